@@ -1,0 +1,21 @@
+"""cgaskin: deform, cut and tear skinned characters with Conformal Geometric Algebra.
+
+The runtime calls only the kernels in ``cgaskin.generated`` (emitted by ``cgaskin build``).
+"""
+from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError,
+                     NoSkinError)
+from .rig import Channel, Clip, Rig, Skeleton
+
+__version__ = "0.1.0"
+
+
+def load(path, **options):
+    """Load a rigged model (.glb, .gltf, .fbx, .dae) as a ``Rig``."""
+    from .rigs import load as _load
+    return _load(path, **options)
+
+
+def save(rig, path):
+    """Save a ``Rig`` as skinned glTF 2.0 (.glb or .gltf), clips included."""
+    from .rigs import save as _save
+    return _save(rig, path)

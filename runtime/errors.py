@@ -1,0 +1,29 @@
+"""Exceptions raised by cgaskin.
+
+Every error a user can trigger with bad input is one of these, so that callers can catch
+``CgaskinError`` and numba never surfaces a traceback of its own.
+"""
+
+
+class CgaskinError(Exception):
+    """Base class of every error cgaskin raises on purpose."""
+
+
+class InvalidInputError(CgaskinError, ValueError):
+    """An argument has the wrong shape, dtype or value (NaN, infinite, out of range)."""
+
+
+class ModelFormatError(CgaskinError, ValueError):
+    """A model file is malformed, truncated, or uses something the loader cannot read."""
+
+
+class NoSkinError(ModelFormatError):
+    """A model file holds no skinned mesh."""
+
+
+class MissesMeshError(CgaskinError, ValueError):
+    """A cutting plane or a scalpel does not meet the mesh."""
+
+
+class StaleGeneratedError(CgaskinError):
+    """``generated/`` does not match what ``codegen/`` emits now."""
