@@ -1,0 +1,1 @@
+"""Generated CGA kernels (see codegen/). Do not edit by hand."""
