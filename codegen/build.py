@@ -78,7 +78,7 @@ def skinning_module(kernels_hash: str, affine) -> str:
             raise CodegenError("affine_point is not linear in its coefficients: cannot blend them")
     n = len(coeffs)
     loop = [f"        a{j} = 0.0" for j in range(n)]
-    inner = [f"            a{j} += w * affines[b, {j}]" for j in range(n)]
+    inner = ["            row = affines[b]"] + [f"            a{j} += w * row[{j}]" for j in range(n)]
     blend_args = ", ".join(f"a{j}" for j in range(n))
 
     def blend(name, decorator, rng):
@@ -87,19 +87,31 @@ def skinning_module(kernels_hash: str, affine) -> str:
             f"def {name}(rest, joints, weights, affines, out):",
             '    """out[i] = (Σ_k weights[i,k] affines[joints[i,k]]) applied to rest[i].',
             "",
-            "    rest : (n, 3) float64, joints : (n, k) int, weights : (n, k) float64,",
+            "    rest : (n, 3) float64, joints : (n, k) int, weights : (n, k) float,",
             "    affines : (B, 12) float64 from versor_to_affine, out : (n, 3) float64 (written).",
+            "    Returns (influences with a joint index outside [0, B), vertices with a non-finite result);",
+            "    an index is checked before it is read, and a bad one is skipped. Checking here costs",
+            "    nothing measurable: the loop is memory-bound and the branches are never taken.",
             '    """',
+            "    n_bones = affines.shape[0]",
+            "    bad_joints = 0",
+            "    bad_values = 0",
             f"    for i in {rng}(rest.shape[0]):",
             *loop,
             "        for k in range(joints.shape[1]):",
             "            w = weights[i, k]",
             "            b = joints[i, k]",
+            "            if b < 0 or b >= n_bones:",
+            "                bad_joints += 1",
+            "                continue",
             *inner,
             f"        x = affine_point(({blend_args}), rest[i])",
             "        out[i, 0] = x[0]",
             "        out[i, 1] = x[1]",
             "        out[i, 2] = x[2]",
+            "        if not x[0] * 0.0 + x[1] * 0.0 + x[2] * 0.0 == 0.0:    # false for NaN and inf",
+            "            bad_values += 1",
+            "    return bad_joints, bad_values",
         ]) + "\n"
 
     body = "\n\n".join([

@@ -5,6 +5,8 @@ The runtime calls only the kernels in ``cgaskin.generated`` (emitted by ``cgaski
 from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError,
                      NoSkinError)
 from .rig import Channel, Clip, Rig, Skeleton
+from .skinning import skin_affine, skin_vertices
+from . import versor
 
 __version__ = "0.1.0"
 

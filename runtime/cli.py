@@ -1,0 +1,53 @@
+"""The ``cgaskin`` command line."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def _build(args) -> int:
+    try:
+        from .codegen import build
+    except ImportError as exc:                        # sympy is a build-time extra
+        print(f"cgaskin build needs sympy: pip install 'cgaskin[build]' ({exc})", file=sys.stderr)
+        return 2
+    stale = build.build(check=args.check)
+    return 1 if (args.check and stale) else 0
+
+
+def _bench(args) -> int:
+    import importlib
+    names = {"skinning": "benchmarks.bench_skinning", "frame": "benchmarks.bench_frame",
+             "cut": "benchmarks.bench_cut_tear"}
+    try:
+        module = importlib.import_module(names[args.which])
+    except ImportError:
+        print("the benchmarks live in the source tree: run `cgaskin bench` from the repository root",
+              file=sys.stderr)
+        return 2
+    module.main(args.rest)
+    return 0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="cgaskin", description="Deform, cut and tear skinned models with CGA.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("build", help="regenerate the numba kernels in generated/ from codegen/")
+    p.add_argument("--check", action="store_true", help="do not write: fail if generated/ is stale")
+    p.set_defaults(run=_build)
+
+    p = sub.add_parser("bench", help="run a benchmark (prints tables)")
+    p.add_argument("which", choices=["skinning", "frame", "cut"], nargs="?", default="skinning")
+    p.add_argument("rest", nargs=argparse.REMAINDER, help="options passed to the benchmark")
+    p.set_defaults(run=_bench)
+
+    from . import commands                            # the model commands (demo, skin, cut, tear)
+    commands.register(sub)
+
+    args = parser.parse_args(argv)
+    return args.run(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,97 @@
+"""Linear blend skinning through the hoisted CGA kernels.
+
+Per frame: each bone's versor becomes its 3x4 affine form once (``versor_to_affine``, the per-bone
+half of the hoisted sandwich), then one loop over vertices blends the affine coefficients by the
+weights and applies them (``skin_blend``). That equals Σ_k w_k down(V_k up(x) Ṽ_k) exactly, because
+the per-vertex kernel is linear in the per-bone coefficients (the build checks it).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._checks import float_array, index_array
+from .errors import InvalidInputError
+from .generated import kernels as K
+from .generated.skinning import skin_blend, skin_blend_parallel
+from .versor import _versor_arg
+
+# numba's thread pool costs ~10 ms per parallel call on a 2-core machine; below this many vertices
+# the serial loop wins (benchmarks/bench_skinning.py measures the crossover).
+PARALLEL_THRESHOLD = 100_000
+
+
+def _mesh_args(rest, joints, weights):
+    """Shapes and dtypes only: values (finiteness, index range) are checked inside the blend loop,
+    which reports problems without a second pass over the data."""
+    rest = np.asarray(rest)
+    if rest.dtype != np.float64:
+        rest = float_array(rest, "rest")
+    weights = np.asarray(weights)
+    if weights.dtype not in (np.float32, np.float64):
+        weights = float_array(weights, "weights")
+    joints = np.asarray(joints)
+    if joints.dtype.kind not in "iu":
+        joints = index_array(joints, "joints", np.iinfo(np.int64).max)
+    if rest.ndim != 2 or rest.shape[1] != 3:
+        raise InvalidInputError(f"rest must have shape (n, 3), got {rest.shape}")
+    if weights.ndim != 2 or weights.shape[0] != rest.shape[0]:
+        raise InvalidInputError(f"weights must have shape ({rest.shape[0]}, k), got {weights.shape}")
+    if joints.shape != weights.shape:
+        raise InvalidInputError(f"joints shape {joints.shape} must equal weights shape {weights.shape}")
+    return rest, np.ascontiguousarray(joints), np.ascontiguousarray(weights)
+
+
+def _diagnose(rest, joints, weights, n_bones, bad_joints, bad_values):
+    """Name the first bad input after the blend loop reported a problem (the slow path)."""
+    if bad_joints:
+        index_array(joints, "joints", n_bones)
+    for name, arr in (("rest", rest), ("weights", weights)):
+        float_array(arr, name)
+    raise InvalidInputError(f"{bad_values} skinned vertices are not finite; the bone transforms "
+                            f"overflow float64")
+
+
+def skin_affine(rest, joints, weights, affines, parallel=None, out=None) -> np.ndarray:
+    """Blend per-bone affine maps: out[i] = Σ_k weights[i,k] (A[joints[i,k]] applied to rest[i]).
+
+    rest : (n, 3) float64 ; joints : (n, k) int ; weights : (n, k) float32/64 ;
+    affines : (B, 3, 4) or (B, 12) float64 ; parallel : None (by size), True or False ;
+    out : optional (n, 3) float64 C-contiguous array to write into (reuse it across frames).
+    Returns (n, 3) float64 (``out`` when given). For transforms that are not similarities (bind matrices with
+    non-uniform scale); similarity poses should use ``skin_vertices``.
+    """
+    affines = float_array(affines, "affines")
+    if affines.ndim not in (2, 3) or affines.shape[1:] not in ((3, 4), (12,)):
+        raise InvalidInputError(f"affines must have shape (B, 3, 4) or (B, 12), got {affines.shape}")
+    affines = np.ascontiguousarray(affines.reshape(len(affines), 12))
+    rest, joints, weights = _mesh_args(rest, joints, weights)
+    if out is None:
+        out = np.empty_like(rest)
+    elif out.shape != rest.shape or out.dtype != np.float64 or not out.flags.c_contiguous:
+        raise InvalidInputError(f"out must be a C-contiguous float64 array of shape {rest.shape}")
+    if parallel is None:
+        parallel = len(rest) >= PARALLEL_THRESHOLD
+    bad_joints, bad_values = (skin_blend_parallel if parallel else skin_blend)(rest, joints, weights, affines, out)
+    if bad_joints or bad_values:
+        _diagnose(rest, joints, weights, len(affines), bad_joints, bad_values)
+    return out
+
+
+def bone_affines(versors) -> np.ndarray:
+    """(B, 12) hoisted affine coefficients of (B, 12) versors (the per-bone half of skinning)."""
+    versors = _versor_arg(versors, "versors")
+    if versors.ndim != 2:
+        raise InvalidInputError(f"versors must have shape (B, 12), got {versors.shape}")
+    out = np.empty((len(versors), 12))
+    K.versor_to_affine_batch(np.ascontiguousarray(versors), out)
+    return out
+
+
+def skin_vertices(rest, joints, weights, versors, parallel=None, out=None) -> np.ndarray:
+    """Skin rest positions with one versor per bone.
+
+    rest : (n, 3) float64 ; joints : (n, k) int bone indices ; weights : (n, k) float ;
+    versors : (B, 12) float64 ; returns (n, 3) float64 (written into ``out`` if given).
+    The caller's other arrays are not modified.
+    """
+    return skin_affine(rest, joints, weights, bone_affines(versors), parallel=parallel, out=out)

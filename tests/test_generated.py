@@ -1,0 +1,78 @@
+"""generated/ is exactly what codegen/ emits, builds fast, and its numba cache works."""
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from cgaskin.codegen import build
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def test_generated_is_fresh():
+    messages = []
+    stale = build.build(check=True, log=messages.append)
+    assert stale == 0, "\n".join(messages)
+
+
+def test_check_names_a_stale_file(tmp_path):
+    for name, text in build.render().items():
+        (tmp_path / name).write_text(text)
+    kernels = tmp_path / "kernels.py"
+    kernels.write_text(kernels.read_text().replace("v_s * v_s", "v_s * v_s * 1.0", 1))
+    messages = []
+    assert build.build(check=True, directory=tmp_path, log=messages.append) == 1
+    assert "generated/kernels.py" in messages[0]
+
+
+def test_cli_check_exit_code():
+    done = subprocess.run([sys.executable, "-m", "cgaskin.cli", "build", "--check"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_build_is_fast():
+    start = time.perf_counter()
+    build.render()
+    assert time.perf_counter() - start < 30.0
+
+
+def test_headers_stamp_hashes():
+    files = build.render()
+    assert "spec hash:" in files["kernels.py"] and "sympy:" in files["kernels.py"]
+    # skinning.py imports kernels.py: its header must carry the hash of kernels.py, so that a change of
+    # a callee changes the caller's text and numba's file-keyed cache recompiles it
+    assert "imports kernels (hash" in files["skinning.py"]
+
+
+def test_runtime_does_not_import_sympy():
+    code = "import sys, cgaskin, cgaskin.versor; sys.exit('sympy' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+CACHE_PROBE = """
+import warnings, sys
+warnings.simplefilter('error')          # a numba cache warning (uncachable function) is a failure
+import numpy as np
+import cgaskin
+from cgaskin import versor
+from cgaskin.generated import kernels, skinning
+v = versor.compose(versor.motor([0, 0, 1], 0.5, [1, 2, 3]), versor.dilator(2.0))
+versor.apply(v, np.ones((4, 3)))
+cgaskin.skin_vertices(np.ones((4, 3)), np.zeros((4, 1), int), np.ones((4, 1)), v[None])
+misses = {name: d.stats.cache_misses for name in ('versor_to_affine_batch', 'affine_point_batch')
+          for d in [getattr(kernels, name)]}
+misses['skin_blend'] = skinning.skin_blend.stats.cache_misses
+print(misses)
+sys.exit(1 if any(misses.values()) else 0)
+"""
+
+
+@pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT") == "1", reason="no numba cache without the JIT")
+def test_numba_cache_is_used():
+    # first run fills the cache (if needed), second must load everything from it
+    subprocess.run([sys.executable, "-c", CACHE_PROBE], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", CACHE_PROBE], capture_output=True, text=True)
+    assert done.returncode == 0, f"numba recompiled on a warm cache: {done.stdout}{done.stderr}"
