@@ -6,7 +6,8 @@ from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelForm
                      NoSkinError)
 from .rig import Channel, Clip, Rig, Skeleton
 from .skinning import skin_affine, skin_vertices
-from . import versor
+from .pose import Pose, skin, skin_normals
+from . import baselines, versor
 
 __version__ = "0.1.0"
 
@@ -21,3 +22,9 @@ def save(rig, path):
     """Save a ``Rig`` as skinned glTF 2.0 (.glb or .gltf), clips included."""
     from .rigs import save as _save
     return _save(rig, path)
+
+
+def capsule_arm(*args, **kwargs):
+    """The built-in procedural rig (a capsule arm with a joint chain and a "wave" clip)."""
+    from .rigs.procedural import capsule_arm as _capsule_arm
+    return _capsule_arm(*args, **kwargs)

@@ -143,6 +143,23 @@ class Rig:
             return names.index(clip)
         raise InvalidInputError(f"unknown clip {clip!r}; valid clips: {', '.join(map(repr, names)) or 'none'}")
 
+    def rest_pose(self):
+        """The rest (node) pose of the skeleton, as a ``Pose``."""
+        from .pose import Pose
+        return Pose.rest(self.skeleton)
+
+    def bind_pose(self):
+        """The pose whose skinning returns ``vertices`` unchanged: every bone's global transform is
+        the inverse of its inverse bind matrix (differs from the rest pose in some files)."""
+        from .pose import Pose
+        return Pose.bind(self.skeleton)
+
+    def pose(self, clip=0, time: float = 0.0, rotation_blend: str = "slerp"):
+        """The pose of a clip (name or index) at ``time`` seconds, glTF sampler semantics; rotations
+        interpolate as rotors (``"slerp"``: geodesic, as glTF; ``"linear"``: normalised blend)."""
+        from .pose import Pose
+        return Pose.from_clip(self.skeleton, self.clips[self.clip_index(clip)], time, rotation_blend)
+
     def with_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
         """A new rig with the same skeleton and clips and another mesh."""
         return replace(self, vertices=vertices, faces=faces, joints=joints, weights=weights,

@@ -1,0 +1,257 @@
+"""Poses: the local transform of every skeleton node for one frame, as versors.
+
+A node whose local transform is a similarity (rotation, translation, positive uniform scale) holds a
+versor T R D; composition along the hierarchy is the geometric product (generated kernel). A node
+whose transform is not a similarity (non-uniform scale, a matrix with shear) keeps its exact matrix,
+and so do its descendants' globals: nothing is approximated (design.md §4). Bone transforms are
+G[node] @ inverse_bind, hoisted to 3x4 affine maps for the blend loop.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from . import versor
+from ._checks import float_array
+from .animation import sample_clip
+from .errors import InvalidInputError
+from .generated.kernels import gp_versor_versor, versor_to_affine
+from .rig import Rig, Skeleton
+from .skinning import skin_affine
+
+FRAMES = ("parent", "local")
+
+
+def _trs_matrix(t, q, s):
+    x, y, z, w = q / np.linalg.norm(q)
+    m = np.eye(4)
+    m[:3, :3] = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]) * s
+    m[:3, 3] = t
+    return m
+
+
+def _local_from_trs(t, q, s):
+    """(versor (12,), similar) for a TRS; the versor is NaN-free only when ``similar``."""
+    t, q, s = (np.asarray(a, dtype=np.float64) for a in (t, q, s))
+    if s[0] == s[1] == s[2] and s[0] > 0:
+        return versor.compose(versor.translator(t), versor.rotor_from_quaternion(q), versor.dilator(s[0])), True
+    return versor.identity(), False
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Local transforms of every node of ``skeleton``.
+
+    versors : (j, 12) float64, the local versor of each similarity node (identity elsewhere)
+    matrices : (j, 4, 4) float64, the exact local matrix of each node
+    similar : (j,) bool, whether the node's local transform is a similarity held by ``versors``
+    """
+
+    skeleton: Skeleton
+    versors: np.ndarray
+    matrices: np.ndarray
+    similar: np.ndarray
+
+    # -- construction -------------------------------------------------------------------------
+    @classmethod
+    def from_trs(cls, skeleton: Skeleton, translations, rotations, scales, exact_matrices=None):
+        """A pose from per-node TRS; ``exact_matrices`` (j, 4, 4) overrides nodes whose TRS is only
+        an approximation (matrix nodes with shear), marked by a non-None entry."""
+        j = skeleton.n_nodes
+        versors = np.empty((j, 12))
+        matrices = np.empty((j, 4, 4))
+        similar = np.zeros(j, dtype=bool)
+        for i in range(j):
+            exact = None if exact_matrices is None else exact_matrices[i]
+            if exact is not None:
+                versors[i], matrices[i] = versor.identity(), exact
+                continue
+            versors[i], similar[i] = _local_from_trs(translations[i], rotations[i], scales[i])
+            matrices[i] = _trs_matrix(translations[i], rotations[i], scales[i])
+        return cls(skeleton, versors, matrices, similar)
+
+    @classmethod
+    def rest(cls, skeleton: Skeleton) -> "Pose":
+        """The rest (node) pose stored in the file."""
+        exact = _shear_nodes(skeleton)
+        return cls.from_trs(skeleton, skeleton.rest_translations, skeleton.rest_rotations,
+                            skeleton.rest_scales, exact)
+
+    @classmethod
+    def bind(cls, skeleton: Skeleton) -> "Pose":
+        """The pose in which every bone's global transform is inverse(inverse_bind): skinning it
+        returns the stored vertices. Held as exact matrices (bind matrices need not be similarities);
+        nodes that are not bones keep their rest transform relative to their parent."""
+        n = skeleton.n_nodes
+        globals_ = np.empty((n, 4, 4))
+        bind_of = {}
+        for b, node in enumerate(skeleton.bone_nodes):
+            bind_of.setdefault(int(node), np.linalg.inv(skeleton.inverse_bind[b]))
+        local = skeleton.rest_matrices.copy()
+        for i, p in enumerate(skeleton.parents):
+            parent = np.eye(4) if p < 0 else globals_[p]
+            if i in bind_of:
+                globals_[i] = bind_of[i]
+                local[i] = np.linalg.solve(parent, bind_of[i])
+            else:
+                globals_[i] = parent @ local[i]
+        return cls(skeleton, np.tile(versor.identity(), (n, 1)), local, np.zeros(n, dtype=bool))
+
+    @classmethod
+    def from_clip(cls, skeleton: Skeleton, clip, time: float, rotation_blend: str = "slerp") -> "Pose":
+        """The pose of ``clip`` at ``time`` seconds (glTF sampler semantics); unanimated properties
+        keep their rest values."""
+        t = skeleton.rest_translations.copy()
+        r = skeleton.rest_rotations.copy()
+        s = skeleton.rest_scales.copy()
+        exact = _shear_nodes(skeleton)
+        for (node, path), value in sample_clip(clip, time, rotation_blend).items():
+            {"translation": t, "rotation": r, "scale": s}[path][node] = value
+            exact[node] = None                     # an animated node is TRS by the glTF spec
+        return cls.from_trs(skeleton, t, r, s, exact)
+
+    # -- edits (each returns a new Pose) --------------------------------------------------------
+    def _edit(self, joint, left=None, right=None) -> "Pose":
+        """local' = left · local · right (versors), on the versor or, for matrix nodes, the matrix."""
+        i = self.skeleton.node_index(joint)
+        versors, matrices = self.versors.copy(), self.matrices.copy()
+        if self.similar[i]:
+            parts = [p for p in (left, versors[i], right) if p is not None]
+            versors[i] = versor.compose(*parts)
+            matrices[i] = versor.to_matrix(versors[i])
+        else:
+            m = matrices[i]
+            if left is not None:
+                m = versor.to_matrix(left) @ m
+            if right is not None:
+                m = m @ versor.to_matrix(right)
+            matrices[i] = m
+        return Pose(self.skeleton, versors, matrices, self.similar)
+
+    def rotate(self, joint, axis, angle, frame: str = "parent") -> "Pose":
+        """Rotate ``joint`` (name or index) by ``angle`` radians about ``axis`` through the joint's
+        origin; the axis is given in the parent's frame (``frame="parent"``) or the joint's own."""
+        if frame not in FRAMES:
+            raise InvalidInputError(f"frame must be one of {FRAMES}, got {frame!r}")
+        rot = versor.rotor(axis, angle)
+        if frame == "local":
+            return self._edit(joint, right=rot)
+        pivot = self.matrices[self.skeleton.node_index(joint)][:3, 3]
+        return self._edit(joint, left=versor.compose(versor.translator(pivot), rot, versor.translator(-pivot)))
+
+    def translate(self, joint, vector) -> "Pose":
+        """Move ``joint`` by ``vector`` in its parent's frame."""
+        return self._edit(joint, left=versor.translator(float_array(vector, "vector", 3)))
+
+    def dilate(self, joint, scale) -> "Pose":
+        """Scale ``joint``'s subtree by ``scale`` > 0 about the joint's origin."""
+        return self._edit(joint, right=versor.dilator(scale))
+
+    # -- evaluation ----------------------------------------------------------------------------
+    def bone_affines(self) -> np.ndarray:
+        """(B, 12) row-major 3x4 maps G[bone_nodes[b]] @ inverse_bind[b] for the blend loop."""
+        sk = self.skeleton
+        out = np.empty((sk.n_bones, 12))
+        _bone_affines(sk.parents, self.versors, self.matrices, self.similar, sk.bone_nodes,
+                      _ibm_rows(sk), out)
+        return out
+
+    def global_matrices(self) -> np.ndarray:
+        """(j, 4, 4) global transform of every node."""
+        sk = self.skeleton
+        out = np.empty((sk.n_nodes, 12))
+        ident = np.zeros((sk.n_nodes, 12))
+        ident[:, [0, 5, 10]] = 1.0
+        _bone_affines(sk.parents, self.versors, self.matrices, self.similar,
+                      np.arange(sk.n_nodes), ident, out)
+        m = np.zeros((sk.n_nodes, 4, 4))
+        m[:, :3, :] = out.reshape(-1, 3, 4)
+        m[:, 3, 3] = 1.0
+        return m
+
+
+def _shear_nodes(skeleton: Skeleton) -> list:
+    """Per node: its exact rest matrix when the stored TRS does not reproduce it, else None."""
+    out = []
+    for i in range(skeleton.n_nodes):
+        trs = _trs_matrix(skeleton.rest_translations[i], skeleton.rest_rotations[i], skeleton.rest_scales[i])
+        exact = skeleton.rest_matrices[i]
+        out.append(None if np.allclose(trs, exact, rtol=0, atol=1e-12 * max(1.0, np.abs(exact).max())) else exact)
+    return out
+
+
+def _ibm_rows(skeleton: Skeleton) -> np.ndarray:
+    ibm = skeleton.inverse_bind
+    if not np.allclose(ibm[:, 3, :], [0, 0, 0, 1], atol=1e-6):
+        raise InvalidInputError("inverse bind matrices must be affine (last row 0 0 0 1)")
+    return np.ascontiguousarray(ibm[:, :3, :].reshape(-1, 12))
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _compose_affine(a, b):
+    """Row-major 3x4 a ∘ 3x4 b (both as (12,) arrays), as (12,)."""
+    out = np.empty(12)
+    for r in range(3):
+        for c in range(4):
+            acc = a[4 * r + 3] if c == 3 else 0.0
+            for k in range(3):
+                acc += a[4 * r + k] * b[4 * k + c]
+            out[4 * r + c] = acc
+    return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _bone_affines(parents, versors, matrices, similar, bone_nodes, ibm, out):
+    """Globals along the hierarchy (versor products while every ancestor is a similarity, exact
+    matrices below any that is not), then each bone's 3x4 map G @ IBM."""
+    n = parents.shape[0]
+    gv = np.empty((n, 12))
+    ga = np.empty((n, 12))
+    gsim = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        p = parents[i]
+        if similar[i] and (p < 0 or gsim[p]):
+            if p < 0:
+                gv[i] = versors[i]
+            else:
+                gv[i] = np.array(gp_versor_versor(gv[p], versors[i]))
+            ga[i] = np.array(versor_to_affine(gv[i]))
+            gsim[i] = True
+        else:
+            local = matrices[i][:3, :].copy().reshape(12)
+            ga[i] = local if p < 0 else _compose_affine(ga[p], local)
+    for b in range(bone_nodes.shape[0]):
+        out[b] = _compose_affine(ga[bone_nodes[b]], ibm[b])
+
+
+def skin(rig: Rig, pose: Pose | None = None, out=None) -> np.ndarray:
+    """Skinned positions (n, 3) float64 of ``rig`` in ``pose`` (default: the rest pose).
+
+    glTF semantics for every format: Σ_i w_i (G[joint_i] · IBM_i) v; the mesh node's own transform is
+    ignored."""
+    pose = rig.rest_pose() if pose is None else pose
+    if pose.skeleton is not rig.skeleton and pose.skeleton.n_nodes != rig.skeleton.n_nodes:
+        raise InvalidInputError("the pose belongs to another skeleton")
+    return skin_affine(rig.vertices, rig.joints, rig.weights, pose.bone_affines(), out=out)
+
+
+def skin_normals(rig: Rig, pose: Pose | None = None, normals=None) -> np.ndarray:
+    """Skinned unit normals (n, 3): the blended linear part's cofactor matrix (inverse transpose up
+    to a positive factor, so scale and non-uniform scale are corrected) applied, then normalised."""
+    pose = rig.rest_pose() if pose is None else pose
+    normals = rig.attributes.get("NORMAL") if normals is None else normals
+    if normals is None:
+        raise InvalidInputError("the rig has no NORMAL attribute; pass normals (n, 3)")
+    normals = float_array(normals, "normals", 3, ndim=2)
+    affines = pose.bone_affines().reshape(-1, 3, 4)
+    lin = np.einsum("nk,nkij->nij", rig.weights, affines[rig.joints][..., :3])
+    cof = np.stack([np.cross(lin[:, 1], lin[:, 2]), np.cross(lin[:, 2], lin[:, 0]),
+                    np.cross(lin[:, 0], lin[:, 1])], axis=1)       # rows of det(M) M^-T
+    out = np.einsum("nij,nj->ni", cof, normals)
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return out / np.where(length > 0, length, 1.0)
