@@ -158,7 +158,7 @@ class Pose:
         sk = self.skeleton
         out = np.empty((sk.n_bones, 12))
         _bone_affines(sk.parents, self.versors, self.matrices, self.similar, sk.bone_nodes,
-                      _ibm_rows(sk), out)
+                      sk.inverse_bind_rows, out)
         return out
 
     def global_matrices(self) -> np.ndarray:
@@ -183,13 +183,6 @@ def _shear_nodes(skeleton: Skeleton) -> list:
         exact = skeleton.rest_matrices[i]
         out.append(None if np.allclose(trs, exact, rtol=0, atol=1e-12 * max(1.0, np.abs(exact).max())) else exact)
     return out
-
-
-def _ibm_rows(skeleton: Skeleton) -> np.ndarray:
-    ibm = skeleton.inverse_bind
-    if not np.allclose(ibm[:, 3, :], [0, 0, 0, 1], atol=1e-6):
-        raise InvalidInputError("inverse bind matrices must be affine (last row 0 0 0 1)")
-    return np.ascontiguousarray(ibm[:, :3, :].reshape(-1, 12))
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

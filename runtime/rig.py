@@ -15,6 +15,7 @@ Conventions (glTF 2.0 semantics, whatever the source format):
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -85,6 +86,14 @@ class Skeleton:
     @property
     def n_bones(self) -> int:
         return len(self.bone_nodes)
+
+    @cached_property
+    def inverse_bind_rows(self) -> np.ndarray:
+        """(b, 12) C-contiguous top 3x4 rows of the inverse bind matrices (checked affine once)."""
+        ibm = np.asarray(self.inverse_bind, dtype=np.float64)
+        if not np.allclose(ibm[:, 3, :], [0, 0, 0, 1], atol=1e-6):
+            raise InvalidInputError("inverse bind matrices must be affine (last row 0 0 0 1)")
+        return np.ascontiguousarray(ibm[:, :3, :].reshape(-1, 12))
 
     def node_index(self, joint) -> int:
         """Index of a node given by name or index; a clear error lists the valid names."""
