@@ -29,6 +29,17 @@ HALF = Rational(1, 2)
 # Below these, closed forms divide 0 by 0: use Taylor series accurate to far below 1e-16.
 SMALL_ANGLE = 1e-4
 SMALL_SINE = 1e-8
+# Below this angle the closed forms with θ − sin θ or 1 − x cot x cancel (relative error ~ε/θ²):
+# use their Taylor series, whose first omitted term is < 1e-17 here.
+SERIES_ANGLE = 0.2
+
+
+def _series(x2, coefficients):
+    """Σ c_k x2^k by Horner's rule (x2 a symbol or expression, coefficients exact rationals)."""
+    acc = sympy.Integer(0)
+    for c in reversed(coefficients):
+        acc = acc * x2 + c
+    return acc
 
 
 def _euclid(k, mv, blades=("e1", "e2", "e3")):
@@ -423,9 +434,13 @@ def versor_log():
     for name, qc in zip(("w1", "w2", "w3"), (qx, qy, qz)):
         k.let(sy[name], qc * sy["f"])
     th = sy["theta"]
-    # J(ω)⁻¹ = I − ½[ω]× + a [ω]×², a = (1 − θ sin θ / (2(1 − cos θ))) / θ²  (→ 1/12 + θ²/720)
-    k.let(sy["a"], Piecewise((Rational(1, 12) + th ** 2 / 720, th < SMALL_ANGLE),
-                             ((1 - th * sin(th) / (2 * (1 - cos(th)))) / th ** 2, True)))
+    # J(ω)⁻¹ = I − ½[ω]× + a [ω]×², a = (1 − (θ/2) cot(θ/2)) / θ²; with x = θ/2 the series of
+    # 1 − x cot x is Σ 2^2k |B_2k| x^2k / (2k)!, so a = 1/12 + x²/180 + x⁴/1890 + ...
+    x2 = th ** 2 / 4
+    a_series = _series(x2, [Rational(1, 12), Rational(1, 180), Rational(1, 1890), Rational(1, 18900),
+                            Rational(1, 187110), Rational(691, 2554051500)])
+    k.let(sy["a"], Piecewise((a_series, th < SERIES_ANGLE),
+                             ((1 - (th / 2) * cos(th / 2) / sin(th / 2)) / th ** 2, True)))
     w = sympy.Matrix([sy["w1"], sy["w2"], sy["w3"]])
     t = sympy.Matrix([sy["t1"], sy["t2"], sy["t3"]])
     wx = sympy.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
@@ -455,8 +470,11 @@ def versor_exp():
     k.let(th, sqrt(w.dot(w)))
     k.let(sy["cos_half"], cos(th / 2))
     k.let(sy["sinc_half"], Piecewise((HALF - th ** 2 / 48, th < SMALL_ANGLE), (sin(th / 2) / th, True)))
-    k.let(sy["b"], Piecewise((HALF - th ** 2 / 24, th < SMALL_ANGLE), ((1 - cos(th)) / th ** 2, True)))
-    k.let(sy["c"], Piecewise((Rational(1, 6) - th ** 2 / 120, th < SMALL_ANGLE), ((th - sin(th)) / th ** 3, True)))
+    # b = (1 − cos θ)/θ² = 2 (sin(θ/2)/θ)² has no cancellation; c = (θ − sin θ)/θ³ needs its series
+    k.let(sy["b"], 2 * sy["sinc_half"] ** 2)
+    c_series = _series(th ** 2, [Rational(1, 6), Rational(-1, 120), Rational(1, 5040), Rational(-1, 362880),
+                                 Rational(1, 39916800), Rational(-1, 6227020800)])
+    k.let(sy["c"], Piecewise((c_series, th < SERIES_ANGLE), ((th - sin(th)) / th ** 3, True)))
     wx = sympy.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
     t = vv + sy["b"] * (wx * vv) + sy["c"] * (wx * (wx * vv))
     for i, name in enumerate(("t1", "t2", "t3")):

@@ -148,15 +148,17 @@ def print_kernel(kernel: Kernel) -> str:
 def print_batch(kernel: Kernel) -> str:
     """Source of ``name_batch(inputs (N, ...)..., out (N, k))``: the scalar kernel over rows."""
     args = [i.name for i in kernel.inputs]
+    if "row" in args:
+        raise CodegenError(f"{kernel.name}: an input named 'row' would shadow the batch loop index")
     n_out = len(kernel.outputs)
     lines = [f"@njit(cache=True, error_model='numpy', nogil=True)",
              f"def {kernel.name}_batch({', '.join(args)}, out):",
              f'    """``{kernel.name}`` on every row: inputs (N, ...) or (N,), out (N, {n_out})."""',
-             f"    for n in range(out.shape[0]):"]
-    call = f"{kernel.name}({', '.join(a + '[n]' for a in args)})"
+             f"    for row in range(out.shape[0]):"]
+    call = f"{kernel.name}({', '.join(a + '[row]' for a in args)})"
     if n_out == 1:
-        lines.append(f"        out[n, 0] = {call}")
+        lines.append(f"        out[row, 0] = {call}")
     else:
         lines.append(f"        r = {call}")
-        lines += [f"        out[n, {j}] = r[{j}]" for j in range(n_out)]
+        lines += [f"        out[row, {j}] = r[{j}]" for j in range(n_out)]
     return "\n".join(lines) + "\n"

@@ -5,7 +5,7 @@ generator: 1
 sympy: 1.14.0
 algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
 spec hash: 52cb0cb1cec992d2
-imports kernels (hash 881fe8e7a1153a59)
+imports kernels (hash cd513f9b79887e6f)
 """
 
 from numba import njit, prange

@@ -25,7 +25,11 @@ VERSOR_TOLERANCE = 1e-6        # relative residual of V Ṽ beyond which an arra
 
 def _rows(kernel_batch, n_out, *arrays):
     """Run a generated ``_batch`` kernel over broadcast leading axes; returns (..., n_out)."""
-    lead = np.broadcast_shapes(*(a.shape[:-1] if is_vector else a.shape for a, is_vector in arrays))
+    shapes = [a.shape[:-1] if is_vector else a.shape for a, is_vector in arrays]
+    try:
+        lead = np.broadcast_shapes(*shapes)
+    except ValueError:
+        raise InvalidInputError(f"the arguments' leading axes {shapes} do not broadcast together") from None
     flat = []
     for a, is_vector in arrays:
         if is_vector:
@@ -39,11 +43,20 @@ def _rows(kernel_batch, n_out, *arrays):
     return out.reshape(lead + (n_out,))
 
 
+def _versor_test(arr):
+    """(residual, scalar, ok): V Ṽ must be a positive scalar. Rounding alone leaves a non-scalar
+    part of ~ε|V|² (large coefficients, e.g. translations of 1e4), so the residual is measured
+    against the coefficients' squared size, not against ⟨V Ṽ⟩₀."""
+    residual, norm = np.moveaxis(_rows(K.versor_residual_batch, 2, (arr, True)), -1, 0)
+    size = np.sum(arr * arr, axis=-1)
+    return residual, norm, (norm > 0) & (residual <= VERSOR_TOLERANCE * np.maximum(size, 1.0))
+
+
 def _versor_arg(v, name="versor", check=True) -> np.ndarray:
     arr = float_array(v, name, last=VERSOR_SIZE)
     if check:
-        residual, norm = np.moveaxis(_rows(K.versor_residual_batch, 2, (arr, True)), -1, 0)
-        bad = ~((norm > 0) & (residual <= VERSOR_TOLERANCE * np.maximum(norm, 1.0)))
+        residual, norm, ok = _versor_test(arr)
+        bad = ~ok
         if np.any(bad):
             idx = tuple(np.argwhere(np.atleast_1d(bad))[0])
             raise InvalidInputError(
@@ -56,9 +69,7 @@ def _versor_arg(v, name="versor", check=True) -> np.ndarray:
 
 def is_versor(v) -> np.ndarray:
     """(...,) bool: whether each (..., 12) array is a similarity versor (within tolerance)."""
-    arr = float_array(v, "versor", last=VERSOR_SIZE)
-    residual, norm = np.moveaxis(_rows(K.versor_residual_batch, 2, (arr, True)), -1, 0)
-    return (norm > 0) & (residual <= VERSOR_TOLERANCE * np.maximum(norm, 1.0))
+    return _versor_test(float_array(v, "versor", last=VERSOR_SIZE))[2]
 
 
 # ---- construction --------------------------------------------------------------------------------
@@ -108,7 +119,7 @@ def compose(*versors) -> np.ndarray:
     """Geometric product V1 V2 ... Vn: applies Vn first, V1 last."""
     if not versors:
         raise InvalidInputError("compose needs at least one versor")
-    result = _versor_arg(versors[0], "versors[0]", check=False)
+    result = np.array(_versor_arg(versors[0], "versors[0]", check=False))    # never the caller's array
     for i, v in enumerate(versors[1:], 1):
         result = _rows(K.gp_versor_versor_batch, VERSOR_SIZE, (result, True),
                        (_versor_arg(v, f"versors[{i}]", check=False), True))
