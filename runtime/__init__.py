@@ -8,6 +8,7 @@ from .rig import Channel, Clip, Rig, Skeleton
 from .skinning import skin_affine, skin_vertices
 from .pose import Pose, skin, skin_normals
 from . import baselines, versor
+from .validate import check_mesh
 
 __version__ = "0.1.0"
 

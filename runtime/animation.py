@@ -12,7 +12,7 @@ import numpy as np
 
 from . import versor
 from .errors import InvalidInputError
-from .rig import Channel, Clip
+from .rig import Clip
 
 ROTATION_BLENDS = ("slerp", "linear")
 
@@ -29,45 +29,58 @@ def _segment(times: np.ndarray, t: float):
 
 
 def _quat_from_rotor(r):
-    return np.array([-r[3], r[2], -r[1], r[0]])
+    """(..., 4) quaternions (x, y, z, w) of (..., 12) rotors R = w − x e23 + y e13 − z e12."""
+    return np.stack([-r[..., 3], r[..., 2], -r[..., 1], r[..., 0]], axis=-1)
 
 
-def _rotor(q):
-    return versor.rotor_from_quaternion(q)
+def blend_rotations(q0, q1, u, rotation_blend: str = "slerp") -> np.ndarray:
+    """Interpolate quaternions (k, 4) -> (k, 4) at fractions u (k,) as rotors.
 
-
-def sample_channel(channel: Channel, t: float, rotation_blend: str = "slerp") -> np.ndarray:
-    """Value of one channel at time t: (3,) for translation/scale, (4,) unit (x, y, z, w) for rotation."""
-    times, values = channel.times, channel.values
-    k, u, dt = _segment(times, t)
-    cubic = channel.interpolation == "CUBICSPLINE"
-    key = (lambda i: values[i, 1]) if cubic else (lambda i: values[i])
-    if u == 0.0 or channel.interpolation == "STEP":
-        value = np.array(key(k), dtype=np.float64)
-    elif cubic:
-        u2, u3 = u * u, u * u * u
-        value = ((2 * u3 - 3 * u2 + 1) * values[k, 1] + (u3 - 2 * u2 + u) * dt * values[k, 2]
-                 + (-2 * u3 + 3 * u2) * values[k + 1, 1] + (u3 - u2) * dt * values[k + 1, 0])
-    elif channel.path != "rotation":
-        value = (1 - u) * values[k] + u * values[k + 1]
+    "slerp": R0 exp(u log(R̃0 R1)), the geodesic along the shorter arc (log takes the angle in
+    [0, π]) — glTF's LINEAR rotation; "linear": the normalised blend (1−u) R0 + u R1."""
+    r0, r1 = versor.rotor_from_quaternion(q0), versor.rotor_from_quaternion(q1)
+    u = np.asarray(u, dtype=np.float64)
+    if rotation_blend == "linear":
+        blended = versor.blend_linear(np.stack([r0, r1], axis=-2), np.stack([1 - u, u], axis=-1))
     else:
-        r0, r1 = _rotor(values[k]), _rotor(values[k + 1])
-        if rotation_blend == "linear":
-            value = _quat_from_rotor(versor.blend_linear(np.stack([r0, r1]), [1 - u, u]))
-        else:
-            # slerp along the shorter arc: R0 exp(u log(R̃0 R1)); log takes the angle in [0, π]
-            step = versor.compose(versor.reverse(r0), r1)
-            value = _quat_from_rotor(versor.compose(r0, versor.exp(u * versor.log(step))))
-    if channel.path == "rotation":
-        value = value / np.linalg.norm(value)
-    return value
+        step = versor.compose(versor.reverse(r0), r1)
+        blended = versor.compose(r0, versor.exp(u[:, None] * versor.log(step)))
+    q = _quat_from_rotor(blended)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
 def sample_clip(clip: Clip, t: float, rotation_blend: str = "slerp") -> dict:
-    """{(node, path): value} for every channel of ``clip`` at time ``t`` (seconds)."""
+    """{(node, path): value} for every channel of ``clip`` at time ``t`` (seconds): (3,) for
+    translation/scale, unit (4,) (x, y, z, w) for rotation. Rotations between keys are blended as
+    rotors in one batch of kernel calls for the whole clip."""
     if rotation_blend not in ROTATION_BLENDS:
         raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
     t = float(t)
     if not np.isfinite(t):
         raise InvalidInputError(f"time must be finite, got {t}")
-    return {(c.node, c.path): sample_channel(c, t, rotation_blend) for c in clip.channels}
+    values = {}
+    pending = []                                    # LINEAR rotations: (key, q0, q1, u)
+    for channel in clip.channels:
+        key = (channel.node, channel.path)
+        data = channel.values
+        k, u, dt = _segment(channel.times, t)
+        cubic = channel.interpolation == "CUBICSPLINE"
+        if u == 0.0 or channel.interpolation == "STEP":
+            value = np.array(data[k, 1] if cubic else data[k], dtype=np.float64)
+        elif cubic:
+            u2, u3 = u * u, u * u * u
+            value = ((2 * u3 - 3 * u2 + 1) * data[k, 1] + (u3 - 2 * u2 + u) * dt * data[k, 2]
+                     + (-2 * u3 + 3 * u2) * data[k + 1, 1] + (u3 - u2) * dt * data[k + 1, 0])
+        elif channel.path == "rotation":
+            pending.append((key, data[k], data[k + 1], u))
+            continue
+        else:
+            value = (1 - u) * data[k] + u * data[k + 1]
+        if channel.path == "rotation":
+            value = value / np.linalg.norm(value)
+        values[key] = value
+    if pending:
+        keys, q0, q1, u = zip(*pending)
+        for key, q in zip(keys, blend_rotations(np.array(q0), np.array(q1), np.array(u), rotation_blend)):
+            values[key] = q
+    return values

@@ -24,23 +24,17 @@ from .skinning import skin_affine
 FRAMES = ("parent", "local")
 
 
-def _trs_matrix(t, q, s):
-    x, y, z, w = q / np.linalg.norm(q)
-    m = np.eye(4)
-    m[:3, :3] = np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]) * s
-    m[:3, 3] = t
+def _trs_matrices(t, q, s):
+    """(j, 4, 4) glTF local matrices T @ R @ S of (j, 3), (j, 4) (x, y, z, w), (j, 3)."""
+    x, y, z, w = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
+    m = np.zeros(t.shape[:-1] + (4, 4))
+    m[..., :3, :3] = np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2) * s[..., None, :]
+    m[..., :3, 3] = t
+    m[..., 3, 3] = 1.0
     return m
-
-
-def _local_from_trs(t, q, s):
-    """(versor (12,), similar) for a TRS; the versor is NaN-free only when ``similar``."""
-    t, q, s = (np.asarray(a, dtype=np.float64) for a in (t, q, s))
-    if s[0] == s[1] == s[2] and s[0] > 0:
-        return versor.compose(versor.translator(t), versor.rotor_from_quaternion(q), versor.dilator(s[0])), True
-    return versor.identity(), False
 
 
 @dataclass(frozen=True)
@@ -60,19 +54,23 @@ class Pose:
     # -- construction -------------------------------------------------------------------------
     @classmethod
     def from_trs(cls, skeleton: Skeleton, translations, rotations, scales, exact_matrices=None):
-        """A pose from per-node TRS; ``exact_matrices`` (j, 4, 4) overrides nodes whose TRS is only
-        an approximation (matrix nodes with shear), marked by a non-None entry."""
+        """A pose from per-node TRS (j, 3), (j, 4), (j, 3); ``exact_matrices`` (a list with a (4, 4)
+        or None per node) overrides nodes whose TRS is only an approximation (shear)."""
+        t = np.asarray(translations, dtype=np.float64)
+        q = np.asarray(rotations, dtype=np.float64)
+        s = np.asarray(scales, dtype=np.float64)
         j = skeleton.n_nodes
-        versors = np.empty((j, 12))
-        matrices = np.empty((j, 4, 4))
-        similar = np.zeros(j, dtype=bool)
-        for i in range(j):
-            exact = None if exact_matrices is None else exact_matrices[i]
-            if exact is not None:
-                versors[i], matrices[i] = versor.identity(), exact
-                continue
-            versors[i], similar[i] = _local_from_trs(translations[i], rotations[i], scales[i])
-            matrices[i] = _trs_matrix(translations[i], rotations[i], scales[i])
+        exact = [None] * j if exact_matrices is None else exact_matrices
+        overridden = np.array([m is not None for m in exact], dtype=bool)
+        # a versor holds the node when its scale is uniform and positive (T R D); else a matrix
+        similar = (s[:, 0] == s[:, 1]) & (s[:, 0] == s[:, 2]) & (s[:, 0] > 0) & ~overridden
+        versors = np.tile(versor.identity(), (j, 1))
+        if similar.any():
+            versors[similar] = versor.compose(versor.translator(t[similar]), versor.rotor_from_quaternion(q[similar]),
+                                              versor.dilator(s[similar, 0]))
+        matrices = _trs_matrices(t, q, s)
+        for i in np.flatnonzero(overridden):
+            matrices[i] = exact[i]
         return cls(skeleton, versors, matrices, similar)
 
     @classmethod
@@ -177,11 +175,10 @@ class Pose:
 
 def _shear_nodes(skeleton: Skeleton) -> list:
     """Per node: its exact rest matrix when the stored TRS does not reproduce it, else None."""
+    trs = _trs_matrices(skeleton.rest_translations, skeleton.rest_rotations, skeleton.rest_scales)
     out = []
-    for i in range(skeleton.n_nodes):
-        trs = _trs_matrix(skeleton.rest_translations[i], skeleton.rest_rotations[i], skeleton.rest_scales[i])
-        exact = skeleton.rest_matrices[i]
-        out.append(None if np.allclose(trs, exact, rtol=0, atol=1e-12 * max(1.0, np.abs(exact).max())) else exact)
+    for m, exact in zip(trs, skeleton.rest_matrices):
+        out.append(None if np.allclose(m, exact, rtol=0, atol=1e-12 * max(1.0, np.abs(exact).max())) else exact)
     return out
 
 

@@ -1,0 +1,316 @@
+"""glTF 2.0 exporter: ``Rig`` -> skinned .glb or .gltf.
+
+The file holds one mesh with one triangle primitive (POSITION, NORMAL / TEXCOORD_0 when the rig
+has them, JOINTS_0, WEIGHTS_0, uint32 indices), the skeleton nodes in the rig's order (so node
+``i`` of the file is skeleton node ``i``), one skin whose joints are the bones, a root mesh node
+without transform that carries the skin, one scene, and one animation per clip.
+
+Precision. glTF requires float32 for positions, weights, inverse bind matrices and keyframes;
+node transforms are JSON numbers and keep float64. Hence:
+
+* a rig loaded from a glTF file (whose data were float32 to begin with) saves and reloads to
+  bit-identical arrays: vertices, faces, joints, weights, every skeleton array, every clip;
+* a rig built in float64 reloads exactly to float32 rounding (relative 6e-8) for positions,
+  inverse bind matrices, keyframes and attributes, and exactly for everything else.
+
+Weights are the exception that needs care: the loader renormalises them in float64 (rows must sum
+to 1 for skinning to match glTF to 1e-9), so they are not float32 values. WEIGHTS_0 holds their
+float32 rounding (what every viewer reads); when that alone would not reload to the same float64
+weights, two application-specific attributes ``_CGASKIN_WEIGHTS_0_LO`` and ``_LO2`` hold the
+rounding residuals, with w == (WEIGHTS_0 + LO) + LO2 exactly (24 + 24 + 24 bits >= 53).
+"""
+from __future__ import annotations
+
+import base64
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pygltflib
+
+from ..errors import InvalidInputError
+from ..rig import CHANNEL_PATHS, INTERPOLATIONS, Rig
+from ..validate import check_mesh
+from ..validate import EXACT_SUM_TOLERANCE
+from .gltf import WEIGHT_RESIDUALS, trs_to_matrix
+
+__all__ = ["save_gltf", "save_mesh"]
+
+FLOAT, UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT = 5126, 5121, 5123, 5125
+ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+TYPES = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4", 16: "MAT4"}
+#: glTF names of per-vertex attributes and their widths; anything else is written with a leading
+#: underscore, the spec's prefix for application-specific attributes
+KNOWN_ATTRIBUTES = {"NORMAL": 3, "TANGENT": 4, "TEXCOORD_0": 2, "TEXCOORD_1": 2, "COLOR_0": 4}
+
+
+class _BinaryBuilder:
+    """Accumulates one binary buffer and the bufferViews/accessors that describe it."""
+
+    def __init__(self):
+        self.blob = bytearray()
+        self.views: list[pygltflib.BufferView] = []
+        self.accessors: list[pygltflib.Accessor] = []
+
+    def add(self, array: np.ndarray, component_type: int, width: int, *, target=None,
+            min_max=False) -> int:
+        """Append ``array`` (count, width) of the given component type; return its accessor index."""
+        dtype = {FLOAT: "<f4", UNSIGNED_BYTE: "<u1", UNSIGNED_SHORT: "<u2", UNSIGNED_INT: "<u4"}[component_type]
+        data = np.ascontiguousarray(array, dtype=dtype).reshape(-1, width)
+        self.blob += b"\0" * (-len(self.blob) % 4)  # spec: accessors aligned to 4 bytes
+        view = pygltflib.BufferView(buffer=0, byteOffset=len(self.blob), byteLength=data.nbytes,
+                                    target=target)
+        self.blob += data.tobytes()
+        self.views.append(view)
+        accessor = pygltflib.Accessor(bufferView=len(self.views) - 1, byteOffset=0,
+                                      componentType=component_type, count=len(data),
+                                      type=TYPES[width])
+        if min_max:
+            # min/max must be the exact float32 values stored (float(float32) is exact in JSON)
+            accessor.min = data.min(axis=0).astype(np.float64).tolist()
+            accessor.max = data.max(axis=0).astype(np.float64).tolist()
+        self.accessors.append(accessor)
+        return len(self.accessors) - 1
+
+
+def _float32(array, what: str) -> np.ndarray:
+    """float32 copy of ``array``; refuses values beyond float32 range (they would become inf)."""
+    with np.errstate(over="ignore"):  # overflow is reported below, with the culprit's name
+        out = np.asarray(array, dtype=np.float64).astype(np.float32)
+    if not np.isfinite(out).all():
+        raise InvalidInputError(f"{what} holds values that are not finite in float32 (|x| > 3.4e38 "
+                                f"or NaN); glTF stores them as float32")
+    return out
+
+
+def _check_skeleton(rig: Rig) -> None:
+    sk = rig.skeleton
+    j, b = sk.n_nodes, sk.n_bones
+    shapes = {"parents": (sk.parents, (j,)), "rest_translations": (sk.rest_translations, (j, 3)),
+              "rest_rotations": (sk.rest_rotations, (j, 4)), "rest_scales": (sk.rest_scales, (j, 3)),
+              "rest_matrices": (sk.rest_matrices, (j, 4, 4)), "bone_nodes": (sk.bone_nodes, (b,)),
+              "inverse_bind": (sk.inverse_bind, (b, 4, 4))}
+    for name, (array, shape) in shapes.items():
+        if np.shape(array) != shape:
+            raise InvalidInputError(f"skeleton.{name} has shape {np.shape(array)}, expected {shape}")
+        if not np.isfinite(array).all():
+            raise InvalidInputError(f"skeleton.{name} holds non-finite values")
+    parents = np.asarray(sk.parents)
+    if ((parents >= np.arange(j)) | (parents < -1)).any():
+        bad = int(np.flatnonzero((parents >= np.arange(j)) | (parents < -1))[0])
+        raise InvalidInputError(f"skeleton node {bad} has parent {int(parents[bad])}: parents must "
+                                f"precede their children (parents[i] < i, -1 for roots)")
+    bones = np.asarray(sk.bone_nodes)
+    if b == 0:
+        raise InvalidInputError("the skeleton has no bones: a glTF skin needs at least one joint")
+    if ((bones < 0) | (bones >= j)).any():
+        raise InvalidInputError(f"skeleton.bone_nodes must index the {j} nodes, got {bones.tolist()}")
+    if len(np.unique(bones)) != b:
+        raise InvalidInputError(
+            "two bones share a skeleton node (they come from several skins with different inverse "
+            "bind matrices); a glTF skin needs unique joints, so this rig cannot be saved as one skin")
+
+
+def save_gltf(rig: Rig, path) -> Path:
+    """Write ``rig`` as skinned glTF 2.0: binary ``.glb`` or ``.gltf`` with an embedded buffer.
+
+    Parameters
+    ----------
+    rig : Rig
+        vertices (n, 3), faces (m, 3), joints (n, 4) bone indices, weights (n, 4); attributes
+        (n, c) arrays are written as vertex attributes (NORMAL, TEXCOORD_0, ...).
+    path : str or os.PathLike
+        Ends in .glb or .gltf.
+
+    Returns
+    -------
+    Path of the written file.
+
+    Round trips (see the module docstring): positions, inverse bind matrices, keyframes and
+    attributes go through float32, which is exact for rigs loaded from glTF and float32-rounding
+    for float64 rigs; weights reload exactly in both cases (float32 + residuals). Skeleton nodes
+    whose ``rest_matrices`` differ from their TRS (matrix nodes, shear) are written as matrices,
+    unless a clip animates them (glTF allows only TRS on animated nodes).
+
+    Raises
+    ------
+    InvalidInputError
+        Unsupported extension, inconsistent arrays, more than 65536 bones, values beyond float32.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".glb", ".gltf"):
+        raise InvalidInputError(f"cannot write {path.name}: save_gltf writes .glb or .gltf")
+    _check_skeleton(rig)
+    sk = rig.skeleton
+    n_bones = sk.n_bones
+    if n_bones > 65536:
+        raise InvalidInputError(f"{n_bones} bones: glTF joints are at most unsigned short (65536 bones)")
+    vertices, faces, joints, weights = check_mesh(rig.vertices, rig.faces, rig.joints, rig.weights,
+                                                  n_bones=n_bones, source=rig.name)
+    if len(faces) == 0:
+        raise InvalidInputError("the rig has no faces: glTF needs at least one triangle")
+
+    out = _BinaryBuilder()
+    attributes = {"POSITION": out.add(_float32(vertices, "vertices"), FLOAT, 3,
+                                      target=ARRAY_BUFFER, min_max=True)}
+    for name, values in rig.attributes.items():
+        values = np.asarray(values)
+        if values.ndim == 1:
+            values = values[:, None]
+        if values.ndim != 2 or len(values) != len(vertices) or values.shape[1] not in (1, 2, 3, 4):
+            raise InvalidInputError(f"attribute {name!r} has shape {values.shape}; vertex attributes "
+                                    f"are ({len(vertices)}, 1..4)")
+        gltf_name = name if KNOWN_ATTRIBUTES.get(name) == values.shape[1] else "_" + name.lstrip("_")
+        attributes[gltf_name] = out.add(_float32(values, f"attribute {name}"), FLOAT, values.shape[1],
+                                        target=ARRAY_BUFFER)
+    joint_type = UNSIGNED_BYTE if n_bones <= 256 else UNSIGNED_SHORT
+    attributes["JOINTS_0"] = out.add(joints, joint_type, 4, target=ARRAY_BUFFER)
+    high = _float32(weights, "weights")
+    attributes["WEIGHTS_0"] = out.add(high, FLOAT, 4, target=ARRAY_BUFFER)
+    reloads_exactly = (np.array_equal(high, weights)
+                       and (np.abs(high.astype(np.float64).sum(axis=1) - 1) <= EXACT_SUM_TOLERANCE).all())
+    if not reloads_exactly:
+        # float64 weights = (hi + lo) + lo2 exactly: each residual is the rounding error of the last
+        lo = (weights - high).astype(np.float32)
+        lo2 = (weights - high - lo.astype(np.float64)).astype(np.float32)
+        for name, residual in zip(WEIGHT_RESIDUALS, (lo, lo2)):
+            attributes[name.format(0)] = out.add(residual, FLOAT, 4, target=ARRAY_BUFFER)
+    indices = out.add(faces.reshape(-1), UNSIGNED_INT, 1, target=ELEMENT_ARRAY_BUFFER)
+    # the spec stores matrices column-major
+    ibm = out.add(_float32(np.transpose(sk.inverse_bind, (0, 2, 1)), "inverse bind matrices"),
+                  FLOAT, 16)
+
+    animations, animated = _animations(rig, out)
+    nodes = _skeleton_nodes(rig, animated)
+    mesh_node = len(nodes)
+    nodes.append(pygltflib.Node(name=rig.name, mesh=0, skin=0))  # root, no transform: ignored anyway
+    roots = [i for i in range(sk.n_nodes) if sk.parents[i] == -1] + [mesh_node]
+
+    primitive = pygltflib.Primitive(attributes=pygltflib.Attributes(**attributes), indices=indices,
+                                    mode=pygltflib.TRIANGLES)
+    gltf = pygltflib.GLTF2(
+        asset=pygltflib.Asset(generator="cgaskin", version="2.0"),
+        scene=0,
+        scenes=[pygltflib.Scene(nodes=roots)],
+        nodes=nodes,
+        meshes=[pygltflib.Mesh(name=rig.name, primitives=[primitive])],
+        skins=[pygltflib.Skin(joints=[int(b) for b in sk.bone_nodes], inverseBindMatrices=ibm)],
+        animations=animations,
+        accessors=out.accessors,
+        bufferViews=out.views,
+        buffers=[pygltflib.Buffer(byteLength=len(out.blob))],
+    )
+    return _write(gltf, out.blob, path)
+
+
+def _write(gltf: pygltflib.GLTF2, blob: bytearray, path: Path) -> Path:
+    """Write ``gltf`` with its one buffer ``blob``: GLB chunk or embedded base64 by extension."""
+    if path.suffix.lower() == ".glb":
+        gltf.set_binary_blob(bytes(blob))
+        gltf.save_binary(str(path))
+    else:
+        gltf.buffers[0].uri = ("data:application/octet-stream;base64,"
+                               + base64.b64encode(bytes(blob)).decode("ascii"))
+        path.write_text(gltf.gltf_to_json(), encoding="utf-8")
+    return path
+
+
+def save_mesh(vertices, faces, path, normals=None, name: str = "mesh") -> Path:
+    """Write a static triangle mesh (e.g. a skinned pose) as .glb or .gltf, without skin.
+
+    vertices : (n, 3) float ; faces : (m, 3) int ; normals : optional (n, 3) float
+    """
+    path = Path(path)
+    if path.suffix.lower() not in (".glb", ".gltf"):
+        raise InvalidInputError(f"cannot write {path.name}: save_mesh writes .glb or .gltf")
+    vertices = _float32(vertices, "vertices")
+    faces = np.asarray(faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise InvalidInputError(f"vertices must have shape (n, 3), got {vertices.shape}")
+    if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0 or faces.min() < 0 or faces.max() >= len(vertices):
+        raise InvalidInputError(f"faces must be a non-empty (m, 3) array of indices below {len(vertices)}")
+    out = _BinaryBuilder()
+    attributes = {"POSITION": out.add(vertices, FLOAT, 3, target=ARRAY_BUFFER, min_max=True)}
+    if normals is not None:
+        attributes["NORMAL"] = out.add(_float32(normals, "normals"), FLOAT, 3, target=ARRAY_BUFFER)
+    indices = out.add(faces.reshape(-1), UNSIGNED_INT, 1, target=ELEMENT_ARRAY_BUFFER)
+    primitive = pygltflib.Primitive(attributes=pygltflib.Attributes(**attributes), indices=indices,
+                                    mode=pygltflib.TRIANGLES)
+    gltf = pygltflib.GLTF2(
+        asset=pygltflib.Asset(generator="cgaskin", version="2.0"), scene=0,
+        scenes=[pygltflib.Scene(nodes=[0])], nodes=[pygltflib.Node(name=name, mesh=0)],
+        meshes=[pygltflib.Mesh(name=name, primitives=[primitive])],
+        accessors=out.accessors, bufferViews=out.views, buffers=[pygltflib.Buffer(byteLength=len(out.blob))])
+    return _write(gltf, out.blob, path)
+
+
+def _skeleton_nodes(rig: Rig, animated: set) -> list:
+    """One glTF node per skeleton node, same order; TRS, or the exact matrix where they differ."""
+    sk = rig.skeleton
+    children = [[] for _ in range(sk.n_nodes)]
+    for i, p in enumerate(sk.parents):
+        if p >= 0:
+            children[p].append(i)
+    nodes = []
+    for i in range(sk.n_nodes):
+        t, q, s = sk.rest_translations[i], sk.rest_rotations[i], sk.rest_scales[i]
+        matrix = np.asarray(sk.rest_matrices[i], dtype=np.float64)
+        node = pygltflib.Node(name=sk.names[i], children=children[i])
+        # exact comparison: the loader computes TRS-node matrices with this very function, so a
+        # TRS node reloads bit-identical and anything else (a matrix node) keeps its matrix
+        if np.array_equal(matrix, trs_to_matrix(t, q, s)) or i in animated:
+            if i in animated and not np.allclose(matrix, trs_to_matrix(t, q, s), rtol=0, atol=1e-9):
+                warnings.warn(f"{rig.name}: node {sk.names[i]!r} is animated, so glTF requires TRS, "
+                              f"but its rest matrix is not a TRS (shear?); wrote the TRS", UserWarning,
+                              stacklevel=3)
+            if not np.array_equal(t, [0, 0, 0]):
+                node.translation = [float(x) for x in t]
+            if not np.array_equal(q, [0, 0, 0, 1]):
+                node.rotation = [float(x) for x in q]
+            if not np.array_equal(s, [1, 1, 1]):
+                node.scale = [float(x) for x in s]
+        else:
+            node.matrix = [float(x) for x in matrix.T.reshape(-1)]  # column-major
+        nodes.append(node)
+    return nodes
+
+
+def _animations(rig: Rig, out: _BinaryBuilder):
+    """glTF animations of the rig's clips, and the set of skeleton nodes they animate."""
+    animations, animated = [], set()
+    for clip in rig.clips:
+        samplers, channels, inputs = [], [], {}
+        for c, ch in enumerate(clip.channels):
+            where = f"clip {clip.name!r} channel {c}"
+            if ch.path not in CHANNEL_PATHS or ch.interpolation not in INTERPOLATIONS:
+                raise InvalidInputError(f"{where}: path {ch.path!r} / interpolation {ch.interpolation!r} "
+                                        f"is not glTF's")
+            if not 0 <= ch.node < rig.skeleton.n_nodes:
+                raise InvalidInputError(f"{where} targets node {ch.node}, outside the skeleton")
+            width = CHANNEL_PATHS[ch.path]
+            times = _float32(np.asarray(ch.times).reshape(-1), f"{where} times")
+            if len(times) == 0 or (np.diff(times) <= 0).any():
+                raise InvalidInputError(f"{where}: key times must increase strictly (in float32)")
+            per_key = 3 if ch.interpolation == "CUBICSPLINE" else 1
+            values = np.asarray(ch.values)
+            if values.shape != ((len(times), 3, width) if per_key == 3 else (len(times), width)):
+                raise InvalidInputError(f"{where}: values have shape {values.shape} for {len(times)} "
+                                        f"{ch.interpolation} keys of {ch.path}")
+            # channels of one clip usually share their key times: store each set once
+            key = times.tobytes()
+            if key not in inputs:
+                inputs[key] = out.add(times, FLOAT, 1, min_max=True)  # the spec requires min/max
+            output = out.add(_float32(values.reshape(-1, width), f"{where} values"), FLOAT, width)
+            samplers.append(pygltflib.AnimationSampler(input=inputs[key], output=output,
+                                                       interpolation=ch.interpolation))
+            channels.append(pygltflib.AnimationChannel(
+                sampler=len(samplers) - 1,
+                target=pygltflib.AnimationChannelTarget(node=int(ch.node), path=ch.path)))
+            animated.add(int(ch.node))
+        if not channels:
+            warnings.warn(f"{rig.name}: clip {clip.name!r} has no channels; glTF animations need at "
+                          f"least one, so it is not written", UserWarning, stacklevel=3)
+            continue
+        animations.append(pygltflib.Animation(name=clip.name, samplers=samplers, channels=channels))
+    return animations, animated

@@ -1,0 +1,220 @@
+"""Validation of skinned-mesh arrays at the boundary of the library.
+
+Loaders, ``Rig`` constructors and the mesh operations call ``check_mesh`` once, so that every kernel
+after it can assume clean data: finite float64 positions, int64 faces inside the vertex range, and
+exactly four influences per vertex with non-negative weights that sum to 1 (to float64 rounding:
+skinning must match glTF to 1e-9 of the model's size, and a row off 1 by e moves a vertex by e
+times its distance from the origin).
+
+Real files break the last rule routinely (float32 weights sum to 1 only within ~1e-7; assimp's
+conversions store rows up to 1.8e-3 off; ``quad_skin.glb`` has 10 influences per vertex, and keeping
+the largest 4 drops up to 0.37 of a row's weight), so those cases are repaired: float32 noise
+silently, real defects with a warning. Everything else that is wrong is refused with an
+``InvalidInputError`` that says which vertex holds which value.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .errors import InvalidInputError
+
+MAX_INFLUENCES = 4
+#: Rows whose sum is off 1 by more than this are reported (a warning) before being renormalised.
+#: float32 files (every glTF) round each weight to ~6e-8 relative, so their rows sum to 1 only
+#: within ~2.4e-7: that much is storage noise, renormalised silently.
+WEIGHT_SUM_TOLERANCE = 1e-6
+#: Rows within this of 1 are left bit for bit as they are. One float64 division by the row sum
+#: lands within ~8e-16 (4 roundings and 3 additions of 2^-53 each), so a second ``check_mesh`` never
+#: changes a row again: the function is idempotent, which save -> load round trips rely on.
+EXACT_SUM_TOLERANCE = 2e-15
+
+
+def _prefix(source: str) -> str:
+    return f"{source}: " if source else ""
+
+
+def _as_array(value, name: str, source: str) -> np.ndarray:
+    try:
+        return np.array(value)  # always a copy: the caller's array is never modified
+    except Exception as exc:  # ragged lists and the like
+        raise InvalidInputError(f"{_prefix(source)}{name} is not an array: {exc}") from None
+
+
+def _first_bad_row(mask: np.ndarray) -> int:
+    """Index of the first True row of a (n,) or (n, k) boolean mask."""
+    rows = mask if mask.ndim == 1 else mask.any(axis=1)
+    return int(np.flatnonzero(rows)[0])
+
+
+def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, source: str = ""):
+    """Validate and normalise a skinned triangle mesh; return new arrays.
+
+    Parameters
+    ----------
+    vertices : (n, 3) real
+        Rest positions; must be finite.
+    faces : (m, 3) integer
+        Vertex indices, each in ``[0, n)``.
+    joints : (n, k) integer, k >= 1
+        Bone index of each influence. Slots whose weight is 0 are ignored (their index may be
+        anything); the others must lie in ``[0, n_bones)``.
+    weights : (n, k) real, k >= 1
+        Influence weights: finite and >= 0, at least one > 0 per vertex.
+    n_bones : int, optional
+        Number of bones; when given, joint indices of weighted slots must be below it.
+    source : str
+        Where the data come from (a file name), used in messages and warnings.
+
+    Returns
+    -------
+    vertices : (n, 3) float64
+    faces : (m, 3) int64
+    joints : (n, 4) int64, unused slots hold bone 0
+    weights : (n, 4) float64, each row sums to 1 within ``EXACT_SUM_TOLERANCE``
+
+    Repairs (each with one ``UserWarning`` naming ``source``): slots that name the same bone twice
+    are merged (exact: skinning is linear in the weights, so no warning); more than 4 influences
+    keep the 4 largest; rows whose sum is off 1 by more than ``WEIGHT_SUM_TOLERANCE`` are divided by
+    their sum. Rows off by less (float32 storage noise) are divided by their sum silently; rows
+    within ``EXACT_SUM_TOLERANCE`` are left bit for bit alone, so data that went through
+    ``check_mesh`` once pass it again unchanged (what makes save -> load round trips exact).
+    Weighted slots are moved to the front of each row, keeping their order.
+
+    Raises
+    ------
+    InvalidInputError
+        Wrong shapes or dtypes, non-finite positions, faces out of range, NaN/inf or negative
+        weights, a vertex without any weight, a joint index outside ``[0, n_bones)``.
+    """
+    pre = _prefix(source)
+    vertices = _as_array(vertices, "vertices", source)
+    faces = _as_array(faces, "faces", source)
+    joints = _as_array(joints, "joints", source)
+    weights = _as_array(weights, "weights", source)
+
+    # --- vertices ---------------------------------------------------------------------------
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise InvalidInputError(f"{pre}vertices must have shape (n, 3), got {vertices.shape}")
+    if not (np.issubdtype(vertices.dtype, np.floating) or np.issubdtype(vertices.dtype, np.integer)):
+        raise InvalidInputError(f"{pre}vertices must be real numbers, got dtype {vertices.dtype}")
+    vertices = vertices.astype(np.float64)
+    n = len(vertices)
+    bad = ~np.isfinite(vertices)
+    if bad.any():
+        v = _first_bad_row(bad)
+        raise InvalidInputError(
+            f"{pre}vertex {v} has a non-finite position {vertices[v].tolist()} "
+            f"({int(bad.any(axis=1).sum())} such vertices); fix or remove them before skinning")
+
+    # --- faces ------------------------------------------------------------------------------
+    if faces.size == 0:
+        faces = faces.reshape(0, 3)
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise InvalidInputError(f"{pre}faces must have shape (m, 3) (triangles), got {faces.shape}")
+    if not np.issubdtype(faces.dtype, np.integer):
+        raise InvalidInputError(f"{pre}faces must hold integer vertex indices, got dtype {faces.dtype}")
+    faces = faces.astype(np.int64)
+    bad = (faces < 0) | (faces >= n)
+    if bad.any():
+        f = _first_bad_row(bad)
+        raise InvalidInputError(
+            f"{pre}face {f} = {faces[f].tolist()} refers to a vertex outside [0, {n}) "
+            f"({int(bad.any(axis=1).sum())} such faces); faces must index the {n} vertices")
+
+    # --- joints and weights: shapes and values ------------------------------------------------
+    if weights.ndim != 2 or weights.shape[0] != n or weights.shape[1] < 1:
+        raise InvalidInputError(f"{pre}weights must have shape ({n}, k) with k >= 1 (one row per vertex), "
+                                f"got {weights.shape}")
+    if joints.shape != weights.shape:
+        raise InvalidInputError(f"{pre}joints must have the shape of weights {weights.shape}, got {joints.shape}")
+    if not (np.issubdtype(weights.dtype, np.floating) or np.issubdtype(weights.dtype, np.integer)):
+        raise InvalidInputError(f"{pre}weights must be real numbers, got dtype {weights.dtype}")
+    if not np.issubdtype(joints.dtype, np.integer):
+        raise InvalidInputError(f"{pre}joints must hold integer bone indices, got dtype {joints.dtype}")
+    weights = weights.astype(np.float64)
+    joints = joints.astype(np.int64)
+
+    bad = ~np.isfinite(weights)
+    if bad.any():
+        v = _first_bad_row(bad)
+        raise InvalidInputError(f"{pre}vertex {v} has non-finite weights {weights[v].tolist()} "
+                                f"({int(bad.any(axis=1).sum())} such vertices)")
+    bad = weights < 0
+    if bad.any():
+        v = _first_bad_row(bad)
+        raise InvalidInputError(f"{pre}vertex {v} has negative weights {weights[v].tolist()} "
+                                f"({int(bad.any(axis=1).sum())} such vertices); weights must be >= 0")
+    used = weights > 0
+    # Unused slots may hold any index (exporters write garbage there); give them bone 0 so that
+    # no later lookup can go out of range.
+    joints[~used] = 0
+    bad = used & ((joints < 0) | ((joints >= n_bones) if n_bones is not None else False))
+    if bad.any():
+        v = _first_bad_row(bad)
+        limit = f"[0, {n_bones})" if n_bones is not None else ">= 0"
+        raise InvalidInputError(
+            f"{pre}vertex {v} is weighted to bone indices {joints[v][used[v]].tolist()}, "
+            f"which must be {limit} ({int(bad.any(axis=1).sum())} such vertices)")
+    empty = ~used.any(axis=1)
+    if empty.any():
+        v = int(np.flatnonzero(empty)[0])
+        raise InvalidInputError(
+            f"{pre}vertex {v} has no weight at all ({int(empty.sum())} such vertices); every vertex "
+            f"needs at least one bone with weight > 0 (bind unskinned vertices to a root bone)")
+
+    # --- merge slots that name the same bone (exact: skinning is linear in the weights) -------
+    k = weights.shape[1]
+    for a in range(k):
+        for b in range(a + 1, k):
+            same = used[:, a] & used[:, b] & (joints[:, a] == joints[:, b])
+            if same.any():
+                weights[same, a] += weights[same, b]
+                weights[same, b] = 0.0
+                joints[same, b] = 0
+                used[same, b] = False
+
+    # --- at most 4 influences: keep the largest ----------------------------------------------
+    counts = used.sum(axis=1)
+    over = counts > MAX_INFLUENCES
+    if over.any():
+        rows = np.flatnonzero(over)
+        # stable sort on -w: ties keep the file's slot order, so the result is deterministic
+        order = np.argsort(-weights[rows], axis=1, kind="stable")
+        drop = order[:, MAX_INFLUENCES:]
+        weights[rows[:, None], drop] = 0.0
+        joints[rows[:, None], drop] = 0
+        used[rows[:, None], drop] = False
+        warnings.warn(
+            f"{pre}{len(rows)} vertices have more than {MAX_INFLUENCES} bone influences (up to "
+            f"{int(counts.max())}); kept the {MAX_INFLUENCES} largest weights of each and renormalised",
+            UserWarning, stacklevel=2)
+
+    # --- compact the used slots to the front, keeping their order, then pad/trim to 4 ----------
+    order = np.argsort(~used, axis=1, kind="stable")
+    weights = np.take_along_axis(weights, order, axis=1)
+    joints = np.take_along_axis(joints, order, axis=1)
+    if k < MAX_INFLUENCES:
+        pad = MAX_INFLUENCES - k
+        weights = np.concatenate([weights, np.zeros((n, pad))], axis=1)
+        joints = np.concatenate([joints, np.zeros((n, pad), dtype=np.int64)], axis=1)
+    else:
+        weights = np.ascontiguousarray(weights[:, :MAX_INFLUENCES])
+        joints = np.ascontiguousarray(joints[:, :MAX_INFLUENCES])
+
+    # --- rows must sum to 1 ----------------------------------------------------------------------
+    sums = weights.sum(axis=1)
+    deviation = np.abs(sums - 1.0)
+    # over-4 rows were cut, so they are always renormalised (silently: warned above)
+    off = (deviation > EXACT_SUM_TOLERANCE) | over
+    if off.any():
+        weights[off] /= sums[off, None]
+        warned = deviation[~over] > WEIGHT_SUM_TOLERANCE
+        if warned.any():
+            worst = int(np.flatnonzero(~over)[np.argmax(np.where(warned, deviation[~over], -1.0))])
+            warnings.warn(
+                f"{pre}{int(warned.sum())} vertices have weights that do not sum to 1 (max deviation "
+                f"{deviation[worst]:.3g} at vertex {worst}); renormalised them",
+                UserWarning, stacklevel=2)
+    return vertices, faces, joints, weights

@@ -1,0 +1,23 @@
+"""Shared fixtures: the real-model folder and the hypothesis profiles."""
+import os
+from pathlib import Path
+
+import pytest
+from hypothesis import settings
+
+# `ci` is the default; HYPOTHESIS_PROFILE=thorough runs >= 2000 examples per property
+settings.register_profile("ci", max_examples=50, deadline=None)
+settings.register_profile("thorough", max_examples=2000, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="session")
+def models_dir() -> Path:
+    """The real models (env CGASKIN_MODELS, default <repo>/../shared/models); skip if absent."""
+    path = Path(os.environ.get("CGASKIN_MODELS", REPO.parent / "shared" / "models"))
+    if not path.is_dir():
+        pytest.skip(f"real models folder {path} is absent: set CGASKIN_MODELS to the folder "
+                    f"holding Arm5.glb, Fox.glb, ... (see design.md section 6)")
+    return path
