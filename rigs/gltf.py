@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 import pygltflib
 
+from ..baselines import matrix_to_quat, quat_to_matrix, trs_matrix
 from ..errors import CgaskinError, InvalidInputError, ModelFormatError, NoSkinError
 from ..rig import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip, Rig, Skeleton
 from .. import validate
@@ -92,60 +93,13 @@ _PACKAGE_DIRS = {os.path.dirname(__file__), os.path.dirname(validate.__file__)}
 
 # --- transforms (shared with the exporter) -----------------------------------------------------
 
-def quat_to_matrix(q) -> np.ndarray:
-    """Rotation matrix of a unit quaternion.
-
-    q : (4,) float, (x, y, z, w)
-    returns : (3, 3) float64
-    """
-    x, y, z, w = (float(c) for c in q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
-
-
-def matrix_to_quat(r) -> np.ndarray:
-    """Unit quaternion (x, y, z, w), w >= 0, of a rotation matrix (Shepperd's method).
-
-    Picks the largest of the four squared components to divide by, so rotations near 180 degrees
-    (the FBX PreRotation nodes at 179.999995 degrees) lose no precision.
-
-    r : (3, 3) float, orthonormal with det +1
-    returns : (4,) float64
-    """
-    r = np.asarray(r, dtype=np.float64)
-    trace = r[0, 0] + r[1, 1] + r[2, 2]
-    candidates = (trace, r[0, 0], r[1, 1], r[2, 2])
-    k = int(np.argmax(candidates))
-    if k == 0:
-        s = 2.0 * np.sqrt(max(1.0 + trace, 0.0))
-        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, s / 4]
-    elif k == 1:
-        s = 2.0 * np.sqrt(max(1.0 + r[0, 0] - r[1, 1] - r[2, 2], 0.0))
-        q = [s / 4, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
-    elif k == 2:
-        s = 2.0 * np.sqrt(max(1.0 + r[1, 1] - r[0, 0] - r[2, 2], 0.0))
-        q = [(r[0, 1] + r[1, 0]) / s, s / 4, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
-    else:
-        s = 2.0 * np.sqrt(max(1.0 + r[2, 2] - r[0, 0] - r[1, 1], 0.0))
-        q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, s / 4, (r[1, 0] - r[0, 1]) / s]
-    q = np.array(q)
-    q /= np.linalg.norm(q)
-    return -q if q[3] < 0 else q
-
-
 def trs_to_matrix(translation, rotation, scale) -> np.ndarray:
-    """The glTF local matrix T @ R @ S.
+    """The glTF local matrix T @ R @ S (see ``cgaskin.baselines.trs_matrix``).
 
     translation : (3,) float; rotation : (4,) float unit quaternion (x, y, z, w); scale : (3,) float
     returns : (4, 4) float64
     """
-    m = np.eye(4)
-    m[:3, :3] = quat_to_matrix(rotation) * np.asarray(scale, dtype=np.float64)[None, :]
-    m[:3, 3] = translation
-    return m
+    return trs_matrix(translation, rotation, scale)
 
 
 def matrix_to_trs(m):

@@ -9,6 +9,8 @@ from .skinning import skin_affine, skin_vertices
 from .pose import Pose, skin, skin_normals
 from . import baselines, versor
 from .validate import check_mesh
+from .cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
+from .topology import Topology, rig_topology
 
 __version__ = "0.1.0"
 

@@ -15,6 +15,7 @@ from numba import njit
 
 from . import versor
 from ._checks import float_array
+from .baselines import trs_matrix
 from .animation import sample_clip
 from .errors import InvalidInputError
 from .generated.kernels import gp_versor_versor, versor_to_affine
@@ -22,19 +23,6 @@ from .rig import Rig, Skeleton
 from .skinning import skin_affine
 
 FRAMES = ("parent", "local")
-
-
-def _trs_matrices(t, q, s):
-    """(j, 4, 4) glTF local matrices T @ R @ S of (j, 3), (j, 4) (x, y, z, w), (j, 3)."""
-    x, y, z, w = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
-    m = np.zeros(t.shape[:-1] + (4, 4))
-    m[..., :3, :3] = np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2) * s[..., None, :]
-    m[..., :3, 3] = t
-    m[..., 3, 3] = 1.0
-    return m
 
 
 @dataclass(frozen=True)
@@ -68,7 +56,7 @@ class Pose:
         if similar.any():
             versors[similar] = versor.compose(versor.translator(t[similar]), versor.rotor_from_quaternion(q[similar]),
                                               versor.dilator(s[similar, 0]))
-        matrices = _trs_matrices(t, q, s)
+        matrices = trs_matrix(t, q, s)
         for i in np.flatnonzero(overridden):
             matrices[i] = exact[i]
         return cls(skeleton, versors, matrices, similar)
@@ -175,7 +163,7 @@ class Pose:
 
 def _shear_nodes(skeleton: Skeleton) -> list:
     """Per node: its exact rest matrix when the stored TRS does not reproduce it, else None."""
-    trs = _trs_matrices(skeleton.rest_translations, skeleton.rest_rotations, skeleton.rest_scales)
+    trs = trs_matrix(skeleton.rest_translations, skeleton.rest_rotations, skeleton.rest_scales)
     out = []
     for m, exact in zip(trs, skeleton.rest_matrices):
         out.append(None if np.allclose(m, exact, rtol=0, atol=1e-12 * max(1.0, np.abs(exact).max())) else exact)

@@ -1,0 +1,420 @@
+"""The position-welded topology of a triangle mesh, shared by cut and tear.
+
+Real files duplicate vertices along UV and normal seams: two rows of ``rig.vertices`` with the same
+position and different NORMAL/TEXCOORD_0 (Fox is fully unindexed: no face shares a vertex with
+another). An operation that walks the surface (a cut following crossed edges, a tear crossing from face
+to face, boundary loops) must see through those copies, or it stops at the first seam and leaves the
+copies of a seam edge cut at different places (a crack). So it works on the *welded* mesh, in which
+vertices with bitwise-equal positions are one, while the output keeps the attribute-split vertices.
+
+Vocabulary (used by the field names below)
+
+* vertex: a row of the mesh's vertex array (attribute-split);
+* welded vertex: a class of vertices with bitwise-equal positions (``-0.0`` equals ``0.0``); numbered
+  by first appearance, so welded vertex ``w`` is represented by its lowest vertex ``representative[w]``;
+* corner edge ``k`` of face ``f``: from ``faces[f, k]`` to ``faces[f, (k + 1) % 3]`` (the face's own
+  direction, counter-clockwise);
+* vertex edge: an undirected pair of vertices joined by some corner edge (a seam edge has two or more,
+  one per copy; faces that share both vertices share the vertex edge);
+* edge: an undirected pair of welded vertices joined by some corner edge.
+
+``topology(vertices, faces)`` builds it in a few linear passes in numba (a hash table welds positions;
+edges are deduplicated in buckets by their lower end, a counting sort), and ``rig_topology(rig)`` caches
+it per rig, which is how cut and tear use it (rigs are immutable by convention: a rig whose arrays are
+modified in place after a first call keeps its stale topology; see ``clear_topology_cache``).
+"""
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from .errors import InvalidInputError
+
+__all__ = ["Topology", "topology", "rig_topology", "rig_cached", "clear_topology_cache", "directed_loops"]
+
+
+# ---- welding: a hash table (open addressing, linear probing, >= 2x the keys so probes stay short) -----
+_M1 = np.uint64(0xFF51AFD7ED558CCD)
+_M2 = np.uint64(0xC4CEB9FE1A85EC53)
+_S33 = np.uint64(33)
+_ROT = np.uint64(0x9E3779B97F4A7C15)
+
+
+@njit(cache=True, nogil=True)
+def _mix(h):
+    """The 64-bit finaliser of MurmurHash3: every input bit affects every output bit."""
+    h ^= h >> _S33
+    h *= _M1
+    h ^= h >> _S33
+    h *= _M2
+    h ^= h >> _S33
+    return h
+
+
+@njit(cache=True, nogil=True)
+def _table_size(n):
+    size = 16
+    while size < 2 * n:
+        size *= 2
+    return size
+
+
+@njit(cache=True, nogil=True)
+def _weld_positions(bits):
+    """Welded ids of rows of ``bits`` (n, 3) uint64 (float64 bit patterns, -0.0 already made +0.0).
+
+    returns welded (n,) int64 in order of first appearance, representative (w,) int64 (first row)
+    """
+    n = bits.shape[0]
+    size = _table_size(n)
+    mask = np.uint64(size - 1)
+    table = np.full(size, -1, np.int64)          # welded id stored at its hash slot
+    welded = np.empty(n, np.int64)
+    representative = np.empty(n, np.int64)
+    count = 0
+    for i in range(n):
+        h = _mix(bits[i, 0] ^ _mix(bits[i, 1] + _ROT) ^ _mix(bits[i, 2] * _ROT))
+        slot = h & mask
+        while True:
+            w = table[slot]
+            if w < 0:
+                table[slot] = count
+                representative[count] = i
+                welded[i] = count
+                count += 1
+                break
+            r = representative[w]
+            if bits[r, 0] == bits[i, 0] and bits[r, 1] == bits[i, 1] and bits[r, 2] == bits[i, 2]:
+                welded[i] = w
+                break
+            slot = (slot + np.uint64(1)) & mask
+    return welded, representative[:count].copy()
+
+
+@njit(cache=True, nogil=True)
+def _unique_pairs(a, b):
+    """Ids of the unordered pairs {a[i], b[i]} (non-negative int64).
+
+    Buckets by the lower element (a counting sort, cache-friendly where a hash table over millions of
+    keys is not), then deduplicates within each bucket: by scanning for the small buckets of a mesh,
+    by sorting for large ones (a fan around a pole). Ids increase with the lower element, then with
+    first appearance.
+
+    returns ids (N,) int64, pairs (u, 2) int64 with pairs[j, 0] <= pairs[j, 1]
+    """
+    n = a.shape[0]
+    top = 0
+    for i in range(n):
+        top = max(top, a[i], b[i])
+    offsets = np.zeros(top + 2, np.int64)
+    for i in range(n):
+        offsets[min(a[i], b[i]) + 1] += 1
+    for v in range(top + 1):
+        offsets[v + 1] += offsets[v]
+    fill = offsets[:-1].copy()
+    member = np.empty(n, np.int64)               # pair indices grouped by lower element, in order
+    for i in range(n):
+        lo = min(a[i], b[i])
+        member[fill[lo]] = i
+        fill[lo] += 1
+    ids = np.empty(n, np.int64)
+    pairs = np.empty((n, 2), np.int64)
+    count = 0
+    for lo in range(top + 1):
+        s, e = offsets[lo], offsets[lo + 1]
+        if e - s <= 32:
+            for q in range(s, e):
+                i = member[q]
+                hi = max(a[i], b[i])
+                found = -1
+                for r in range(s, q):
+                    j = member[r]
+                    if max(a[j], b[j]) == hi:
+                        found = ids[j]
+                        break
+                if found < 0:
+                    pairs[count, 0] = lo
+                    pairs[count, 1] = hi
+                    found = count
+                    count += 1
+                ids[i] = found
+        else:
+            his = np.empty(e - s, np.int64)
+            for q in range(s, e):
+                i = member[q]
+                his[q - s] = max(a[i], b[i])
+            order = np.argsort(his, kind="mergesort")   # stable: first appearance within equal keys
+            for q in range(e - s):
+                i = member[s + order[q]]
+                if q == 0 or his[order[q]] != his[order[q - 1]]:
+                    pairs[count, 0] = lo
+                    pairs[count, 1] = his[order[q]]
+                    count += 1
+                ids[i] = count - 1
+    return ids, pairs[:count].copy()
+
+
+@njit(cache=True, nogil=True)
+def _edge_faces_csr(face_edges, n_edges):
+    """Incidence lists edge -> (face, corner), faces in increasing order within each edge."""
+    m = face_edges.shape[0]
+    offsets = np.zeros(n_edges + 1, np.int64)
+    for f in range(m):
+        for k in range(3):
+            offsets[face_edges[f, k] + 1] += 1
+    for e in range(n_edges):
+        offsets[e + 1] += offsets[e]
+    fill = offsets[:-1].copy()
+    faces = np.empty(3 * m, np.int64)
+    corners = np.empty(3 * m, np.int8)
+    for f in range(m):
+        for k in range(3):
+            e = face_edges[f, k]
+            faces[fill[e]] = f
+            corners[fill[e]] = k
+            fill[e] += 1
+    return offsets, faces, corners
+
+
+@njit(cache=True, nogil=True)
+def _corner_pairs(faces, vertex_map):
+    """Endpoints (3m,) of every corner edge after mapping vertices through ``vertex_map``."""
+    m = faces.shape[0]
+    a = np.empty(3 * m, np.int64)
+    b = np.empty(3 * m, np.int64)
+    for f in range(m):
+        for k in range(3):
+            a[3 * f + k] = vertex_map[faces[f, k]]
+            b[3 * f + k] = vertex_map[faces[f, (k + 1) % 3]]
+    return a, b
+
+
+@njit(cache=True, nogil=True)
+def _find_pairs(pairs, a, b):
+    """Row of ``pairs`` (u, 2), sorted within rows, holding each {a[i], b[i]}, or -1: one pass of
+    ``_unique_pairs`` over the table and the queries together."""
+    u = pairs.shape[0]
+    ids, unique = _unique_pairs(np.concatenate((pairs[:, 0], a)), np.concatenate((pairs[:, 1], b)))
+    row = np.full(unique.shape[0], -1, np.int64)
+    for j in range(u):
+        row[ids[j]] = j
+    out = np.empty(a.shape[0], np.int64)
+    for i in range(a.shape[0]):
+        out[i] = row[ids[u + i]]
+    return out
+
+
+# ---- the data structure -------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Topology:
+    """Welded topology of a triangle mesh (see the module docstring for the vocabulary).
+
+    welded : (n,) int64, welded vertex of each vertex
+    representative : (w,) int64, the first vertex of each welded vertex
+    faces : (m, 3) int64, the faces over welded vertices (same order and corners as the mesh's)
+    vertex_edges : (u, 2) int64, vertex edges, lower vertex index first, ordered by it
+    face_vertex_edges : (m, 3) int64, vertex edge of each corner edge
+    vertex_edge_edge : (u,) int64, the (welded) edge of each vertex edge
+    edges : (e, 2) int64, welded edges, lower welded id first, ordered by it
+    face_edges : (m, 3) int64, edge of each corner edge
+    edge_face_offsets : (e + 1,) int64, CSR offsets: the faces of edge ``i`` are
+        ``edge_face_faces[edge_face_offsets[i]:edge_face_offsets[i + 1]]``
+    edge_face_faces : (3m,) int64, face of each incidence, increasing within an edge
+    edge_face_corners : (3m,) int8, corner k of each incidence (the face runs along the edge from its
+        corner k to corner k + 1, which gives the side: see ``edge_directions``)
+    """
+
+    welded: np.ndarray
+    representative: np.ndarray
+    faces: np.ndarray
+    vertex_edges: np.ndarray
+    face_vertex_edges: np.ndarray
+    vertex_edge_edge: np.ndarray
+    edges: np.ndarray
+    face_edges: np.ndarray
+    edge_face_offsets: np.ndarray
+    edge_face_faces: np.ndarray
+    edge_face_corners: np.ndarray
+
+    @property
+    def n_welded(self) -> int:
+        return len(self.representative)
+
+    @property
+    def n_edges(self) -> int:
+        return len(self.edges)
+
+    @property
+    def edge_face_counts(self) -> np.ndarray:
+        """(e,) int64, number of faces on each edge: 1 on a boundary, 2 inside a manifold surface."""
+        return np.diff(self.edge_face_offsets)
+
+    @property
+    def boundary_edges(self) -> np.ndarray:
+        """(b,) int64 ids of the edges with exactly one face."""
+        return np.flatnonzero(self.edge_face_counts == 1)
+
+    @property
+    def nonmanifold_edges(self) -> np.ndarray:
+        """(k,) int64 ids of the edges with more than two faces."""
+        return np.flatnonzero(self.edge_face_counts > 2)
+
+    def edge_faces(self, edge: int) -> np.ndarray:
+        """Faces (k,) int64 on ``edge``."""
+        return self.edge_face_faces[self.edge_face_offsets[edge]:self.edge_face_offsets[edge + 1]]
+
+    def edge_directions(self) -> np.ndarray:
+        """(3m,) bool, per incidence of ``edge_face_faces``: True when the face runs along its edge
+        from ``edges[e, 0]`` to ``edges[e, 1]``. A consistently oriented manifold edge has one of each."""
+        f, k = self.edge_face_faces, self.edge_face_corners.astype(np.int64)
+        return self.faces[f, k] < self.faces[f, (k + 1) % 3]
+
+    def find_edges(self, a, b) -> np.ndarray:
+        """Edge id of each welded pair {a[i], b[i]} (arrays (k,) int), -1 where there is none."""
+        a = np.ascontiguousarray(a, dtype=np.int64).reshape(-1)
+        b = np.ascontiguousarray(b, dtype=np.int64).reshape(-1)
+        if len(a) == 0:
+            return np.empty(0, np.int64)
+        return _find_pairs(self.edges, a, b)
+
+    def boundary_loops(self) -> list:
+        """Closed boundary loops, as lists of welded vertex ids in the direction their faces run along
+        them (counter-clockwise around the hole when seen from the side the normals point to).
+
+        Only chains that close are returned (an open chain is impossible on a boundary of a manifold
+        surface, but a non-manifold vertex can make one). Where a welded vertex starts two boundary
+        edges (two holes touching at a vertex), the loops are split there arbitrarily.
+        """
+        be = self.boundary_edges
+        if len(be) == 0:
+            return []
+        inc = self.edge_face_offsets[be]
+        f, k = self.edge_face_faces[inc], self.edge_face_corners[inc].astype(np.int64)
+        start, end = self.faces[f, k], self.faces[f, (k + 1) % 3]
+        return directed_loops(start, end)
+
+
+def directed_loops(start, end, choose=None) -> list:
+    """Chain directed edges start[i] -> end[i] into closed loops (lists of vertex ids).
+
+    Where a vertex starts several unused edges (loops touching at a vertex), ``choose(previous, vertex,
+    candidates)`` picks the next one (an index into ``candidates``, which are edge indices); by default
+    the first. Geometry-aware callers pass the sharpest turn (see ``cut``), so that touching loops come
+    out as separate simple loops. Edges left in chains that do not close are dropped.
+    """
+    outgoing: dict = {}
+    for i, s in enumerate(start.tolist()):
+        outgoing.setdefault(s, []).append(i)
+    used = np.zeros(len(start), bool)
+    loops = []
+    end_list = end.tolist()
+    start_list = start.tolist()
+    for first in range(len(start)):
+        if used[first]:
+            continue
+        loop, i = [], first
+        while True:
+            used[i] = True
+            loop.append(start_list[i])
+            vertex = end_list[i]
+            candidates = [j for j in outgoing.get(vertex, ()) if not used[j] or j == first]
+            if not candidates:
+                break                                  # open chain: dropped
+            if len(candidates) == 1:
+                pick = candidates[0]
+            elif choose is None:
+                pick = first if first in candidates else candidates[0]
+            else:
+                pick = candidates[choose(start_list[i], vertex, candidates)]
+            if pick == first:
+                loops.append(loop)
+                break
+            i = pick
+    return loops
+
+
+def topology(vertices, faces) -> Topology:
+    """Build the welded topology of a triangle mesh.
+
+    vertices : (n, 3) float, finite
+    faces : (m, 3) int, indices in [0, n)
+    returns Topology (0.5 ms for the 5k-face arm, 0.3-0.6 s for 1.26M faces on a 2-vCPU machine)
+    """
+    vertices = np.asarray(vertices)
+    faces = np.asarray(faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise InvalidInputError(f"vertices must have shape (n, 3), got {vertices.shape}")
+    if faces.ndim != 2 or faces.shape[1] != 3 or (faces.size and faces.dtype.kind not in "iu"):
+        raise InvalidInputError(f"faces must be an (m, 3) integer array, got {faces.shape} {faces.dtype}")
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
+        raise InvalidInputError(f"faces hold indices outside [0, {len(vertices)})")
+    # bitwise equality of positions, with -0.0 == 0.0 (adding +0.0 turns -0.0 into +0.0)
+    positions = np.ascontiguousarray(vertices, dtype=np.float64) + 0.0
+    if not np.isfinite(positions).all():
+        raise InvalidInputError("vertices hold non-finite values (NaN or inf)")
+    welded, representative = _weld_positions(positions.view(np.uint64))
+    welded_faces = welded[faces]
+    m = len(faces)
+    ident = np.arange(len(vertices), dtype=np.int64)
+    a, b = _corner_pairs(faces, ident)
+    vertex_edge_ids, vertex_edges = _unique_pairs(a, b)
+    # the welded edge of each vertex edge: its pair of welded ids, deduplicated the same way
+    vertex_edge_edge, edges = _unique_pairs(welded[vertex_edges[:, 0]], welded[vertex_edges[:, 1]])
+    face_vertex_edges = vertex_edge_ids.reshape(m, 3)
+    face_edges = vertex_edge_edge[face_vertex_edges]
+    offsets, inc_faces, inc_corners = _edge_faces_csr(face_edges, len(edges))
+    return Topology(welded=welded, representative=representative, faces=welded_faces,
+                    vertex_edges=vertex_edges, face_vertex_edges=face_vertex_edges,
+                    vertex_edge_edge=vertex_edge_edge, edges=edges, face_edges=face_edges,
+                    edge_face_offsets=offsets, edge_face_faces=inc_faces, edge_face_corners=inc_corners)
+
+
+# ---- per-rig cache ------------------------------------------------------------------------------------
+# id(rig) -> (weak reference to the rig, its vertices and faces objects, {name: value}). The weak
+# reference tells a live entry from a recycled id; a finaliser drops the entry when the rig is collected.
+_CACHE: dict = {}
+
+
+def rig_cached(rig, name: str, build):
+    """``build(rig)``, computed once per rig and name and kept while the rig lives.
+
+    For data derived from a rig's mesh (its topology, checked arrays): rigs are frozen dataclasses, and
+    the cache also checks that ``rig.vertices`` and ``rig.faces`` are the same array objects, but it
+    cannot see in-place edits of the arrays (call ``clear_topology_cache`` after one).
+    """
+    key = id(rig)
+    entry = _CACHE.get(key)
+    if entry is not None:
+        ref, vertices, faces, values = entry
+        if ref() is rig and vertices is rig.vertices and faces is rig.faces:
+            if name not in values:
+                values[name] = build(rig)
+            return values[name]
+    value = build(rig)
+    try:
+        ref = weakref.ref(rig)
+    except TypeError:                     # not weak-referenceable: do not cache
+        return value
+    if entry is None or entry[0]() is not rig:
+        weakref.finalize(rig, _CACHE.pop, key, None)
+    _CACHE[key] = (ref, rig.vertices, rig.faces, {name: value})
+    return value
+
+
+def _build_topology(rig) -> Topology:
+    return topology(rig.vertices, rig.faces)
+
+
+def rig_topology(rig) -> Topology:
+    """The welded topology of ``rig``'s mesh (``topology(rig.vertices, rig.faces)``), built on first use
+    and cached while the rig lives (see ``rig_cached``)."""
+    return rig_cached(rig, "topology", _build_topology)
+
+
+def clear_topology_cache() -> None:
+    """Forget every cached topology (and everything else ``rig_cached`` holds)."""
+    _CACHE.clear()
