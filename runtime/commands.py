@@ -39,8 +39,54 @@ def _demo(args) -> int:
     frames = [(skin(rig, p), rig.faces) for p in poses.values()]
     render_strip(frames, out / "deform.png", titles=list(poses))
     save(rig, out / "capsule_arm.glb")
-    print(f"wrote {out / 'deform.png'} (rest, rotation, translation, dilation, all three, clip) "
-          f"and {out / 'capsule_arm.glb'}")
+    written = [out / "deform.png", out / "capsule_arm.glb"]
+    written += _demo_cut(rig, out)
+    print("wrote " + ", ".join(map(str, written)))
+    return 0
+
+
+def _demo_cut(rig, out: Path) -> list:
+    """Cut the bent arm across the forearm (capped), then animate both halves again."""
+    from . import cut, save, skin
+    from .render import render_strip
+    bent = rig.rest_pose().rotate(rig.skeleton.names[1], [0, 0, 1], np.radians(50))
+    joints = bent.global_matrices()[:, :3, 3]
+    elbow, wrist = joints[1], joints[2]
+    # across the middle of the forearm, tilted a little so that the cap is an ellipse
+    normal = (elbow - wrist) + np.array([0.0, 0.0, 0.3])
+    upper, lower = cut(rig, normal, (elbow + wrist) / 2, pose=bent, cap=True)
+    frames, titles = [], []
+    for name, half in (("upper half", upper), ("lower half", lower)):
+        frames.append((skin(half, bent), half.faces))
+        titles.append(f"{name}, cut posed")
+    again = bent.rotate(rig.skeleton.names[1], [0, 0, 1], np.radians(-80)).dilate(rig.skeleton.names[-1], 1.4)
+    for name, half in (("upper half", upper), ("lower half", lower)):
+        frames.append((skin(half, again), half.faces))
+        titles.append(f"{name}, re-posed + dilated")
+    render_strip(frames, out / "cut.png", titles=titles, columns=2)
+    save(upper, out / "cut_upper.glb")
+    save(lower, out / "cut_lower.glb")
+    return [out / "cut.png", out / "cut_upper.glb", out / "cut_lower.glb"]
+
+
+def _pose_of(rig, args):
+    """The pose named by --clip/--time (None: rest pose)."""
+    if args.clip is None:
+        return None
+    clip = int(args.clip) if args.clip.isdigit() else args.clip
+    return rig.pose(clip, args.time)
+
+
+def _cut(args) -> int:
+    from . import cut, load, save
+    rig = load(args.model)
+    halves = cut(rig, args.normal, args.point, pose=_pose_of(rig, args), cap=args.cap)
+    for half, path in zip(halves, args.out):
+        if half.n_faces:
+            save(half, path)
+            print(f"wrote {path}: {half.n_vertices} vertices, {half.n_faces} faces")
+        else:
+            print(f"{path}: that side of the plane is empty; not written")
     return 0
 
 
@@ -64,6 +110,11 @@ def _skin(args) -> int:
     return 0
 
 
+def _add_pose_options(p) -> None:
+    p.add_argument("--clip", default=None, help="pose: clip name or index (default: the rest pose)")
+    p.add_argument("--time", type=float, default=0.0, help="pose: seconds into the clip")
+
+
 def register(sub) -> None:
     """Add the model subcommands to the argparse subparsers ``sub``."""
     p = sub.add_parser("demo", help="deform the built-in capsule arm; write pictures and a .glb (no files needed)")
@@ -72,9 +123,18 @@ def register(sub) -> None:
 
     p = sub.add_parser("skin", help="skin a model at a clip time and write the posed mesh (.glb/.gltf)")
     p.add_argument("model")
-    p.add_argument("--clip", default=None, help="clip name or index (default: the rest pose)")
-    p.add_argument("--time", type=float, default=0.0, help="seconds into the clip")
+    _add_pose_options(p)
     p.add_argument("--frames", type=int, default=1, help="bake this many frames from --time to --end")
     p.add_argument("--end", type=float, default=None, help="last time when baking (default: clip end)")
     p.add_argument("--out", required=True)
     p.set_defaults(run=_skin)
+
+    p = sub.add_parser("cut", help="cut a model by a plane into two rigs (.glb)")
+    p.add_argument("model")
+    p.add_argument("--normal", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
+    p.add_argument("--point", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
+    p.add_argument("--cap", action="store_true", help="close each half with a cap on the plane")
+    _add_pose_options(p)
+    p.add_argument("--out", nargs=2, required=True, metavar=("POSITIVE.glb", "NEGATIVE.glb"),
+                   help="the half the normal points to, then the other")
+    p.set_defaults(run=_cut)
