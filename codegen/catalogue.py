@@ -322,13 +322,18 @@ def plane_from_points():
                       "accuracy far from the origin: π' = −(e0 ∧ up(b−a) ∧ up(c−a) ∧ e∞)*, then "
                       "normalised and moved back by d = n̂·a.")
     a, b, c = k.array("a", 3), k.array("b", 3), k.array("c", 3)
-    u = [bi - ai for ai, bi in zip(a, b)]
-    w = [ci - ai for ai, ci in zip(a, c)]
+    # the edge vectors are intermediates, so that the products below stay in relative coordinates
+    # (expanding b − a into the products would reintroduce absolute ones: error ~ε|a|²)
+    u = k.intermediate("u0", "u1", "u2")
+    w = k.intermediate("w0", "w1", "w2")
     n1, n2, n3, inv = k.intermediate("n1", "n2", "n3", "inv_len")
+    for syms, other in ((u, b), (w, c)):
+        for s_, oi, ai in zip(syms, other, a):
+            k.let(s_, oi - ai)
     o = MV(k.ring, {algebra.mask_of("eo"): k.ring.one})
     inf = MV(k.ring, {algebra.mask_of("ei"): k.ring.one})
-    U = up(k.ring, [k.ring(sympy.expand(e)) for e in u])
-    W = up(k.ring, [k.ring(sympy.expand(e)) for e in w])
+    U = up(k.ring, [k.poly(e) for e in u])
+    W = up(k.ring, [k.poly(e) for e in w])
     P = -((o ^ U ^ W ^ inf).dual())
     if P["ei"] != 0:
         raise CodegenError("plane through the origin must have no e∞ part")

@@ -5,7 +5,7 @@ generator: 1
 sympy: 1.14.0
 algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
 spec hash: 52cb0cb1cec992d2
-imports kernels (hash cd513f9b79887e6f)
+imports kernels (hash 2a3be177f2b68d0c)
 """
 
 from numba import njit, prange
