@@ -116,8 +116,11 @@ def skinning_module(kernels_hash: str, affine) -> str:
 
     body = "\n\n".join([
         "from numba import njit, prange\n\nfrom .kernels import affine_point\n",
-        blend("skin_blend", "@njit(cache=True, error_model='numpy', nogil=True)", "range"),
-        blend("skin_blend_parallel", "@njit(cache=True, error_model='numpy', nogil=True, parallel=True)", "prange"),
+        # 'contract' lets LLVM fuse a += w * r into one FMA (one rounding instead of two: no less
+        # accurate, ~8% faster); no other fast-math flag (the results must stay IEEE-exact otherwise)
+        blend("skin_blend", "@njit(cache=True, error_model='numpy', nogil=True, fastmath={'contract'})", "range"),
+        blend("skin_blend_parallel",
+              "@njit(cache=True, error_model='numpy', nogil=True, parallel=True, fastmath={'contract'})", "prange"),
     ])
     return _header("Hoisted skinning: blend per-bone affine coefficients, apply once per vertex.",
                    _digest(body), {"kernels": kernels_hash}) + "\n" + body

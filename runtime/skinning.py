@@ -41,11 +41,11 @@ def _mesh_args(rest, joints, weights):
     return rest, np.ascontiguousarray(joints), np.ascontiguousarray(weights)
 
 
-def _diagnose(rest, joints, weights, n_bones, bad_joints, bad_values):
+def _diagnose(rest, joints, weights, affines, bad_joints, bad_values):
     """Name the first bad input after the blend loop reported a problem (the slow path)."""
     if bad_joints:
-        index_array(joints, "joints", n_bones)
-    for name, arr in (("rest", rest), ("weights", weights)):
+        index_array(joints, "joints", len(affines))
+    for name, arr in (("rest", rest), ("weights", weights), ("affines", affines)):
         float_array(arr, name)
     raise InvalidInputError(f"{bad_values} skinned vertices are not finite; the bone transforms "
                             f"overflow float64")
@@ -60,7 +60,9 @@ def skin_affine(rest, joints, weights, affines, parallel=None, out=None) -> np.n
     Returns (n, 3) float64 (``out`` when given). For transforms that are not similarities (bind matrices with
     non-uniform scale); similarity poses should use ``skin_vertices``.
     """
-    affines = float_array(affines, "affines")
+    affines = np.asarray(affines)
+    if affines.dtype != np.float64:
+        affines = float_array(affines, "affines")
     if affines.ndim not in (2, 3) or affines.shape[1:] not in ((3, 4), (12,)):
         raise InvalidInputError(f"affines must have shape (B, 3, 4) or (B, 12), got {affines.shape}")
     affines = np.ascontiguousarray(affines.reshape(len(affines), 12))
@@ -73,7 +75,7 @@ def skin_affine(rest, joints, weights, affines, parallel=None, out=None) -> np.n
         parallel = len(rest) >= PARALLEL_THRESHOLD
     bad_joints, bad_values = (skin_blend_parallel if parallel else skin_blend)(rest, joints, weights, affines, out)
     if bad_joints or bad_values:
-        _diagnose(rest, joints, weights, len(affines), bad_joints, bad_values)
+        _diagnose(rest, joints, weights, affines, bad_joints, bad_values)
     return out
 
 

@@ -73,3 +73,11 @@ def test_bad_input(parallel):
         cgaskin.skin_vertices(rest, joints[:, :3], weights, v)
     with pytest.raises(InvalidInputError, match="not a similarity versor"):
         cgaskin.skin_vertices(rest, joints, weights, v + 0.5)
+
+
+def test_nan_affine_is_named():
+    rest, joints, weights, v = random_skin(4)
+    affines = versor.to_affine(v)
+    affines[2, 1, 3] = np.nan
+    with pytest.raises(InvalidInputError, match="affines"):
+        cgaskin.skin_affine(rest, joints, weights, affines)
