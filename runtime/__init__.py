@@ -11,6 +11,8 @@ from . import baselines, versor
 from .validate import check_mesh
 from .cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
 from .topology import Topology, rig_topology
+from .bvh import TriangleBVH
+from .tear import TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
 
 __version__ = "0.1.0"
 
