@@ -602,12 +602,18 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
     faces = _triangles(f, mode, idx, where)
 
     out = {"positions": positions, "faces": faces, "attributes": {}}
-    for name, width in (("NORMAL", 3), ("TEXCOORD_0", 2)):
+    residuals = {r.format(s) for r in WEIGHT_RESIDUALS for s in range(8)}
+    # NORMAL, TEXCOORD_0 and application-specific attributes ("_NAME", e.g. the tear's "_TEAR"
+    # labels): carried through cut, tear and export
+    custom = [(name, None) for name in attrs if name.startswith("_") and name not in residuals]
+    for name, width in (("NORMAL", 3), ("TEXCOORD_0", 2), *custom):
         if name in attrs:
             _, ctype, atype, _ = f.accessor_info(attrs[name], f"{where} {name}")
             values = f.accessor(attrs[name], f"{where} {name}")
-            if values.ndim != 2 or values.shape[1] != width or values.dtype != np.float64:
-                raise f.error(f"{where} {name} must be VEC{width} of floats or normalized "
+            if values.ndim == 1:
+                values = values[:, None]
+            if values.ndim != 2 or (width is not None and values.shape[1] != width) or values.dtype != np.float64:
+                raise f.error(f"{where} {name} must be VEC{width or 'n'} of floats or normalized "
                               f"integers, got {atype} {COMPONENT_NAMES[ctype]}")
             if not np.isfinite(values).all():
                 v = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
@@ -906,7 +912,8 @@ def _build_rig(f: _GltfFile) -> Rig:
 
     joints, weights = padded("joints", np.int64), padded("weights", np.float64)
     attributes = {}
-    for name in ("NORMAL", "TEXCOORD_0"):
+    names = dict.fromkeys(name for part in parts for name in part["attributes"])
+    for name in names:
         have = [name in part["attributes"] for part in parts]
         if all(have):
             attributes[name] = np.concatenate([part["attributes"][name] for part in parts])

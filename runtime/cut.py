@@ -564,8 +564,13 @@ def _split_arrays(rig, vertices, joints, weights, pos_src, neg_src, new_lo, new_
         flat = np.ascontiguousarray(values.reshape(len(values), -1))
         if flat.dtype.kind != "f":
             flat = flat.astype(np.float64)
-        unit = key == "NORMAL" and flat.shape[1] == 3
-        new = _lerp_rows(flat, new_lo, new_hi, new_t, unit).astype(flat.dtype, copy=False)
+        if key.startswith("_"):
+            # application-specific data (e.g. the tear's "_TEAR" labels) may not be interpolable:
+            # a new vertex takes the row of the nearer edge end
+            new = np.where((np.asarray(new_t) < 0.5)[:, None], flat[new_lo], flat[new_hi])
+        else:
+            unit = key == "NORMAL" and flat.shape[1] == 3
+            new = _lerp_rows(flat, new_lo, new_hi, new_t, unit).astype(flat.dtype, copy=False)
         for h, rows in enumerate(_assemble(flat, pos_src, neg_src, new)):
             attributes[h][key] = rows.reshape((len(rows),) + values.shape[1:])
     return [(out[0][h], out[1][h], out[2][h], attributes[h]) for h in range(2)]
