@@ -41,6 +41,7 @@ def _demo(args) -> int:
     save(rig, out / "capsule_arm.glb")
     written = [out / "deform.png", out / "capsule_arm.glb"]
     written += _demo_cut(rig, out)
+    written += _demo_tear(rig, out)
     print("wrote " + ", ".join(map(str, written)))
     return 0
 
@@ -69,6 +70,26 @@ def _demo_cut(rig, out: Path) -> list:
     return [out / "cut.png", out / "cut_upper.glb", out / "cut_lower.glb"]
 
 
+def _demo_tear(rig, out: Path) -> list:
+    """Two scalpel strokes along the top of the arm (one slit), opened, then animated again."""
+    from . import save, skin, tear
+    from .render import render_strip
+    # the blade stands vertically (handle above the skin, tip at the axis) and moves along x
+    stroke = [([x, 0.05, 1.0], [x, 0.05, 0.0]) for x in (0.6, 1.2, 1.8)]
+    torn = tear(rig, stroke[0], stroke[1], opening=0.06)
+    torn = tear(torn, stroke[1], stroke[2], opening=0.06)
+    new = np.zeros(torn.n_vertices, bool)
+    new[rig.n_vertices:] = True
+    marked = new[torn.faces].any(axis=1)
+    poses = {"torn (2 strokes, opened)": torn.rest_pose(),
+             "torn, elbow bent -40°": torn.rest_pose().rotate(torn.skeleton.names[1], [0, 0, 1], np.radians(-40)),
+             "torn, clip 'wave' t=1.5s": torn.pose("wave", 1.5)}
+    frames = [(skin(torn, p), torn.faces, marked) for p in poses.values()]
+    render_strip(frames, out / "tear.png", titles=list(poses), elev=80.0)
+    save(torn, out / "torn.glb")
+    return [out / "tear.png", out / "torn.glb"]
+
+
 def _pose_of(rig, args):
     """The pose named by --clip/--time (None: rest pose)."""
     if args.clip is None:
@@ -87,6 +108,18 @@ def _cut(args) -> int:
             print(f"wrote {path}: {half.n_vertices} vertices, {half.n_faces} faces")
         else:
             print(f"{path}: that side of the plane is empty; not written")
+    return 0
+
+
+def _tear(args) -> int:
+    from . import load, save, tear
+    rig = load(args.model)
+    pose = _pose_of(rig, args)
+    torn = tear(rig, (args.from_[:3], args.from_[3:]), (args.to[:3], args.to[3:]), pose=pose,
+                opening=args.opening)
+    save(torn, args.out)
+    print(f"wrote {args.out}: {torn.n_vertices} vertices ({torn.n_vertices - rig.n_vertices} new), "
+          f"{torn.n_faces} faces")
     return 0
 
 
@@ -138,3 +171,15 @@ def register(sub) -> None:
     p.add_argument("--out", nargs=2, required=True, metavar=("POSITIVE.glb", "NEGATIVE.glb"),
                    help="the half the normal points to, then the other")
     p.set_defaults(run=_cut)
+
+    p = sub.add_parser("tear", help="tear a model along the path of a moving scalpel (.glb)")
+    p.add_argument("model")
+    p.add_argument("--from", dest="from_", type=float, nargs=6, required=True,
+                   metavar=("AX", "AY", "AZ", "BX", "BY", "BZ"),
+                   help="the scalpel (handle A, tip B) at the start of the stroke")
+    p.add_argument("--to", type=float, nargs=6, required=True, metavar=("AX", "AY", "AZ", "BX", "BY", "BZ"),
+                   help="the scalpel at the end of the stroke")
+    p.add_argument("--opening", type=float, default=0.0, help="push the two sides apart by this distance")
+    _add_pose_options(p)
+    p.add_argument("--out", required=True)
+    p.set_defaults(run=_tear)
