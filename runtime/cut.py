@@ -56,6 +56,7 @@ from .generated.kernels import (affine_point, plane_from_normal_distance, plane_
                                 point_plane_distance, point_plane_distance_batch, segment_plane)
 from .rig import Rig
 from .skinning import skin_affine
+from .weights import blend_weight_rows
 from .topology import Topology, directed_loops, rig_cached, rig_topology, topology
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
@@ -320,57 +321,6 @@ def _split(plane, positions, faces, wfaces, welded, representative, sign, face_v
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _interpolate_weights(lo, hi, t, joints, weights):
-    """Weights of points at parameter t on edges lo -> hi: (1 - t) w_lo + t w_hi over the union of
-    the two rows' bones (up to 8), the 4 largest kept, renormalised; sorted by decreasing weight,
-    unused slots bone 0 with weight 0 (the layout ``validate.check_mesh`` produces).
-
-    returns joints (k, 4) int64, weights (k, 4) float64
-    """
-    k = lo.shape[0]
-    width = joints.shape[1]
-    out_j = np.zeros((k, 4), np.int64)
-    out_w = np.zeros((k, 4))
-    bones = np.empty(2 * width, np.int64)
-    values = np.empty(2 * width)
-    for i in range(k):
-        count = 0
-        for side in range(2):
-            v = lo[i] if side == 0 else hi[i]
-            scale = 1.0 - t[i] if side == 0 else t[i]
-            for s in range(width):
-                w = scale * weights[v, s]
-                if w <= 0.0:
-                    continue
-                bone = joints[v, s]
-                found = False
-                for q in range(count):
-                    if bones[q] == bone:
-                        values[q] += w
-                        found = True
-                        break
-                if not found:
-                    bones[count] = bone
-                    values[count] = w
-                    count += 1
-        # selection of the 4 largest (ties: the bone met first)
-        total = 0.0
-        kept = min(4, count)
-        for slot in range(kept):
-            best = slot
-            for q in range(slot + 1, count):
-                if values[q] > values[best]:
-                    best = q
-            bones[slot], bones[best] = bones[best], bones[slot]
-            values[slot], values[best] = values[best], values[slot]
-            total += values[slot]
-        for slot in range(kept):
-            out_j[i, slot] = bones[slot]
-            out_w[i, slot] = values[slot] / total
-    return out_j, out_w
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _solve3(m, r):
     """x with L x = r for the linear part L (3x3) of a row-major 3x4 map ``m`` (12,), by Cramer's rule;
     returns (x0, x1, x2, det)."""
@@ -625,7 +575,8 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
                          np.empty((0, 3)), (len(halves[0].vertices), len(halves[1].vertices)), plane, tol,
                          0.0)
 
-    new_joints, new_weights = _interpolate_weights(new_lo, new_hi, new_t, joints, weights)
+    new_joints, new_weights = blend_weight_rows(np.stack([new_lo, new_hi], axis=1),
+                                                np.stack([1.0 - new_t, new_t], axis=1), joints, weights)
     residual = 0.0
     if affines is None:
         new_rest = new_point

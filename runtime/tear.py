@@ -74,6 +74,7 @@ from .errors import CgaskinError, InvalidInputError, MissesMeshError
 from .generated.kernels import (affine_point, barycentric, plane_from_points, point_plane_distance,
                                 segment_plane)
 from .rig import Rig
+from .weights import blend_weight_rows
 from .topology import Topology, rig_cached, rig_topology, topology
 
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
@@ -899,54 +900,6 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
 
 # ---- data of the new vertices -------------------------------------------------------------------------
 @njit(cache=True, nogil=True, error_model="numpy")
-def _blend_weights(src, coef, joints, weights):
-    """Weights of interpolated vertices: Σ_r coef[i, r] · (row src[i, r]) over the union of the rows'
-    bones (up to 12), the 4 largest kept and renormalised, sorted by decreasing weight; unused slots
-    bone 0 with weight 0 (the layout ``validate.check_mesh`` produces).
-
-    src : (k, 3) int64 ; coef : (k, 3) float64 ; joints, weights : (n, 4)
-    returns joints (k, 4) int64, weights (k, 4) float64
-    """
-    k = src.shape[0]
-    out_j = np.zeros((k, 4), np.int64)
-    out_w = np.zeros((k, 4))
-    bones = np.empty(12, np.int64)
-    values = np.empty(12)
-    for i in range(k):
-        count = 0
-        for r in range(3):
-            v = src[i, r]
-            for s in range(4):
-                w = coef[i, r] * weights[v, s]
-                if w <= 0.0:
-                    continue
-                found = False
-                for q in range(count):
-                    if bones[q] == joints[v, s]:
-                        values[q] += w
-                        found = True
-                        break
-                if not found:
-                    bones[count] = joints[v, s]
-                    values[count] = w
-                    count += 1
-        kept = min(4, count)
-        total = 0.0
-        for slot in range(kept):            # selection of the largest (ties: the bone met first)
-            best = slot
-            for q in range(slot + 1, count):
-                if values[q] > values[best]:
-                    best = q
-            bones[slot], bones[best] = bones[best], bones[slot]
-            values[slot], values[best] = values[best], values[slot]
-            total += values[slot]
-        for slot in range(kept):
-            out_j[i, slot] = bones[slot]
-            out_w[i, slot] = values[slot] / total
-    return out_j, out_w
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _blended(joints, weights, affines, i):
     """(12,) the blended row-major 3x4 map Σ_k w_k A[joints[i, k]] of vertex i."""
     out = np.zeros(12)
@@ -1247,7 +1200,7 @@ def _vertex_data(vertices, joints, weights, labels, path_float, new_node, new_sr
     """
     n, v, t = vertices.shape[0], new_node.shape[0], twins.shape[0]
     total = n + v + t
-    new_joints, new_weights = _blend_weights(new_src, new_coef, joints, weights)
+    new_joints, new_weights = blend_weight_rows(new_src, new_coef, joints, weights)
     out_v = np.empty((total, 3))
     out_j = np.empty((total, 4), np.int64)
     out_w = np.empty((total, 4))
