@@ -1,0 +1,468 @@
+"""The public versor API (cgaskin.versor): batching, algebraic laws, round trips, blending, and the
+errors bad input must raise (InvalidInputError naming the argument, never a numba traceback)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+import strategies as S
+from cgaskin import versor as V
+from cgaskin.errors import CgaskinError, InvalidInputError
+from tolerances import TOL
+
+
+def rel_err(got, expected, scale=None) -> float:
+    got, expected = np.asarray(got, float), np.asarray(expected, float)
+    if scale is None:
+        scale = float(np.max(np.abs(expected)))
+    return float(np.max(np.abs(got - expected))) / max(scale, 1e-300)
+
+
+def same_map(a, b, scale=None) -> float:
+    """Relative difference of the affine maps of two versors (sign-free)."""
+    ma, mb = V.to_matrix(a), V.to_matrix(b)
+    return rel_err(ma, mb, scale)
+
+
+def matrix_scale(*ms) -> float:
+    """Max entry of |M1| |M2| ... : the natural scale of the rounding in a matrix product."""
+    prod = np.abs(ms[0])
+    for m in ms[1:]:
+        prod = prod @ np.abs(m)
+    return float(prod.max())
+
+
+def scale_of(v) -> float:
+    return float(np.cbrt(np.linalg.det(V.to_affine(v)[..., :3])))
+
+
+# ==== shapes and broadcasting ================================================================================
+def test_constructor_shapes():
+    assert V.identity().shape == (12,) and V.identity(3).shape == (3, 12) and V.identity((2, 3)).shape == (2, 3, 12)
+    assert V.translator(np.zeros(3)).shape == (12,)
+    assert V.translator(np.zeros((5, 3))).shape == (5, 12)
+    assert V.translator(np.zeros((2, 4, 3))).shape == (2, 4, 12)
+    assert V.translator(np.zeros((0, 3))).shape == (0, 12)
+    assert V.rotor([0, 0, 1], 1.0).shape == (12,)
+    assert V.rotor([0, 0, 1], np.zeros(5)).shape == (5, 12)
+    assert V.rotor(np.ones((5, 3)), 0.3).shape == (5, 12)
+    assert V.rotor(np.ones((2, 1, 3)), np.zeros(4)).shape == (2, 4, 12)
+    assert V.rotor_from_quaternion(np.tile([0, 0, 0, 1.0], (5, 1))).shape == (5, 12)
+    assert V.dilator(2.0).shape == (12,) and V.dilator(np.full((3, 2), 2.0)).shape == (3, 2, 12)
+    assert V.motor().shape == (12,)
+    np.testing.assert_array_equal(V.motor(), V.identity())
+
+
+def test_operation_shapes():
+    v5 = V.compose(V.translator(np.arange(15.0).reshape(5, 3)), V.rotor([1, 2, 3], np.linspace(0, 3, 5)))
+    one = V.dilator(1.5)
+    assert V.compose(one, v5).shape == (5, 12) and V.compose(v5, one).shape == (5, 12)
+    assert V.compose(v5[:, None], v5[None, :]).shape == (5, 5, 12)
+    assert V.compose(one, one, one).shape == (12,)
+    assert V.reverse(v5).shape == V.inverse(v5).shape == V.normalise(v5).shape == (5, 12)
+    assert V.apply(one, np.zeros((7, 3))).shape == (7, 3)
+    assert V.apply(v5, np.zeros((5, 3))).shape == (5, 3)
+    assert V.apply(v5[:, None], np.zeros((7, 3))).shape == (5, 7, 3)
+    assert V.apply(v5, np.zeros(3)).shape == (5, 3)
+    assert V.to_affine(v5).shape == (5, 3, 4) and V.to_affine(one).shape == (3, 4)
+    assert V.to_matrix(v5).shape == (5, 4, 4) and V.to_matrix(one).shape == (4, 4)
+    assert V.from_matrix(V.to_matrix(v5)).shape == (5, 12)
+    assert V.log(v5).shape == (5, 7) and V.exp(V.log(v5)).shape == (5, 12)
+    pairs = np.stack([v5, v5[::-1]], axis=1)                                   # (5, 2, 12)
+    w = np.tile([0.25, 0.75], (5, 1))
+    assert V.blend_linear(pairs, w).shape == (5, 12) and V.blend_log(pairs, w).shape == (5, 12)
+    assert V.is_versor(v5).shape == (5,) and V.is_versor(one).shape == ()
+    assert V.apply(v5[:0], np.zeros((0, 3))).shape == (0, 3)
+
+
+@given(st.lists(S.versors(), min_size=1, max_size=4), st.lists(S.points(), min_size=1, max_size=4))
+def test_batches_equal_rows(sims, pts):
+    vs = np.stack([s.versor() for s in sims])
+    x = np.stack(pts)
+    out = V.apply(vs[:, None], x[None, :])                                  # (n, m, 3)
+    for i, v in enumerate(vs):
+        for j, p in enumerate(x):
+            np.testing.assert_array_equal(out[i, j], V.apply(v, p))
+    np.testing.assert_array_equal(V.to_matrix(vs)[-1], V.to_matrix(vs[-1]))
+    np.testing.assert_array_equal(V.compose(vs, vs[::-1])[0], V.compose(vs[0], vs[-1]))
+
+
+def test_non_contiguous_and_float32_inputs():
+    rng = np.random.default_rng(5)
+    vs = V.compose(V.translator(rng.uniform(-5, 5, (6, 3))), V.rotor(rng.normal(size=(6, 3)), rng.uniform(-3, 3, 6)))
+    x = rng.uniform(-5, 5, (6, 3))
+    expected = V.apply(vs[::2], x[::2])
+    np.testing.assert_array_equal(V.apply(np.asfortranarray(vs)[::2], np.asfortranarray(x)[::2]), expected)
+    np.testing.assert_array_equal(V.apply(vs.T.copy().T[::2], x.T.copy().T[::2]), expected)
+    x32 = x.astype(np.float32)
+    np.testing.assert_array_equal(V.apply(vs, x32), V.apply(vs, x32.astype(np.float64)))
+    np.testing.assert_array_equal(V.translator([1, 2, 3]), V.translator(np.array([1.0, 2.0, 3.0])))
+
+
+# ==== algebraic laws ===========================================================================================
+@given(S.versors(), S.versors(), S.versors())
+def test_compose_is_associative_and_matches_matrices(a, b, c):
+    va, vb, vc = a.versor(), b.versor(), c.versor()
+    left = V.compose(V.compose(va, vb), vc)
+    right = V.compose(va, V.compose(vb, vc))
+    both = V.compose(va, vb, vc)
+    ma, mb, mc = a.matrix(), b.matrix(), c.matrix()
+    scale = matrix_scale(ma, mb, mc)
+    expected = ma @ mb @ mc
+    # products reach scales 1e-6 .. 1e6, where the versor form itself loses ~EPS max(s, 1/s)
+    tol = TOL.scale_bound(a.scale, b.scale, c.scale)
+    for got in (left, right, both):
+        assert rel_err(V.to_matrix(got), expected, scale) <= tol
+    assert rel_err(V.to_matrix(left), V.to_matrix(right), scale) <= tol
+
+
+@given(S.versors(), S.points())
+def test_compose_applies_right_factor_first(sim, x):
+    t = V.translator([1.0, 0.0, 0.0])
+    v = sim.versor()
+    mag = max(sim.magnitude, sim.scale * float(np.abs(x).max()), 1.0)
+    assert rel_err(V.apply(V.compose(t, v), x), sim.apply(x) + [1.0, 0, 0], mag) <= TOL.large
+    assert rel_err(V.apply(V.compose(v, t), x), sim.apply(x + [1.0, 0, 0]), mag + sim.scale) <= TOL.large
+
+
+@given(S.versors(), S.points())
+def test_inverse(sim, x):
+    v = sim.versor()
+    inv = V.inverse(v)
+    m, m_inv = sim.matrix(), np.linalg.inv(sim.matrix())
+    assert rel_err(V.to_matrix(inv), m_inv, matrix_scale(m_inv)) <= TOL.large
+    assert rel_err(V.to_matrix(V.compose(v, inv)), np.eye(4), matrix_scale(m, m_inv)) <= TOL.large
+    assert rel_err(V.to_matrix(V.compose(inv, v)), np.eye(4), matrix_scale(m_inv, m)) <= TOL.large
+    assert rel_err(V.inverse(inv), v) <= TOL.large
+    y = V.apply(v, x)
+    mag = max(1.0, float(np.abs(x).max()), float(np.abs(y).max()) / sim.scale, sim.magnitude / sim.scale)
+    assert rel_err(V.apply(inv, y), x, mag) <= TOL.large
+
+
+@given(S.versors())
+def test_reverse_is_inverse_of_unit_versors(sim):
+    v = sim.versor()
+    assert rel_err(V.reverse(v), V.inverse(v)) <= TOL.large
+
+
+# ==== matrices =================================================================================================
+@given(S.versors())
+def test_from_matrix_to_matrix_round_trip(sim):
+    m = sim.matrix()
+    v = V.from_matrix(m)
+    assert V.is_versor(v)
+    assert rel_err(V.to_matrix(v), m, max(sim.magnitude, 1.0)) <= TOL.large
+    back = V.from_matrix(V.to_matrix(sim.versor()))
+    assert min(rel_err(back, sim.versor()), rel_err(back, -sim.versor())) <= TOL.large
+
+
+@given(S.versors())
+def test_from_matrix_float32_noise(sim):
+    m = sim.matrix().astype(np.float32)
+    v = V.from_matrix(m)
+    assert V.is_versor(v)
+    assert rel_err(V.to_matrix(v)[:3, :3], m[:3, :3], sim.scale) <= 1e-6
+    assert rel_err(V.to_matrix(v)[:3, 3], m[:3, 3], sim.magnitude) <= 1e-6
+
+
+@pytest.mark.parametrize("axis", [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, -2, 3)])
+def test_from_matrix_half_turn(axis):
+    sim = S.Similarity(np.asarray(axis, float) / np.linalg.norm(axis), math.pi, np.array([1.0, 2, 3]), 2.0)
+    v = V.from_matrix(sim.matrix())
+    assert rel_err(V.to_matrix(v), sim.matrix(), sim.magnitude) <= TOL.large
+
+
+def test_to_affine_is_matrix_top_rows():
+    v = V.compose(V.translator([1, 2, 3]), V.rotor([0, 0, 1], math.pi / 2), V.dilator(2.0))
+    np.testing.assert_allclose(V.to_affine(v), [[0, -2, 0, 1], [2, 0, 0, 2], [0, 0, 2, 3]], atol=1e-15)
+    np.testing.assert_array_equal(V.to_matrix(v)[:3], V.to_affine(v))
+    np.testing.assert_array_equal(V.to_matrix(v)[3], [0, 0, 0, 1])
+
+
+# ==== blending ================================================================================================
+def _pair(a, b):
+    return np.stack([a, b])
+
+
+@given(S.versors(), S.versors())
+def test_blends_at_end_weights_return_inputs(s1, s2):
+    a, b = s1.versor(), s2.versor()
+    scale = max(s1.magnitude, s2.magnitude, 1.0)
+    for blend in (V.blend_linear, V.blend_log):
+        got_a = blend(_pair(a, b), [1.0, 0.0])
+        got_b = blend(_pair(a, b), [0.0, 1.0])
+        assert same_map(got_a, a, scale) <= TOL.large, blend.__name__
+        assert same_map(got_b, b, scale) <= TOL.large, blend.__name__
+
+
+@given(S.moderate_versors(), S.translations(TOL.moderate), st.floats(0.0, 1.0))
+def test_blend_linear_translations_interpolate(sim, t2, w):
+    """Same rotation and scale: the linear blend moves the translation along the segment."""
+    other = S.Similarity(sim.axis, sim.angle, t2, sim.scale)
+    got = V.blend_linear(_pair(sim.versor(), other.versor()), [1 - w, w])
+    expected = S.Similarity(sim.axis, sim.angle, (1 - w) * sim.translation + w * t2, sim.scale)
+    assert same_map(got, expected.versor(), max(sim.magnitude, 1.0)) <= TOL.large
+
+
+@given(S.translations(), S.translations(), st.floats(0.0, 1.0))
+def test_blend_log_translations_interpolate(t1, t2, w):
+    got = V.blend_log(_pair(V.translator(t1), V.translator(t2)), [1 - w, w])
+    mag = max(1.0, float(np.abs(t1).max()), float(np.abs(t2).max()))
+    assert rel_err(V.to_affine(got)[:, 3], (1 - w) * t1 + w * t2, mag) <= TOL.large
+    assert rel_err(V.to_affine(got)[:, :3], np.eye(3), 1.0) <= TOL.large
+
+
+@given(S.unit_axes(), S.angles(-math.pi + 1e-3, math.pi - 1e-3), S.angles(-math.pi + 1e-3, math.pi - 1e-3),
+       st.floats(0.0, 1.0))
+def test_blend_rotations_about_one_axis_stay_between(axis, a1, a2, w):
+    pair = _pair(V.rotor(axis, a1), V.rotor(axis, a2))
+    # linear blending (nlerp): the rotors are sign-aligned first, so the blend takes the short arc
+    # from a1 to a2 (or to a2 -+ 2 pi when |a1 - a2| > pi) and its angle stays on that arc
+    b2 = a2 if abs(a1 - a2) <= math.pi else a2 - math.copysign(2 * math.pi, a2 - a1)
+    lin = V.blend_linear(pair, [1 - w, w])
+    half = math.atan2((1 - w) * math.sin(a1 / 2) + w * math.sin(b2 / 2),
+                      (1 - w) * math.cos(a1 / 2) + w * math.cos(b2 / 2))
+    assert min(a1, b2) - 1e-12 <= 2 * half <= max(a1, b2) + 1e-12
+    assert same_map(lin, V.rotor(axis, 2 * half), 1.0) <= TOL.large
+    # log blending: each log has its angle in [0, pi], so the angle interpolates linearly from a1 to a2
+    # (the long way round when |a1 - a2| > pi: blend_log does not align to the short arc)
+    got = V.blend_log(pair, [1 - w, w])
+    expected = V.rotor(axis, (1 - w) * a1 + w * a2)
+    assert same_map(got, expected, 1.0) <= TOL.large
+
+
+@given(S.versors(), S.versors(), st.floats(0.0, 1.0))
+def test_blended_scale_is_between(s1, s2, w):
+    pair = _pair(s1.versor(), s2.versor())
+    lo, hi = min(s1.scale, s2.scale), max(s1.scale, s2.scale)
+    lin = scale_of(V.blend_linear(pair, [1 - w, w]))
+    assert lo * (1 - 1e-12) <= lin <= hi * (1 + 1e-12)
+    log_blend = scale_of(V.blend_log(pair, [1 - w, w]))
+    expected = math.exp((1 - w) * math.log(s1.scale) + w * math.log(s2.scale))   # geometric interpolation
+    assert abs(log_blend - expected) <= 1e-11 * expected
+
+
+@given(S.versors(), st.floats(0.0, 1.0))
+def test_antipodal_versors_blend_to_the_same_map(sim, w):
+    """V and -V are the same transformation: blending them must not cancel."""
+    v = sim.versor()
+    scale = max(sim.magnitude, 1.0)
+    assert same_map(V.blend_linear(_pair(v, -v), [1 - w, w]), v, scale) <= TOL.large
+    assert same_map(V.blend_log(_pair(v, -v), [1 - w, w]), v, scale) <= TOL.large
+
+
+@given(S.versors(), S.versors(), st.floats(0.0, 1.0))
+def test_blend_ignores_input_signs(s1, s2, w):
+    a, b = s1.versor(), s2.versor()
+    scale = max(s1.magnitude, s2.magnitude, 1.0)
+    for blend in (V.blend_linear, V.blend_log):
+        ref = blend(_pair(a, b), [1 - w, w])
+        assert same_map(blend(_pair(a, -b), [1 - w, w]), ref, scale) <= TOL.large
+        assert same_map(blend(_pair(-a, b), [1 - w, w]), ref, scale) <= TOL.large
+
+
+# ==== errors =================================================================================================
+def _raises(match, fn, *args, **kw):
+    with pytest.raises(InvalidInputError, match=match) as info:
+        fn(*args, **kw)
+    assert isinstance(info.value, ValueError) and isinstance(info.value, CgaskinError)
+    return info.value
+
+
+I12 = V.identity()
+BAD_SHAPES = [
+    ("translation", V.translator, ([1.0, 2.0],)),
+    ("translation", V.translator, (np.zeros((3, 2)),)),
+    ("axis", V.rotor, ([0.0, 1.0], 1.0)),
+    ("quaternion", V.rotor_from_quaternion, ([0.0, 0.0, 1.0],)),
+    ("versor", V.apply, (np.ones(11), [0.0, 0.0, 0.0])),
+    ("points", V.apply, (I12, [1.0, 2.0])),
+    ("points", V.apply, (I12, "abc")),
+    ("points", V.apply, (I12, [[1.0, 2.0, 3.0], [1.0, 2.0]])),
+    ("versors\\[1\\]", V.compose, (I12, np.ones(11))),
+    ("versor", V.inverse, (np.ones(13),)),
+    ("versor", V.to_matrix, (np.ones(4),)),
+    ("versor", V.log, (np.ones(8),)),
+    ("bivector", V.exp, (np.ones(6),)),
+    ("matrix", V.from_matrix, (np.eye(3),)),
+    ("matrix", V.from_matrix, (np.eye(4)[:3],)),
+    ("matrix", V.from_matrix, (np.eye(4)[:, :3],)),
+    ("weights", V.blend_linear, (np.stack([I12, I12]), [1.0])),
+    ("weights", V.blend_log, (np.stack([I12, I12]), np.ones((2, 2)))),
+]
+
+
+@pytest.mark.parametrize("name, fn, args", BAD_SHAPES,
+                         ids=[f"{f.__name__}-{i}" for i, (_, f, _) in enumerate(BAD_SHAPES)])
+def test_wrong_shapes_raise(name, fn, args):
+    _raises(name, fn, *args)
+
+
+# Regression (fixed in b5db720): non-broadcasting leading axes used to raise numpy's bare ValueError.
+@pytest.mark.parametrize("call", ["rotor", "compose", "apply"])
+def test_non_broadcasting_shapes_raise_invalid_input(call):
+    with pytest.raises(InvalidInputError):
+        if call == "rotor":
+            V.rotor(np.ones((4, 3)), np.ones(3))
+        elif call == "compose":
+            V.compose(V.identity(3), V.identity(2))
+        else:
+            V.apply(V.identity(3), np.ones((2, 3)))
+
+
+NON_FINITE = [
+    ("translation", lambda bad: V.translator([1.0, bad, 0.0])),
+    ("axis", lambda bad: V.rotor([bad, 0.0, 1.0], 1.0)),
+    ("angle", lambda bad: V.rotor([0.0, 0.0, 1.0], bad)),
+    ("quaternion", lambda bad: V.rotor_from_quaternion([0.0, bad, 0.0, 1.0])),
+    ("scale", lambda bad: V.dilator(bad)),
+    ("points", lambda bad: V.apply(I12, [0.0, bad, 0.0])),
+    ("versor", lambda bad: V.apply(np.r_[bad, np.zeros(11)], [0.0, 0.0, 0.0])),
+    ("versors", lambda bad: V.compose(I12, np.r_[1.0, bad, np.zeros(10)])),
+    ("versor", lambda bad: V.inverse(np.r_[1.0, np.zeros(10), bad])),
+    ("versor", lambda bad: V.to_matrix(np.r_[1.0, np.zeros(10), bad])),
+    ("versor", lambda bad: V.normalise(np.r_[1.0, np.zeros(10), bad])),
+    ("versor", lambda bad: V.log(np.r_[1.0, np.zeros(10), bad])),
+    ("bivector", lambda bad: V.exp(np.r_[np.zeros(6), bad])),
+    ("matrix", lambda bad: V.from_matrix(np.where(np.eye(4) > 0, bad, 0.0))),
+    ("versors", lambda bad: V.blend_linear(np.stack([I12, np.r_[bad, np.zeros(11)]]), [0.5, 0.5])),
+    ("weights", lambda bad: V.blend_log(np.stack([I12, I12]), [bad, 0.5])),
+]
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("name, make", NON_FINITE, ids=[f"{n}-{i}" for i, (n, _) in enumerate(NON_FINITE)])
+def test_non_finite_inputs_raise(name, make, bad):
+    _raises(name, make, bad)
+
+
+@pytest.mark.parametrize("axis", [[0.0, 0.0, 0.0], np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])])
+def test_zero_length_axis_raises(axis):
+    _raises("axis", V.rotor, axis, 1.0)
+    _raises("axis", V.motor, axis, 1.0)
+
+
+@pytest.mark.parametrize("scale", [0.0, -1.0, -0.0, [1.0, 2.0, 0.0], [-3.0]])
+def test_non_positive_scale_raises(scale):
+    _raises("scale", V.dilator, scale)
+
+
+def test_zero_quaternion_raises():
+    _raises("quaternion", V.rotor_from_quaternion, [0.0, 0.0, 0.0, 0.0])
+
+
+@given(S.non_versors())
+def test_non_versors_are_rejected(v):
+    assert not V.is_versor(v)
+    for fn in (V.apply, V.inverse, V.to_matrix, V.to_affine, V.log):
+        args = (v, [1.0, 2.0, 3.0]) if fn is V.apply else (v,)
+        _raises("versor", fn, *args)
+    _raises("versor", V.blend_linear, np.stack([I12, v]), [0.5, 0.5])
+    batch = np.stack([I12, v, I12])                      # one bad row in a batch is enough
+    _raises("versor", V.apply, batch, [1.0, 2.0, 3.0])
+
+
+@given(st.lists(S.versors(), min_size=1, max_size=3))
+def test_versors_are_accepted(sims):
+    """Everything the strategies build (translations to 1e4, scales 0.01..100), and products of it."""
+    vs = [s.versor() for s in sims]
+    chain = V.compose(*vs)
+    assert V.is_versor(np.stack(vs)).all() and V.is_versor(chain)
+    V.apply(chain, [1.0, 2.0, 3.0])
+    V.to_matrix(V.inverse(chain))
+
+
+# Regression (fixed in b5db720): the versor check used to ignore the coefficients' size, so this
+# product of in-range versors (residual 6.1e-5 from rounding alone) was rejected.
+def test_products_of_valid_versors_are_accepted():
+    v = V.compose(V.translator([1e4, -1e4, 1e4]), V.rotor([1.0, 2.0, 3.0], 1.0), V.dilator(0.01))
+    chain = V.compose(v, v, v, v)
+    m = V.to_matrix(v)
+    expected = m @ m @ m @ m
+    got = V.to_matrix(chain)
+    assert rel_err(got, expected, matrix_scale(m, m, m, m)) <= TOL.scale_bound(0.01, 0.01, 0.01, 0.01)
+
+
+def _non_similarities():
+    rot = S.rotation_matrix([1.0, 2.0, 3.0], 0.7)
+    out = {}
+    m = np.eye(4); m[0, 1] = 0.3; out["shear"] = m
+    m = np.eye(4); m[:3, :3] = np.diag([1.0, 1.2, 1.0]) @ rot; out["non-uniform"] = m
+    m = np.eye(4); m[:3, :3] = -2.0 * rot; out["reflection (-s R)"] = m
+    m = np.eye(4); m[:3, :3] = rot @ np.diag([1.0, 1.0, -1.0]); out["mirror"] = m
+    m = np.eye(4); m[3, 0] = 0.1; out["projective row"] = m
+    out["zero"] = np.zeros((4, 4))
+    m = np.eye(4); m[2, 2] = 0.0; out["singular"] = m
+    m = np.eye(4); m[:3, :3] = 1e-3 * np.diag([1.0, 1.0, 1.1]); out["tiny non-uniform"] = m
+    return out
+
+
+@pytest.mark.parametrize("kind", list(_non_similarities()))
+def test_from_matrix_rejects_non_similarities(kind):
+    _raises("matrix", V.from_matrix, _non_similarities()[kind])
+
+
+@given(S.versors(), st.sampled_from(["shear", "stretch", "mirror"]), S.log_uniform(1e-3, 0.5), st.integers(0, 2))
+def test_from_matrix_rejects_distorted_similarities(sim, kind, amount, axis):
+    d = np.eye(4)
+    if kind == "shear":
+        d[axis, (axis + 1) % 3] = amount
+    elif kind == "stretch":
+        d[axis, axis] = 1.0 + amount
+    else:
+        d[axis, axis] = -1.0
+    _raises("matrix", V.from_matrix, sim.matrix() @ d)
+    _raises("matrix", V.from_matrix, np.stack([sim.matrix(), sim.matrix() @ d]))
+
+
+def test_errors_are_not_numba_errors():
+    """Inputs of the wrong kind are caught before any kernel: no numba TypingError surfaces."""
+    for fn, args in ((V.apply, (I12, None)), (V.apply, (I12, [object(), 1, 2])), (V.translator, ({"x": 1},)),
+                     (V.apply, ("versor", [0, 0, 0])), (V.exp, (None,)), (V.from_matrix, ("eye",))):
+        with pytest.raises(InvalidInputError):
+            fn(*args)
+
+
+# ==== caller arrays are left alone ===========================================================================
+def test_inputs_are_not_modified():
+    rng = np.random.default_rng(9)
+    vs = V.compose(V.translator(rng.uniform(-5, 5, (4, 3))), V.rotor(rng.normal(size=(4, 3)), rng.uniform(-3, 3, 4)),
+                   V.dilator(rng.uniform(0.5, 2, 4)))
+    arrays = {
+        "vs": vs, "neg": -vs, "x": rng.uniform(-5, 5, (4, 3)), "t": rng.uniform(-5, 5, (4, 3)),
+        "axis": rng.normal(size=(4, 3)), "angle": rng.uniform(-3, 3, 4), "scale": rng.uniform(0.5, 2, 4),
+        "q": rng.normal(size=(4, 4)), "m": V.to_matrix(vs), "w": np.array([[0.3, 0.7]] * 4),
+        "L": V.log(vs), "blend": 0.5 * vs,
+    }
+    before = {k: v.copy() for k, v in arrays.items()}
+    pairs = np.stack([arrays["vs"], arrays["neg"]], axis=1)
+    pairs_before = pairs.copy()
+    a = arrays
+    V.translator(a["t"]); V.rotor(a["axis"], a["angle"]); V.dilator(a["scale"]); V.rotor_from_quaternion(a["q"])
+    V.compose(a["vs"], a["neg"]); V.reverse(a["vs"]); V.inverse(a["vs"]); V.normalise(a["blend"])
+    V.apply(a["vs"], a["x"]); V.to_matrix(a["vs"]); V.to_affine(a["vs"]); V.from_matrix(a["m"])
+    V.log(a["vs"]); V.exp(a["L"]); V.blend_linear(pairs, a["w"]); V.blend_log(pairs, a["w"])
+    V.is_versor(a["vs"]); V.to_clifford(a["vs"][0])
+    for k in arrays:
+        np.testing.assert_array_equal(arrays[k], before[k], err_msg=f"{k} was modified")
+    np.testing.assert_array_equal(pairs, pairs_before, err_msg="blend input was modified")
+
+
+# Regression (fixed in b5db720): compose(v) used to hand back the caller's array.
+def test_outputs_do_not_alias_inputs():
+    v = V.identity()
+    out = V.compose(v)
+    out[0] = 7.0
+    assert v[0] == 1.0, "compose of one versor handed back the caller's array"
+    assert not np.shares_memory(V.compose(v), v)
+
+
+def test_other_outputs_are_fresh_arrays():
+    v = V.compose(V.translator([1.0, 2.0, 3.0]), V.rotor([0.0, 0.0, 1.0], 0.5))
+    x = np.array([1.0, 2.0, 3.0])
+    for out in (V.compose(v, V.identity()), V.reverse(v), V.inverse(v), V.normalise(v), V.apply(v, x),
+                V.to_affine(v), V.to_matrix(v), V.exp(V.log(v))):
+        assert not np.shares_memory(out, v) and not np.shares_memory(out, x)
