@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 
 def _build(args) -> int:
@@ -29,6 +30,11 @@ def _bench(args) -> int:
     return 0
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings on the command line are messages to the user, not source locations."""
+    print(f"cgaskin: warning: {message}", file=sys.stderr if file is None else file)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="cgaskin", description="Deform, cut and tear skinned models with CGA.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -46,7 +52,15 @@ def main(argv=None) -> int:
     commands.register(sub)
 
     args = parser.parse_args(argv)
-    return args.run(args)
+    from .errors import CgaskinError
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            return args.run(args)
+    except (CgaskinError, OSError) as exc:
+        # bad input is the user's to fix: say what is wrong, without a traceback
+        print(f"cgaskin {args.command}: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -1,11 +1,14 @@
-"""Model subcommands of the ``cgaskin`` command line (demo, skin)."""
+"""Model subcommands of the ``cgaskin`` command line (demo, skin, cut, tear)."""
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from .errors import InvalidInputError
 
 
 def progress(iterable, total: int, label: str):
@@ -90,12 +93,34 @@ def _demo_tear(rig, out: Path) -> list:
     return [out / "tear.png", out / "torn.glb"]
 
 
-def _pose_of(rig, args):
-    """The pose named by --clip/--time (None: rest pose)."""
-    if args.clip is None:
+def _clip_of(rig, args):
+    """--clip as the rig names it: a clip name, else a digit string as an index (None: no clip)."""
+    if args.clip is None or args.clip in [c.name for c in rig.clips] or not args.clip.isdigit():
+        return args.clip
+    return int(args.clip)
+
+
+def _joint_of(rig, name: str):
+    """A joint named on the command line: its name, else a digit string as a node index."""
+    return int(name) if name not in rig.skeleton.names and name.isdigit() else name
+
+
+def _pose_of(rig, args, time=None):
+    """The pose named by --clip/--time and the --rotate/--translate/--dilate edits applied after it
+    in the order given; None when none of them is given (the rest vertices)."""
+    clip = _clip_of(rig, args)
+    if clip is None and not args.edits:
         return None
-    clip = int(args.clip) if args.clip.isdigit() else args.clip
-    return rig.pose(clip, args.time)
+    pose = rig.rest_pose() if clip is None else rig.pose(clip, args.time if time is None else time)
+    for kind, joint, values in args.edits:
+        joint = _joint_of(rig, joint)
+        if kind == "rotate":
+            pose = pose.rotate(joint, values[:3], np.radians(values[3]))
+        elif kind == "translate":
+            pose = pose.translate(joint, values)
+        else:
+            pose = pose.dilate(joint, values[0])
+    return pose
 
 
 def _cut(args) -> int:
@@ -124,28 +149,53 @@ def _tear(args) -> int:
 
 
 def _skin(args) -> int:
-    from . import load, skin
+    from . import load, skin, skin_normals
     from .rigs.export import save_mesh
+    if args.frames > 1 and args.clip is None:
+        raise InvalidInputError("--frames bakes a clip over time: name it with --clip")
     rig = load(args.model)
-    clip = int(args.clip) if args.clip is not None and args.clip.isdigit() else args.clip
-    times = [args.time] if args.frames <= 1 else list(np.linspace(args.time, args.end if args.end is not None
-                                                                  else rig.clips[rig.clip_index(clip)].duration,
-                                                                  args.frames))
+    times = [args.time]
+    if args.frames > 1:
+        clip = _clip_of(rig, args)
+        end = args.end if args.end is not None else rig.clips[rig.clip_index(clip)].duration
+        times = list(np.linspace(args.time, end, args.frames))
     out = Path(args.out)
     paths = [out] if len(times) == 1 else [out.with_name(f"{out.stem}_{i:04d}{out.suffix}") for i in range(len(times))]
     items = zip(times, paths)
     if len(times) > 1:
         items = progress(items, len(times), "skinning")
     for t, path in items:
-        pose = rig.rest_pose() if clip is None else rig.pose(clip, t)
-        save_mesh(skin(rig, pose), rig.faces, path)
+        pose = _pose_of(rig, args, t)
+        normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
+        save_mesh(skin(rig, pose), rig.faces, path, normals=normals)
     print(f"wrote {len(paths)} file(s): {paths[0]}{' ...' if len(paths) > 1 else ''}")
     return 0
 
 
+class _Edit(argparse.Action):
+    """Collects --rotate/--translate/--dilate into one list, in command-line order (the order in
+    which they compose)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        joint, *numbers = values
+        try:
+            numbers = [float(v) for v in numbers]
+        except ValueError:
+            parser.error(f"{option_string} {' '.join(values)}: after the joint, give numbers")
+        namespace.edits = (namespace.edits or []) + [(self.dest, joint, numbers)]
+
+
 def _add_pose_options(p) -> None:
-    p.add_argument("--clip", default=None, help="pose: clip name or index (default: the rest pose)")
-    p.add_argument("--time", type=float, default=0.0, help="pose: seconds into the clip")
+    g = p.add_argument_group("pose (default: the rest vertices); edits apply after the clip, in order")
+    g.add_argument("--clip", default=None, help="clip name or index")
+    g.add_argument("--time", type=float, default=0.0, help="seconds into the clip")
+    g.add_argument("--rotate", action=_Edit, nargs=5, metavar=("JOINT", "AX", "AY", "AZ", "DEGREES"),
+                   help="rotate JOINT about the axis (in its parent's frame); repeatable")
+    g.add_argument("--translate", action=_Edit, nargs=4, metavar=("JOINT", "X", "Y", "Z"),
+                   help="translate JOINT (in its parent's frame); repeatable")
+    g.add_argument("--dilate", action=_Edit, nargs=2, metavar=("JOINT", "SCALE"),
+                   help="scale JOINT and its subtree uniformly about the joint; repeatable")
+    p.set_defaults(edits=[])
 
 
 def register(sub) -> None:
