@@ -54,6 +54,7 @@ from numba import njit
 from .errors import InvalidInputError
 from .generated.kernels import (affine_point, plane_from_normal_distance, plane_from_points,
                                 point_plane_distance, point_plane_distance_batch, segment_plane)
+from .pose import check_pose
 from .rig import Rig
 from .skinning import skin_affine
 from .weights import blend_weight_rows
@@ -441,18 +442,6 @@ def _checked_mesh(rig):
     return vertices, joints, weights
 
 
-def _pose_affines(rig, pose):
-    from .pose import Pose
-    if not isinstance(pose, Pose):
-        raise InvalidInputError(f"pose must be a cgaskin.Pose or None, got {type(pose).__name__}")
-    a, b = rig.skeleton, pose.skeleton
-    if b is not a and (b.n_nodes != a.n_nodes or list(b.names) != list(a.names)
-                       or not np.array_equal(b.bone_nodes, a.bone_nodes)):
-        raise InvalidInputError("the pose belongs to another skeleton (its nodes or bones differ from "
-                                "the rig's)")
-    return pose.bone_affines()
-
-
 def _plane(normal, point) -> np.ndarray:
     n = _vector(normal, "normal")
     p = _vector(point, "point")
@@ -552,7 +541,7 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
     if pose is None:
         positions = vertices
     else:
-        affines = _pose_affines(rig, pose)
+        affines = check_pose(rig, pose).bone_affines()
         positions = skin_affine(vertices, joints, weights, affines)
     topo = rig_topology(rig)
 

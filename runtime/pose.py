@@ -207,21 +207,32 @@ def _bone_affines(parents, versors, matrices, similar, bone_nodes, ibm, out):
         out[b] = _compose_affine(ga[bone_nodes[b]], ibm[b])
 
 
+def check_pose(rig: Rig, pose) -> Pose:
+    """``pose`` itself when it is a ``Pose`` of ``rig``'s skeleton (that object, or one with the same
+    nodes and bones, as a cut or torn rig shares with its original); ``InvalidInputError`` if not."""
+    if not isinstance(pose, Pose):
+        raise InvalidInputError(f"pose must be a cgaskin.Pose or None, got {type(pose).__name__}")
+    a, b = rig.skeleton, pose.skeleton
+    if b is not a and (b.n_nodes != a.n_nodes or list(b.names) != list(a.names)
+                       or not np.array_equal(b.bone_nodes, a.bone_nodes)):
+        raise InvalidInputError("the pose belongs to another skeleton (its nodes or bones differ from "
+                                "the rig's)")
+    return pose
+
+
 def skin(rig: Rig, pose: Pose | None = None, out=None) -> np.ndarray:
     """Skinned positions (n, 3) float64 of ``rig`` in ``pose`` (default: the rest pose).
 
     glTF semantics for every format: Σ_i w_i (G[joint_i] · IBM_i) v; the mesh node's own transform is
     ignored."""
-    pose = rig.rest_pose() if pose is None else pose
-    if pose.skeleton is not rig.skeleton and pose.skeleton.n_nodes != rig.skeleton.n_nodes:
-        raise InvalidInputError("the pose belongs to another skeleton")
+    pose = rig.rest_pose() if pose is None else check_pose(rig, pose)
     return skin_affine(rig.vertices, rig.joints, rig.weights, pose.bone_affines(), out=out)
 
 
 def skin_normals(rig: Rig, pose: Pose | None = None, normals=None) -> np.ndarray:
     """Skinned unit normals (n, 3): the blended linear part's cofactor matrix (inverse transpose up
     to a positive factor, so scale and non-uniform scale are corrected) applied, then normalised."""
-    pose = rig.rest_pose() if pose is None else pose
+    pose = rig.rest_pose() if pose is None else check_pose(rig, pose)
     normals = rig.attributes.get("NORMAL") if normals is None else normals
     if normals is None:
         raise InvalidInputError("the rig has no NORMAL attribute; pass normals (n, 3)")

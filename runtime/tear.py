@@ -248,14 +248,8 @@ def _surface(rig, pose) -> _Surface:
     rig_cached(rig, "tear.checks", _mesh_checks)
     if pose is None:
         return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, r.vertices, None))
-    from .pose import Pose, skin
-    if not isinstance(pose, Pose):
-        raise InvalidInputError(f"pose must be a cgaskin.Pose or None, got {type(pose).__name__}")
-    a, b = rig.skeleton, pose.skeleton
-    if b is not a and (b.n_nodes != a.n_nodes or list(b.names) != list(a.names)
-                       or not np.array_equal(b.bone_nodes, a.bone_nodes)):
-        raise InvalidInputError("the pose belongs to another skeleton (its nodes or bones differ from "
-                                "the rig's)")
+    from .pose import check_pose, skin
+    check_pose(rig, pose)
     cache = _posed_cache(rig)
     entry = cache.get(id(pose))
     if entry is not None and entry[0]() is pose:

@@ -149,3 +149,12 @@ def test_bad_joint_and_clip_names(rigs):
         rig.rest_pose().dilate(3, -1.0)
     with pytest.raises(InvalidInputError, match="axis"):
         rig.rest_pose().rotate(3, [0, 0, 0], 1.0)
+
+
+def test_skin_refuses_what_is_not_a_pose_of_the_rig(rigs):
+    fox, arm = rigs["Fox.glb"], rigs["Arm5.glb"]
+    for function in (cgaskin.skin, cgaskin.skin_normals):
+        with pytest.raises(InvalidInputError, match="pose must be a cgaskin.Pose"):
+            function(arm, "rest")
+        with pytest.raises(InvalidInputError, match="another skeleton"):
+            function(arm, fox.rest_pose())
