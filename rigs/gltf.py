@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 import pygltflib
 
-from ..baselines import matrix_to_quat, quat_to_matrix, trs_matrix
+from ..baselines import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
 from ..errors import CgaskinError, InvalidInputError, ModelFormatError, NoSkinError
 from ..rig import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip, Rig, Skeleton
 from .. import validate
@@ -100,31 +100,6 @@ def trs_to_matrix(translation, rotation, scale) -> np.ndarray:
     returns : (4, 4) float64
     """
     return trs_matrix(translation, rotation, scale)
-
-
-def matrix_to_trs(m):
-    """Decompose an affine 4x4 matrix into translation, rotation and per-axis scale.
-
-    The rotation is the orthogonal factor of the polar decomposition of the 3x3 block (the nearest
-    rotation, exact for T @ R @ S matrices); scales are the column norms, with the x scale negated
-    when the block is a reflection (det < 0). Shear cannot be represented: the result is the
-    nearest TRS, which is why ``Skeleton.rest_matrices`` keeps the exact matrix.
-
-    m : (4, 4) float
-    returns : translation (3,) float64, rotation (4,) float64 (x, y, z, w), scale (3,) float64
-    """
-    m = np.asarray(m, dtype=np.float64)
-    a = m[:3, :3].copy()
-    scale = np.linalg.norm(a, axis=0)
-    if np.linalg.det(a) < 0:
-        scale[0] = -scale[0]
-        a[:, 0] = -a[:, 0]
-    u, _, vt = np.linalg.svd(a)
-    r = u @ vt
-    if np.linalg.det(r) < 0:  # only for singular blocks (a zero scale): pick the proper rotation
-        u[:, -1] = -u[:, -1]
-        r = u @ vt
-    return m[:3, 3].copy(), matrix_to_quat(r), scale
 
 
 # --- file-level context ---------------------------------------------------------------------------

@@ -6,7 +6,7 @@ from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelForm
                      NoSkinError)
 from .rig import Channel, Clip, Rig, Skeleton
 from .skinning import skin_affine, skin_vertices
-from .pose import Pose, skin, skin_normals
+from .pose import Pose, clip_from_poses, skin, skin_normals
 from . import baselines, versor
 from .validate import check_mesh
 from .cut import CutResult, PlaneMissesMeshWarning, cut, cut_details

@@ -15,11 +15,11 @@ from numba import njit
 
 from . import versor
 from ._checks import float_array
-from .baselines import trs_matrix
+from .baselines import matrix_to_trs, trs_matrix
 from .animation import sample_clip
 from .errors import InvalidInputError
 from .generated.kernels import gp_versor_versor, versor_to_affine
-from .rig import Rig, Skeleton
+from .rig import Channel, Clip, Rig, Skeleton
 from .skinning import skin_affine
 
 FRAMES = ("parent", "local")
@@ -159,6 +159,63 @@ class Pose:
         m[:, :3, :] = out.reshape(-1, 3, 4)
         m[:, 3, 3] = 1.0
         return m
+
+
+def clip_from_poses(name: str, times, poses, interpolation: str = "LINEAR") -> Clip:
+    """A clip whose keyframes are ``poses`` at ``times``: poses made on the fly (edits of the rest
+    pose or of a clip's pose) become an animation that ``Rig.pose`` samples and ``save`` exports
+    (add it with ``rig.with_clips(clip)``).
+
+    name : str
+    times : (k,) float, strictly increasing seconds
+    poses : sequence of k ``Pose`` of one skeleton
+    interpolation : "LINEAR" (rotations by rotor slerp, translations and scales linearly) or "STEP"
+
+    Every node whose local transform differs from its rest transform in some key gets translation,
+    rotation and scale channels; the other nodes keep their rest transforms. Sampled at a key time,
+    the clip gives that key's pose.
+
+    Raises InvalidInputError for an empty or mismatched ``times``/``poses``, times that are not
+    finite and increasing, poses of different skeletons, and a pose whose node transform has shear
+    (a glTF channel holds translation, rotation and scale only).
+    """
+    if not isinstance(name, str) or not name:
+        raise InvalidInputError(f"name must be a non-empty string, got {name!r}")
+    if interpolation not in ("LINEAR", "STEP"):
+        raise InvalidInputError(f"interpolation must be 'LINEAR' or 'STEP', got {interpolation!r}")
+    times = float_array(times, "times", ndim=1)
+    poses = list(poses)
+    if len(times) == 0 or len(times) != len(poses):
+        raise InvalidInputError(f"times and poses must be non-empty and of one length, got {len(times)} "
+                                f"times and {len(poses)} poses")
+    if np.any(np.diff(times) <= 0):
+        raise InvalidInputError(f"times must be strictly increasing, got {times.tolist()}")
+    for k, pose in enumerate(poses):
+        if not isinstance(pose, Pose):
+            raise InvalidInputError(f"poses[{k}] must be a cgaskin.Pose, got {type(pose).__name__}")
+        if pose.skeleton is not poses[0].skeleton and list(pose.skeleton.names) != list(poses[0].skeleton.names):
+            raise InvalidInputError(f"poses[{k}] belongs to another skeleton than poses[0]")
+    skeleton = poses[0].skeleton
+    local = np.stack([pose.matrices for pose in poses])                 # (k, j, 4, 4)
+    rest = Pose.rest(skeleton).matrices
+    size = np.maximum(1.0, np.abs(local).max(axis=(0, 2, 3)))
+    changed = np.abs(local - rest).max(axis=(0, 2, 3)) > 1e-12 * size
+    channels = []
+    for node in np.flatnonzero(changed):
+        trs = [matrix_to_trs(m) for m in local[:, node]]
+        t, q, s = (np.array(column) for column in zip(*trs))
+        rebuilt = trs_matrix(t, q, s)
+        bad = np.abs(rebuilt - local[:, node]).max(axis=(1, 2)) > 1e-9 * size[node]
+        if bad.any():
+            raise InvalidInputError(f"poses[{int(np.argmax(bad))}]: node {skeleton.names[node]!r} has a "
+                                    f"sheared transform, which an animation channel cannot hold")
+        for k in range(1, len(q)):                  # one hemisphere, for readers that blend naively
+            if q[k] @ q[k - 1] < 0:
+                q[k] = -q[k]
+        for path, values in (("translation", t), ("rotation", q), ("scale", s)):
+            channels.append(Channel(node=int(node), path=path, interpolation=interpolation,
+                                    times=times.copy(), values=values))
+    return Clip(name=name, channels=tuple(channels))
 
 
 def _shear_nodes(skeleton: Skeleton) -> list:

@@ -169,6 +169,21 @@ class Rig:
         from .pose import Pose
         return Pose.from_clip(self.skeleton, self.clips[self.clip_index(clip)], time, rotation_blend)
 
+    def with_clips(self, *clips: Clip) -> "Rig":
+        """A new rig with ``clips`` added after its own (names must stay unique)."""
+        names = [c.name for c in self.clips]
+        for clip in clips:
+            if not isinstance(clip, Clip):
+                raise InvalidInputError(f"clips must be cgaskin.Clip objects, got {type(clip).__name__}")
+            if clip.name in names:
+                raise InvalidInputError(f"the rig already has a clip named {clip.name!r}")
+            bad = [c.node for c in clip.channels if not 0 <= c.node < self.skeleton.n_nodes]
+            if bad:
+                raise InvalidInputError(f"clip {clip.name!r} animates node {bad[0]}, but the skeleton has "
+                                        f"{self.skeleton.n_nodes} nodes")
+            names.append(clip.name)
+        return replace(self, clips=list(self.clips) + list(clips))
+
     def with_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
         """A new rig with the same skeleton and clips and another mesh."""
         return replace(self, vertices=vertices, faces=faces, joints=joints, weights=weights,

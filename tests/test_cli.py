@@ -129,3 +129,18 @@ def test_errors_are_messages_not_tracebacks(models_dir, tmp_path, capsys, argv, 
     last = err.splitlines()[-1]            # after any warnings the model's loading gave
     assert code == 2 and last.startswith(f"cgaskin {argv[0]}: error: ") and message in last
     assert not list(tmp_path.iterdir())                     # nothing half-written
+
+
+def test_readme_example_runs(models_dir, tmp_path, monkeypatch):
+    """The README's "Use it" block, as written (the model read from the models folder)."""
+    import re
+    from pathlib import Path
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    code = re.search(r"## Use it\n\n```python\n(.*?)```", readme, re.S).group(1)
+    assert 'cgaskin.load("Fox.glb")' in code
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "Fox.glb").symlink_to(models_dir / "Fox.glb")
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert (tmp_path / "fox_nod.glb").exists()
+    assert namespace["torn"].n_vertices > namespace["rig"].n_vertices

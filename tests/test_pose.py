@@ -158,3 +158,80 @@ def test_skin_refuses_what_is_not_a_pose_of_the_rig(rigs):
             function(arm, "rest")
         with pytest.raises(InvalidInputError, match="another skeleton"):
             function(arm, fox.rest_pose())
+
+
+# --- clips from generated keyframes ---------------------------------------------------------------
+
+def test_clip_from_edited_poses_reproduces_its_keys(rigs, tmp_path):
+    rig = rigs["Fox.glb"]
+    neck, tail, root = "b_Neck_04", "b_Tail01_012", "b_Root_00"
+    start = rig.pose("Walk", 0.3)
+    keys = [start,
+            start.rotate(neck, [0, 0, 1], np.radians(50)).dilate(tail, 1.8),
+            start.rotate(neck, [1, 0, 0], np.radians(-170)).translate(root, [0, 20, 5]).dilate(tail, 0.5)]
+    times = [0.5, 1.0, 2.5]
+    clip = cgaskin.clip_from_poses("nod", times, keys)
+    animated = {rig.skeleton.names[c.node] for c in clip.channels}
+    assert {neck, tail, root} <= animated and len(clip.channels) % 3 == 0
+    assert clip.duration == 2.5
+    posed = rig.with_clips(clip)
+    assert [c.name for c in posed.clips] == ["Survey", "Walk", "Run", "nod"] and len(rig.clips) == 3
+    for t, key in zip(times, keys):
+        expected = cgaskin.skin(rig, key)
+        got = cgaskin.skin(posed, posed.pose("nod", t))
+        assert np.abs(got - expected).max() <= 1e-12 * diagonal(expected)
+    # between keys 0 and 1 the neck turns half way and the tail's scale is halfway (linear)
+    half = start.rotate(neck, [0, 0, 1], np.radians(25)).dilate(tail, 1.4)
+    expected = cgaskin.skin(rig, half)
+    assert np.abs(cgaskin.skin(posed, posed.pose("nod", 0.75)) - expected).max() <= 1e-12 * diagonal(expected)
+    # STEP holds each key; save -> load keeps the clip
+    step = rig.with_clips(cgaskin.clip_from_poses("held", times, keys, interpolation="STEP"))
+    np.testing.assert_array_equal(cgaskin.skin(step, step.pose("held", 0.99)), cgaskin.skin(step, step.pose("held", 0.5)))
+    back = cgaskin.load(cgaskin.save(posed, tmp_path / "nod.glb"))
+    expected = cgaskin.skin(rig, keys[2])
+    assert np.abs(cgaskin.skin(back, back.pose("nod", 2.5)) - expected).max() <= 1e-6 * diagonal(expected)
+
+
+def test_clip_from_poses_of_the_procedural_arm_animates_a_cut_half():
+    rig = cgaskin.capsule_arm()
+    rest = rig.rest_pose()
+    elbow = rig.skeleton.names[1]
+    clip = cgaskin.clip_from_poses("bend", [0, 1], [rest, rest.rotate(elbow, [0, 0, 1], np.radians(90))])
+    upper, lower = cgaskin.cut(rig.with_clips(clip), [1, 0, 0], [1.5, 0, 0])
+    for half in (upper, lower):
+        assert half.clips[-1].name == "bend"
+        np.testing.assert_allclose(cgaskin.skin(half, half.pose("bend", 1.0)),
+                                   cgaskin.skin(half, rest.rotate(elbow, [0, 0, 1], np.radians(90))),
+                                   rtol=0, atol=1e-12)
+
+
+def test_clip_from_poses_refuses_bad_keys(rigs):
+    fox, arm = rigs["Fox.glb"], rigs["Arm5.glb"]
+    rest = fox.rest_pose()
+    for args, message in [
+        (("", [0], [rest]), "non-empty string"),
+        (("c", [], []), "non-empty and of one length"),
+        (("c", [0, 1], [rest]), "non-empty and of one length"),
+        (("c", [1, 1], [rest, rest]), "strictly increasing"),
+        (("c", [0, np.nan], [rest, rest]), "non-finite"),
+        (("c", [0, 1], [rest, "pose"]), r"poses\[1\] must be a cgaskin.Pose"),
+        (("c", [0, 1], [rest, arm.rest_pose()]), "another skeleton"),
+    ]:
+        with pytest.raises(InvalidInputError, match=message):
+            cgaskin.clip_from_poses(*args)
+    with pytest.raises(InvalidInputError, match="interpolation"):
+        cgaskin.clip_from_poses("c", [0], [rest], interpolation="CUBICSPLINE")
+    sheared = np.eye(4)
+    sheared[0, 1] = 0.5
+    exact = [None] * fox.skeleton.n_nodes
+    exact[3] = sheared
+    skeleton = fox.skeleton
+    bad = cgaskin.Pose.from_trs(skeleton, skeleton.rest_translations, skeleton.rest_rotations,
+                                skeleton.rest_scales, exact)
+    with pytest.raises(InvalidInputError, match="sheared"):
+        cgaskin.clip_from_poses("c", [0, 1], [rest, bad])
+    clip = cgaskin.clip_from_poses("Walk", [0], [rest.dilate(3, 2.0)])
+    with pytest.raises(InvalidInputError, match="already has a clip named 'Walk'"):
+        fox.with_clips(clip)
+    with pytest.raises(InvalidInputError, match="node"):
+        cgaskin.capsule_arm().with_clips(clip)
