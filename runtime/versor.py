@@ -216,10 +216,17 @@ def blend_linear(versors, weights) -> np.ndarray:
 
 
 def blend_log(versors, weights) -> np.ndarray:
-    """exp of the weighted sum of logarithms: screw-linear interpolation of motors and geometric
-    interpolation of scales."""
+    """Logarithmic blend P exp(Σ_i w_i log(P⁻¹ V_i)) of versors (..., k, 12) with weights (..., k)
+    summing to 1, where the pivot P is the versor of largest weight (so that a weight of 1 returns
+    its versor to rounding): two versors interpolate along the shortest screw motion between them
+    (ScLERP, the short arc for rotations) with the scale interpolated geometrically. For commuting
+    versors (one rotation axis, pure translations, pure scales) it equals exp(Σ_i w_i log V_i)."""
     versors, weights = _blend_args(versors, weights)
-    return exp(np.einsum("...k,...kc->...c", weights, log(versors)))
+    pivot = np.take_along_axis(versors, np.argmax(weights, axis=-1)[..., None, None], axis=-2)
+    # the sign of each versor that puts its rotor within a quarter turn of the pivot's (short arc)
+    sign = np.where(np.sum(pivot[..., :4] * versors[..., :4], axis=-1) < 0, -1.0, 1.0)
+    relative = compose(inverse(pivot), versors * sign[..., None])
+    return compose(pivot[..., 0, :], exp(np.einsum("...k,...kc->...c", weights, log(relative))))
 
 
 # ---- interop with the clifford package (test/oracle dependency) -----------------------------------

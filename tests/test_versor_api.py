@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import assume, given, strategies as st
 
 import strategies as S
 from cgaskin import versor as V
@@ -227,11 +227,26 @@ def test_blend_rotations_about_one_axis_stay_between(axis, a1, a2, w):
                       (1 - w) * math.cos(a1 / 2) + w * math.cos(b2 / 2))
     assert min(a1, b2) - 1e-12 <= 2 * half <= max(a1, b2) + 1e-12
     assert same_map(lin, V.rotor(axis, 2 * half), 1.0) <= TOL.large
-    # log blending: each log has its angle in [0, pi], so the angle interpolates linearly from a1 to a2
-    # (the long way round when |a1 - a2| > pi: blend_log does not align to the short arc)
+    # log blending relative to the first rotor: the angle moves linearly along the same short arc
     got = V.blend_log(pair, [1 - w, w])
-    expected = V.rotor(axis, (1 - w) * a1 + w * a2)
+    expected = V.rotor(axis, (1 - w) * a1 + w * b2)
     assert same_map(got, expected, 1.0) <= TOL.large
+
+
+@given(S.unit_axes(), S.angles(), S.translations(10.0), S.unit_axes(), S.angles(), S.translations(10.0),
+       st.floats(0.0, 1.0))
+def test_blend_log_of_two_motors_is_the_screw_motion(axis0, a0, t0, axis1, a1, t1, w):
+    """Oracle: the rigid motion M0 (M0^-1 M1)^w, the principal matrix power (scipy), i.e. the screw
+    motion from M0 to M1 along the shorter way round."""
+    from scipy.linalg import expm, logm
+    m0 = V.to_matrix(V.motor(axis0, a0, t0))
+    m1 = V.to_matrix(V.motor(axis1, a1, t1))
+    relative = np.linalg.solve(m0, m1)
+    angle = math.acos(np.clip((np.trace(relative[:3, :3]) - 1) / 2, -1, 1))
+    assume(angle < math.pi - 1e-3)          # at a half turn both ways round are as short
+    expected = m0 @ expm(w * np.real(logm(relative)))
+    got = V.to_matrix(V.blend_log(_pair(V.motor(axis0, a0, t0), V.motor(axis1, a1, t1)), [1 - w, w]))
+    assert np.abs(got - expected).max() <= 1e-8 * max(1.0, np.abs(t0).max(), np.abs(t1).max())
 
 
 @given(S.versors(), S.versors(), st.floats(0.0, 1.0))
