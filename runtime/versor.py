@@ -195,7 +195,11 @@ def log(v) -> np.ndarray:
 
 def exp(bivector) -> np.ndarray:
     """Versor exp(Λ_M) exp(λ e∞0) of (..., 7) coefficients on LOG_BLADES (inverse of ``log``)."""
-    return _rows(K.versor_exp_batch, VERSOR_SIZE, (float_array(bivector, "bivector", LOG_SIZE), True))
+    out = _rows(K.versor_exp_batch, VERSOR_SIZE, (float_array(bivector, "bivector", LOG_SIZE), True))
+    if not np.isfinite(out).all():
+        raise InvalidInputError("exp overflows float64: the bivector's scale coefficient (or its "
+                                "translation) is too large for a finite versor")
+    return out
 
 
 def _blend_args(versors, weights):

@@ -481,3 +481,11 @@ def test_other_outputs_are_fresh_arrays():
     for out in (V.compose(v, V.identity()), V.reverse(v), V.inverse(v), V.normalise(v), V.apply(v, x),
                 V.to_affine(v), V.to_matrix(v), V.exp(V.log(v))):
         assert not np.shares_memory(out, v) and not np.shares_memory(out, x)
+
+
+@pytest.mark.parametrize("column, value", [(6, 800.0), (6, -800.0), (3, 1e308)])
+def test_exp_that_overflows_raises(column, value):
+    bivector = np.zeros((2, 7))
+    bivector[1, column] = value
+    _raises("overflows", V.exp, bivector)
+    np.testing.assert_array_equal(V.exp(bivector[:1]), V.identity()[None])
