@@ -10,9 +10,13 @@ from .errors import InvalidInputError
 def float_array(value, name: str, last: int | None = None, ndim: int | None = None) -> np.ndarray:
     """A finite float64 array (a copy only when needed), with last axis ``last`` if given."""
     try:
-        arr = np.asarray(value, dtype=np.float64)
+        arr = np.asarray(value)
+        if arr.dtype.kind != "c":
+            arr = np.asarray(arr, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
+    if arr.dtype.kind == "c":           # numpy would drop the imaginary part with a mere warning
+        raise InvalidInputError(f"{name} must be real, got complex values")
     if last is not None and (arr.ndim == 0 or arr.shape[-1] != last):
         raise InvalidInputError(f"{name} must have shape (..., {last}), got {arr.shape}")
     if ndim is not None and arr.ndim != ndim:

@@ -296,6 +296,8 @@ BAD_SHAPES = [
     ("versor", V.apply, (np.ones(11), [0.0, 0.0, 0.0])),
     ("points", V.apply, (I12, [1.0, 2.0])),
     ("points", V.apply, (I12, "abc")),
+    ("points.*real", V.apply, (I12, [[1.0 + 1j, 2.0, 3.0]])),
+    ("translation.*real", V.translator, (np.array([1.0, 2.0, 3.0], complex),)),
     ("points", V.apply, (I12, [[1.0, 2.0, 3.0], [1.0, 2.0]])),
     ("versors\\[1\\]", V.compose, (I12, np.ones(11))),
     ("versor", V.inverse, (np.ones(13),)),
