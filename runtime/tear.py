@@ -75,7 +75,7 @@ from .generated.kernels import (affine_point, barycentric, plane_from_points, po
                                 segment_plane)
 from .rig import Rig
 from .weights import blend_weight_rows
-from .topology import Topology, rig_cached, rig_topology, topology
+from .topology import Topology, incidence, rig_cached, rig_topology, topology
 
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
            "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]
@@ -131,26 +131,6 @@ class TearResult:
 
 
 # ---- the surface: welded topology, positions, BVH (cached) ---------------------------------------------
-@njit(cache=True, nogil=True)
-def _vertex_faces(wfaces, n_welded):
-    """CSR incidence welded vertex -> faces: (offsets (w + 1,), faces (3m,))."""
-    m = wfaces.shape[0]
-    offsets = np.zeros(n_welded + 1, np.int64)
-    for f in range(m):
-        for k in range(3):
-            offsets[wfaces[f, k] + 1] += 1
-    for w in range(n_welded):
-        offsets[w + 1] += offsets[w]
-    fill = offsets[:-1].copy()
-    out = np.empty(3 * m, np.int64)
-    for f in range(m):
-        for k in range(3):
-            w = wfaces[f, k]
-            out[fill[w]] = f
-            fill[w] += 1
-    return offsets, out
-
-
 def _labels(rig) -> np.ndarray:
     """(n,) int64 tear labels of the rig's vertices (0 without the attribute)."""
     values = rig.attributes.get(TEAR_LABEL)
@@ -231,7 +211,7 @@ def _build_surface(rig, positions, affines) -> _Surface:
     topo = tear_topology(rig)
     positions = np.ascontiguousarray(positions, dtype=np.float64)
     welded_positions = np.ascontiguousarray(positions[topo.representative])
-    vf_offsets, vf_faces = _vertex_faces(topo.faces, topo.n_welded)
+    vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
     bvh = TriangleBVH(positions, rig.faces)
     boundary = np.unique(topo.edges[topo.boundary_edges])
     diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0)))

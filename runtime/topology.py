@@ -158,21 +158,23 @@ def _unique_pairs(a, b):
 
 
 @njit(cache=True, nogil=True)
-def _edge_faces_csr(face_edges, n_edges):
-    """Incidence lists edge -> (face, corner), faces in increasing order within each edge."""
-    m = face_edges.shape[0]
-    offsets = np.zeros(n_edges + 1, np.int64)
+def incidence(table, n):
+    """CSR incidence lists item -> (face, corner) of a (m, 3) per-face table of items < n (the
+    faces' vertices, or their edges): offsets (n + 1,), faces (3m,) in increasing order within each
+    item, corners (3m,) int8."""
+    m = table.shape[0]
+    offsets = np.zeros(n + 1, np.int64)
     for f in range(m):
         for k in range(3):
-            offsets[face_edges[f, k] + 1] += 1
-    for e in range(n_edges):
+            offsets[table[f, k] + 1] += 1
+    for e in range(n):
         offsets[e + 1] += offsets[e]
     fill = offsets[:-1].copy()
     faces = np.empty(3 * m, np.int64)
     corners = np.empty(3 * m, np.int8)
     for f in range(m):
         for k in range(3):
-            e = face_edges[f, k]
+            e = table[f, k]
             faces[fill[e]] = f
             corners[fill[e]] = k
             fill[e] += 1
@@ -366,7 +368,7 @@ def topology(vertices, faces) -> Topology:
     vertex_edge_edge, edges = _unique_pairs(welded[vertex_edges[:, 0]], welded[vertex_edges[:, 1]])
     face_vertex_edges = vertex_edge_ids.reshape(m, 3)
     face_edges = vertex_edge_edge[face_vertex_edges]
-    offsets, inc_faces, inc_corners = _edge_faces_csr(face_edges, len(edges))
+    offsets, inc_faces, inc_corners = incidence(face_edges, len(edges))
     return Topology(welded=welded, representative=representative, faces=welded_faces,
                     vertex_edges=vertex_edges, face_vertex_edges=face_vertex_edges,
                     vertex_edge_edge=vertex_edge_edge, edges=edges, face_edges=face_edges,
