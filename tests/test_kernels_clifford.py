@@ -28,7 +28,7 @@ from cgaskin.errors import InvalidInputError
 from cgaskin.generated import kernels as K
 from cgaskin.generated import skinning as SK
 from cgaskin.generated.layout import LOG_BLADES, MOTOR_BLADES, PLANE_BLADES, VERSOR_BLADES
-from tolerances import TOL
+from tolerances import TOL, rel_err
 
 # ==== clifford side: blades, conversions, independent constructions ========================================
 e1, e2, e3, einf, eo = g3c.e1, g3c.e2, g3c.e3, g3c.einf, g3c.eo
@@ -155,13 +155,6 @@ def _print_worst_errors():
         print("\nworst relative errors per kernel (this run):")
         for name in sorted(WORST):
             print(f"  {name:34s} {WORST[name]:.3g}")
-
-
-def rel_err(got, expected, scale=None) -> float:
-    got, expected = np.asarray(got, float), np.asarray(expected, float)
-    if scale is None:
-        scale = float(np.max(np.abs(expected)))
-    return float(np.max(np.abs(got - expected))) / max(scale, 1e-300)
 
 
 def rel_err_sign(got, expected, scale=None) -> float:

@@ -11,14 +11,7 @@ from hypothesis import assume, given, strategies as st
 import strategies as S
 from cgaskin import versor as V
 from cgaskin.errors import CgaskinError, InvalidInputError
-from tolerances import TOL
-
-
-def rel_err(got, expected, scale=None) -> float:
-    got, expected = np.asarray(got, float), np.asarray(expected, float)
-    if scale is None:
-        scale = float(np.max(np.abs(expected)))
-    return float(np.max(np.abs(got - expected))) / max(scale, 1e-300)
+from tolerances import TOL, rel_err
 
 
 def same_map(a, b, scale=None) -> float:

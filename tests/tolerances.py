@@ -66,3 +66,11 @@ class Tolerances:
 
 
 TOL = Tolerances()
+
+
+def rel_err(got, expected, scale=None) -> float:
+    """max |got - expected| relative to ``scale`` (default: the largest |expected|)."""
+    got, expected = np.asarray(got, float), np.asarray(expected, float)
+    if scale is None:
+        scale = float(np.max(np.abs(expected)))
+    return float(np.max(np.abs(got - expected))) / max(scale, 1e-300)
