@@ -14,8 +14,11 @@ What the conversion does (assimp 5.2.5, checked on the shipped models):
   Asking for a preset (``-cfull`` etc.) makes it worse: the join then runs at import, the exporter
   re-expands the scene to unindexed form and does not join again (Arm5 stays at 15111 vertices).
 * Faces, bones, inverse bind matrices and the node hierarchy (including assimp's ``$AssimpFbx$``
-  pivot nodes) are kept; each vertex keeps at most 4 influences whose weights need not sum to 1
-  (renormalised by the glTF loader).
+  pivot nodes) are kept. The glTF exporter writes only the *first* 4 influences of a vertex, in file
+  order, dropping the rest even when they weigh more; ``-lbw`` (LimitBoneWeights, the one
+  post-processing step asked for, which leaves the vertex count alone) first keeps the 4 largest
+  and renormalises them, as cgaskin does for glTF files. Weights that still do not sum to 1 are
+  renormalised by the glTF loader.
 * The ``.glb`` files shipped beside each ``.fbx`` in the models folder are exactly this conversion;
   their accessors are byte-identical to a fresh one (only unused padding between buffer views can
   differ: assimp leaves it uninitialised).
@@ -61,7 +64,7 @@ def _failure_text(output: str) -> str:
 def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | None = None) -> Rig:
     """Load a rigged model in any format assimp reads (FBX, DAE, ...) as a ``Rig``.
 
-    The file is converted with ``assimp export <path> <tmp>/<stem>.glb -fglb2`` (no extra
+    The file is converted with ``assimp export <path> <tmp>/<stem>.glb -fglb2 -lbw`` (no other
     post-processing; see the module docstring for what assimp does) and read by
     ``cgaskin.rigs.gltf.load_gltf``.
 
@@ -84,7 +87,7 @@ def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | N
 
     with tempfile.TemporaryDirectory(prefix="cgaskin-assimp-") as tmp:
         out = pathlib.Path(tmp) / f"{src.stem or 'model'}.glb"
-        cmd = [exe, "export", str(src), str(out), "-fglb2"]
+        cmd = [exe, "export", str(src), str(out), "-fglb2", "-lbw"]
         try:
             # cwd=tmp: whatever else the tool writes (logs, extracted textures) goes away with tmp.
             proc = subprocess.run(cmd, cwd=tmp, stdin=subprocess.DEVNULL, capture_output=True,

@@ -113,6 +113,28 @@ def test_collada(models_dir, tmp_path):
     assert np.abs(_rest_skin(rig) - _rest_skin(ref)).max() <= tol
 
 
+@needs_assimp
+def test_more_than_four_influences_keep_the_largest(models_dir, tmp_path):
+    """assimp's glTF exporter keeps a vertex's *first* 4 influences; the route must keep the 4
+    largest, like the glTF loader. quad_skin.glb has vertices with up to 10; through Collada."""
+    from cgaskin.rigs.gltf import load_gltf
+    dae = tmp_path / "quad.dae"
+    subprocess.run(["assimp", "export", str(models_dir / "quad_skin.glb"), str(dae)], check=True,
+                   capture_output=True, timeout=60)
+    rig = A.load_assimp(dae)
+    with pytest.warns(UserWarning, match="more than 4 bone influences"):
+        ref = load_gltf(models_dir / "quad_skin.glb")
+
+    def by_bone_name(r):
+        names = [r.skeleton.names[i] for i in r.skeleton.bone_nodes]
+        return [dict(sorted((names[j], float(w)) for j, w in zip(js, ws) if w > 0))
+                for js, ws in zip(r.joints, r.weights)]
+    assert rig.n_vertices == ref.n_vertices == 4
+    for got, expected in zip(by_bone_name(rig), by_bone_name(ref)):
+        assert list(got) == list(expected)                           # the same 4 bones
+        np.testing.assert_allclose(list(got.values()), list(expected.values()), atol=1e-6)
+
+
 def _corrupt_files(models_dir, tmp_path):
     fbx = _fbx_files(models_dir)[0]
     data = fbx.read_bytes()
