@@ -106,10 +106,10 @@ def _joint_of(rig, name: str):
 
 
 def _pose_of(rig, args, time=None):
-    """The pose named by --clip/--time and the --rotate/--translate/--dilate edits applied after it
-    in the order given; None when none of them is given (the rest vertices)."""
+    """The pose named by --rest or --clip/--time and the --rotate/--translate/--dilate edits applied
+    after it in the order given; None when none of them is given (the mesh as stored)."""
     clip = _clip_of(rig, args)
-    if clip is None and not args.edits:
+    if clip is None and not args.edits and not args.rest:
         return None
     pose = rig.rest_pose() if clip is None else rig.pose(clip, args.time if time is None else time)
     for kind, joint, values in args.edits:
@@ -186,7 +186,10 @@ class _Edit(argparse.Action):
 
 
 def _add_pose_options(p) -> None:
-    g = p.add_argument_group("pose (default: the rest vertices); edits apply after the clip, in order")
+    g = p.add_argument_group("pose (default: the mesh as stored); edits apply after the clip, in order")
+    g.add_argument("--rest", action="store_true",
+                   help="the rest pose of the nodes (what a viewer shows; differs from the stored mesh "
+                        "when the bind matrices are not the rest pose's, e.g. a mesh node with an offset)")
     g.add_argument("--clip", default=None, help="clip name or index")
     g.add_argument("--time", type=float, default=0.0, help="seconds into the clip")
     g.add_argument("--rotate", action=_Edit, nargs=5, metavar=("JOINT", "AX", "AY", "AZ", "DEGREES"),

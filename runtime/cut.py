@@ -7,7 +7,8 @@ The plane is {x : n·(x − point) = 0}; ``positive`` is the part on the side th
 
 Steps (design.md section 4, "Cut (plane)"):
 
-1. Positions to cut: the rest vertices, or the skinned positions in ``pose`` (a posed cut).
+1. Positions to cut: the stored vertices (``pose=None``), or the skinned positions in ``pose`` (a
+   posed cut; ``rig.rest_pose()`` cuts what a viewer shows at rest).
 2. Signed distance of every welded vertex to the plane through the generated CGA kernel
    (``point_plane_distance``: up(x)·π); vertices within ``ON_PLANE_TOLERANCE`` times the bounding-box
    diagonal are *on* the plane and belong to both halves (no sliver faces, no duplicate vertices).
@@ -605,7 +606,10 @@ def cut(rig: Rig, normal, point, pose=None, cap: bool = False):
     point : (3,) float, a point of the plane
     pose : Pose or None
         Cut the mesh as posed (skinned) in this pose; the new vertices are placed in rest space so that
-        skinning the halves in ``pose`` puts them exactly on the plane. None cuts the rest vertices.
+        skinning the halves in ``pose`` puts them exactly on the plane. None cuts the stored
+        bind-pose vertices ``rig.vertices``. What a viewer shows at rest is ``skin(rig)``; where that
+        differs from the stored mesh (bind matrices that are not the rest pose's, e.g. a mesh node
+        with an offset), pass ``pose=rig.rest_pose()`` to cut what it shows.
     cap : bool
         Close each half with planar caps over the loops the cut opened.
 

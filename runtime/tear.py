@@ -5,7 +5,7 @@
 The scalpel is a segment from its handle ``a`` to its tip ``b``; ``scalpel_from = (a0, b0)`` is the
 blade at time t_i and ``scalpel_to = (a1, b1)`` at t_{i+1}. Steps (design.md section 4, "Tear"):
 
-1. **Surface.** The rest vertices (``pose=None``), or the skinned positions in ``pose`` (a posed
+1. **Surface.** The stored vertices (``pose=None``), or the skinned positions in ``pose`` (a posed
    tear). Its welded topology (attribute-split copies of a vertex are one, so that the tear crosses
    UV/normal seams) and a BVH over its triangles are built once per rig (and pose) and cached.
 2. **Where the blade meets the skin.** S_i is the *first* crossing of segment a0 -> b0 with the
@@ -1294,7 +1294,10 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     scalpel_from, scalpel_to : (2, 3) float
         The blade (handle a, tip b) at t_i and at t_{i+1}.
     pose : Pose, optional
-        Tear the mesh as skinned in this pose (default: the rest vertices ``rig.vertices``).
+        Tear the mesh as skinned in this pose (default: the stored bind-pose vertices
+        ``rig.vertices``). What a viewer shows at rest is ``skin(rig)``; where that differs from
+        the stored mesh (bind matrices that are not the rest pose's, e.g. a mesh node with an
+        offset), pass ``pose=rig.rest_pose()`` to tear what it shows.
     opening : float >= 0
         Distance the two sides of the slit are moved apart, along the tear plane's normal (in the
         pose's space for a posed tear).
@@ -1343,7 +1346,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
         for f in hit_faces[hit_faces >= 0]:
             if not np.array_equal(bvh.triangle(f), surface.positions[faces[f]]):
                 raise InvalidInputError("bvh was built from other positions than the surface being torn "
-                                        "(the rest vertices, or the skinned positions in the given pose)")
+                                        "(the stored vertices, or the skinned positions in the given pose)")
     if status == NO_MOTION:
         raise InvalidInputError(f"the stroke does not move across the surface: the scalpel meets it at "
                                 f"the same point {ends_pos[0].tolist()} at both times (nothing to tear)")
@@ -1415,7 +1418,8 @@ def tear(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 0.0,
     """Tear ``rig`` along the surface between two positions of a scalpel; returns the torn rig.
 
     scalpel_from, scalpel_to : (2, 3) the blade (handle a, tip b) at t_i and at t_{i+1}
-    pose : Pose or None (tear the skinned surface in that pose; default the rest vertices)
+    pose : Pose or None (tear the skinned surface in that pose; default the stored vertices
+        ``rig.vertices``; ``rig.rest_pose()`` tears what a viewer shows at rest)
     opening : float >= 0, how far apart the two sides of the slit are moved
     bvh : optional TriangleBVH of the surface (built and cached per rig and pose otherwise)
 

@@ -91,6 +91,32 @@ def test_cut_writes_both_halves(models_dir, tmp_path, capsys):
         np.testing.assert_allclose(back.vertices, half.vertices, atol=1e-6)
 
 
+def test_cut_of_the_rest_pose_where_it_is_not_the_stored_mesh(models_dir, tmp_path, capsys):
+    """3Cylinder4bones stores its mesh away from where its rest pose puts it (bind matrices that are
+    not the rest pose's): --rest cuts what a viewer shows, the default the mesh as stored."""
+    path = models_dir / "3Cylinder4bones.glb"
+    rig = cgaskin.load(path)
+    shown = cgaskin.skin(rig)
+    size = np.ptp(shown, axis=0).max()
+    axis = int(np.argmax(np.abs(shown - rig.vertices).mean(axis=0)))    # where they differ most
+    assert np.abs(shown - rig.vertices)[:, axis].mean() > 0.1 * size
+    normal = np.eye(3)[axis]
+    centre = shown.mean(axis=0)
+    code, _, _ = run(capsys, "cut", path, "--rest", "--normal", *normal, "--point", *centre,
+                     "--out", tmp_path / "a.glb", tmp_path / "b.glb")
+    assert code == 0
+    expected = cgaskin.cut(rig, normal, centre, pose=rig.rest_pose())
+    for half, name in zip(expected, ("a.glb", "b.glb")):
+        back = cgaskin.load(tmp_path / name)
+        np.testing.assert_array_equal(back.faces, half.faces)
+        # the vertices the cut made lie on the plane where a viewer shows them, not where stored
+        stored = {tuple(v) for v in rig.vertices}
+        new = np.array([i for i, v in enumerate(back.vertices) if tuple(v) not in stored])
+        assert len(new) > 0
+        assert np.abs(cgaskin.skin(back)[new, axis] - centre[axis]).max() <= 1e-5 * size
+        assert np.abs(back.vertices[new, axis] - centre[axis]).min() > 1e-2 * size
+
+
 def test_cut_that_misses_writes_one_half(models_dir, tmp_path, capsys):
     code, out, err = run(capsys, "cut", models_dir / "Arm5.glb", "--normal", 1, 0, 0, "--point", 1e3, 0, 0,
                          "--out", tmp_path / "a.glb", tmp_path / "b.glb")
