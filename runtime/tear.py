@@ -88,10 +88,13 @@ SNAP_TOLERANCE = 1e-10
 #: relative to the diagonal: a posed tear warns when a new vertex, skinned, misses its path point by more
 PLACEMENT_TOLERANCE = 1e-9
 
+# The compiled helpers take these codes (and every other small integer) as np.int64, never as Python
+# int literals: numba compiles a separate copy of a helper for each literal value it is called with,
+# which tripled the first tear's compile time.
 # path node kinds
-VERTEX, EDGE, FACE = 0, 1, 2
+VERTEX, EDGE, FACE = np.int64(0), np.int64(1), np.int64(2)
 # how a path segment runs from the previous node: across a face, or along an edge in the plane
-NO_CARRIER, FACE_CARRIER, EDGE_CARRIER = -1, 0, 1
+NO_CARRIER, FACE_CARRIER, EDGE_CARRIER = np.int64(-1), np.int64(0), np.int64(1)
 
 
 class TearPlacementWarning(UserWarning):
@@ -371,7 +374,7 @@ def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_
                 face_used[g] = True
                 if t_kind == FACE and g == t_id:
                     n = _push(ni, nf, target, n, FACE, g, 0.0, t_pos[0], t_pos[1], t_pos[2], node,
-                              FACE_CARRIER, g, True)
+                              FACE_CARRIER, g, np.bool_(True))
                     continue
                 count = _elements(g, wfaces, face_edges, cls, kinds, ids)
                 exits = 0
@@ -397,7 +400,7 @@ def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_
                 if t_kind == FACE and g == t_id:
                     face_used[g] = True
                     n = _push(ni, nf, target, n, FACE, g, 0.0, t_pos[0], t_pos[1], t_pos[2], node,
-                              FACE_CARRIER, g, True)
+                              FACE_CARRIER, g, np.bool_(True))
                     continue
                 if cls[x] * cls[y] < 0:
                     face_used[g] = True
@@ -524,7 +527,7 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
                 ib = i
         gap = (ib - ia) % count if ia >= 0 and ib >= 0 else 0
         if gap < 2 or gap > count - 2:
-            return _convex_fan(poly, flat, count, f, wfaces, wpos, path_float, out, 0)
+            return _convex_fan(poly, flat, count, f, wfaces, wpos, path_float, out, np.int64(0))
         sub = np.empty(6, np.int64)
         subflat = np.zeros(6, np.bool_)
         for start, stop in ((ia, ib), (ib, ia)):
@@ -629,7 +632,7 @@ def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_of
     """
     k_nodes = path_int.shape[0]
     affected = np.empty(4 * k_nodes + 8, np.int64)
-    n_aff = 0
+    n_aff = np.int64(0)
     for j in range(k_nodes):
         if path_int[j, 2] == FACE_CARRIER:
             affected, n_aff = _add_unique(affected, n_aff, path_int[j, 3])
@@ -815,9 +818,9 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
     side_b = np.empty(k_nodes, np.int64)
     # twins and moved vertices: (vertex, side rank, path node) and (vertex, sign, side rank, node)
     twins = np.empty((16, 4), np.int64)
-    n_twin = 0
+    n_twin = np.int64(0)
     moved = np.empty((16, 4), np.int64)
-    n_moved = 0
+    n_moved = np.int64(0)
     for j in range(k_nodes):
         s, e = offsets[j], offsets[j + 1]
         side_a[j] = faces[ent_face[s], ent_corner[s]] if e > s else -1
@@ -845,7 +848,7 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
             if has_keeper:
                 v_taken = True
                 side_a[j] = v
-                moved, n_moved = _append_row(moved, n_moved, v, 1, -1, j)
+                moved, n_moved = _append_row(moved, n_moved, v, np.int64(1), np.int64(-1), j)
             for b in range(s, e):
                 if done[b - s] or faces[ent_face[b], ent_corner[b]] != v:
                     continue
@@ -859,10 +862,10 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
                 if not v_taken:
                     v_taken = True
                     new_v = v
-                    moved, n_moved = _append_row(moved, n_moved, v, -1, rank[r], j)
+                    moved, n_moved = _append_row(moved, n_moved, v, np.int64(-1), rank[r], j)
                 else:
                     new_v = n_vertices + n_twin
-                    twins, n_twin = _append_row(twins, n_twin, v, rank[r], j, 0)
+                    twins, n_twin = _append_row(twins, n_twin, v, rank[r], j, np.int64(0))
                 side_b[j] = new_v
                 # every corner of v on this side takes the same vertex
                 for c in range(b, e):
@@ -1140,7 +1143,7 @@ def _cut(path_int, path_float, faces, welded, wfaces, face_edges, edges, ef_offs
         new_positions[i] = path_float[new_node[i], 1:4]
     # the faces that can touch a path node: the pieces, and the kept faces around path vertices
     candidates = np.empty(16, np.int64)
-    n_cand = 0
+    n_cand = np.int64(0)
     for i in range(first_piece, m_out):
         candidates, n_cand = _append(candidates, n_cand, i)
     for j in range(k_nodes):
