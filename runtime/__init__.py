@@ -13,6 +13,7 @@ from .cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
 from .topology import Topology, rig_topology
 from .bvh import TriangleBVH
 from .tear import TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
+from .precompile import precompile
 
 __version__ = "0.1.0"
 

@@ -49,6 +49,8 @@ def _build(positions, faces, leaf_size, padding):
     centroid = np.empty((m, 3))
     tri_lo = np.empty((m, 3))
     tri_hi = np.empty((m, 3))
+    scene_lo = np.full(3, np.inf)
+    scene_hi = np.full(3, -np.inf)
     for f in range(m):
         for k in range(3):
             a = positions[faces[f, 0], k]
@@ -57,9 +59,11 @@ def _build(positions, faces, leaf_size, padding):
             tri_lo[f, k] = min(a, min(b, c))
             tri_hi[f, k] = max(a, max(b, c))
             centroid[f, k] = (a + b + c) / 3.0
+            scene_lo[k] = min(scene_lo[k], tri_lo[f, k])
+            scene_hi[k] = max(scene_hi[k], tri_hi[f, k])
     extent = 0.0
     for k in range(3):
-        extent = max(extent, tri_hi[:, k].max() - tri_lo[:, k].min())
+        extent = max(extent, scene_hi[k] - scene_lo[k])
     pad = padding * max(extent, 1e-300)
 
     cap = 2 * m
@@ -117,14 +121,8 @@ def _build(positions, faces, leaf_size, padding):
                 j -= 1
         mid = i
         if mid == start or mid == end:
-            # every centroid on one side (coincident centroids): split at the object median
-            keys = np.empty(count)
-            for q in range(count):
-                keys[q] = centroid[order[start + q], axis]
-            perm = np.argsort(keys, kind="mergesort")
-            sub = order[start:end].copy()
-            for q in range(count):
-                order[start + q] = sub[perm[q]]
+            # every centroid on one side: they coincide along the longest axis (up to rounding of the
+            # middle), so any order is sorted; split the list in half
             mid = start + count // 2
         left, right = n_nodes, n_nodes + 1
         n_nodes += 2

@@ -30,6 +30,16 @@ def _bench(args) -> int:
     return 0
 
 
+def _precompile(args) -> int:
+    from .precompile import precompile
+    if args.jobs is not None and args.jobs < 1:
+        print(f"cgaskin precompile: error: --jobs must be >= 1, got {args.jobs}", file=sys.stderr)
+        return 2
+    if precompile(args.jobs, verbose=True) == 0:
+        print("every kernel is compiled and cached already")
+    return 0
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """Warnings on the command line are messages to the user, not source locations."""
     print(f"cgaskin: warning: {message}", file=sys.stderr if file is None else file)
@@ -42,6 +52,11 @@ def main(argv=None) -> int:
     p = sub.add_parser("build", help="regenerate the numba kernels in generated/ from codegen/")
     p.add_argument("--check", action="store_true", help="do not write: fail if generated/ is stale")
     p.set_defaults(run=_build)
+
+    p = sub.add_parser("precompile", help="compile the numba kernels now, on every core (a fresh install "
+                                          "otherwise compiles them at their first call, one at a time)")
+    p.add_argument("--jobs", type=int, default=None, help="processes (default: one per core)")
+    p.set_defaults(run=_precompile)
 
     p = sub.add_parser("bench", help="run a benchmark (prints tables)")
     p.add_argument("which", choices=["skinning", "frame", "cut", "tear", "fig1"], nargs="?", default="skinning")

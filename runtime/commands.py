@@ -25,7 +25,9 @@ def progress(iterable, total: int, label: str):
 
 def _demo(args) -> int:
     from . import capsule_arm, skin, save
+    from .precompile import precompile
     from .render import render_strip
+    precompile(verbose=True)              # on a fresh install: every kernel the demo needs, on every core
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rig = capsule_arm()

@@ -253,8 +253,8 @@ def _split(plane, positions, faces, wfaces, welded, representative, sign, face_v
     # Faces of both halves, in output numbering.
     pos_faces = np.empty((m_pos, 3), np.int64)
     neg_faces = np.empty((m_neg, 3), np.int64)
-    ip = 0
-    ineg = 0
+    ip = np.int64(0)           # np.int64, not a literal: see tear.py's note on literals
+    ineg = np.int64(0)
     for f in range(m):
         s = side[f]
         if s > 0:
@@ -381,7 +381,7 @@ def _place_in_rest(target, guess, joints, weights, affines):
         y = affine_point(blend, x)
         residual[i] = math.sqrt((target[i, 0] - y[0]) ** 2 + (target[i, 1] - y[1]) ** 2
                                 + (target[i, 2] - y[2]) ** 2)
-        rest[i] = x
+        rest[i, 0], rest[i, 1], rest[i, 2] = x[0], x[1], x[2]
     return rest, residual, singular
 
 
@@ -678,7 +678,7 @@ def _ear_clip(xy, ids):
         nxt[j] = (j + 1) % k
     remaining = k
     count = 0
-    i = 0
+    i = np.int64(0)
     misses = 0
     while remaining > 3:
         p = prev[i]

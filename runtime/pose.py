@@ -248,20 +248,32 @@ def _bone_affines(parents, versors, matrices, similar, bone_nodes, ibm, out):
     gv = np.empty((n, 12))
     ga = np.empty((n, 12))
     gsim = np.zeros(n, dtype=np.bool_)
+    local = np.empty(12)
     for i in range(n):
         p = parents[i]
         if similar[i] and (p < 0 or gsim[p]):
             if p < 0:
-                gv[i] = versors[i]
+                for c in range(12):
+                    gv[i, c] = versors[i, c]
             else:
-                gv[i] = np.array(gp_versor_versor(gv[p], versors[i]))
-            ga[i] = np.array(versor_to_affine(gv[i]))
+                g = gp_versor_versor(gv[p], versors[i])
+                for c in range(12):
+                    gv[i, c] = g[c]
+            a = versor_to_affine(gv[i])
+            for c in range(12):
+                ga[i, c] = a[c]
             gsim[i] = True
         else:
-            local = matrices[i][:3, :].copy().reshape(12)
-            ga[i] = local if p < 0 else _compose_affine(ga[p], local)
+            for r in range(3):
+                for c in range(4):
+                    local[4 * r + c] = matrices[i, r, c]
+            a = local if p < 0 else _compose_affine(ga[p], local)
+            for c in range(12):
+                ga[i, c] = a[c]
     for b in range(bone_nodes.shape[0]):
-        out[b] = _compose_affine(ga[bone_nodes[b]], ibm[b])
+        a = _compose_affine(ga[bone_nodes[b]], ibm[b])
+        for c in range(12):       # a loop: numba's row assignment compiles a formatted error message
+            out[b, c] = a[c]
 
 
 def check_pose(rig: Rig, pose) -> Pose:

@@ -89,8 +89,9 @@ SNAP_TOLERANCE = 1e-10
 PLACEMENT_TOLERANCE = 1e-9
 
 # The compiled helpers take these codes (and every other small integer) as np.int64, never as Python
-# int literals: numba compiles a separate copy of a helper for each literal value it is called with,
-# which tripled the first tear's compile time.
+# int literals: numba compiles a separate copy of a helper for each literal value it is called with
+# (also for a loop counter that starts at a literal: ``n = 0`` gives one copy for Literal[int](0) and
+# one for int64, so such counters start at ``np.int64(0)``).
 # path node kinds
 VERTEX, EDGE, FACE = np.int64(0), np.int64(1), np.int64(2)
 # how a path segment runs from the previous node: across a face, or along an edge in the plane
@@ -337,7 +338,7 @@ def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_
         nf[0, 0] = segment_plane(plane, wpos[edges[s_id, 0]], wpos[edges[s_id, 1]])[0]
     if s_kind == VERTEX:
         vertex_used[s_id] = True
-    n = 1
+    n = np.int64(1)
     open_[0] = 0
     n_open = 1
     found = -1
@@ -378,7 +379,7 @@ def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_
                     continue
                 count = _elements(g, wfaces, face_edges, cls, kinds, ids)
                 exits = 0
-                ek, eid = -1, -1
+                ek, eid = np.int64(-1), np.int64(-1)
                 for q in range(count):
                     if not (kinds[q] == EDGE and ids[q] == ident):
                         exits += 1
@@ -463,9 +464,9 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
             p = i
             break
     if p < 0 and count == 4:
-        d02 = _position(sub[0], f, wfaces, wpos, path_float) - _position(sub[2], f, wfaces, wpos, path_float)
-        d13 = _position(sub[1], f, wfaces, wpos, path_float) - _position(sub[3], f, wfaces, wpos, path_float)
-        p = 0 if (d02 @ d02) <= (d13 @ d13) else 1
+        d02 = _distance(_position(sub[0], f, wfaces, wpos, path_float), _position(sub[2], f, wfaces, wpos, path_float))
+        d13 = _distance(_position(sub[1], f, wfaces, wpos, path_float), _position(sub[3], f, wfaces, wpos, path_float))
+        p = 0 if d02 <= d13 else 1
     if p < 0:
         p = 0
     for i in range(1, count - 1):
@@ -491,7 +492,7 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
     k_nodes = path_int.shape[0]
     poly = np.empty(6, np.int64)
     flat = np.zeros(6, np.bool_)
-    count = 0
+    count = np.int64(0)
     for k in range(3):
         code = -1 - k
         for j in range(k_nodes):
@@ -504,7 +505,7 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
                 poly[count], flat[count] = j, True
                 count += 1
     inner = np.empty(3, np.int64)
-    n_inner = 0
+    n_inner = np.int64(0)
     chord_a, chord_b = -1, -1
     hub_count = np.zeros(3, np.int64)
     for j in range(k_nodes):
@@ -517,7 +518,7 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
             for q in range(n_inner):
                 if inner[q] == j - 1 or inner[q] == j:
                     hub_count[q] += 1
-    n_out = 0
+    n_out = np.int64(0)
     if n_inner == 0:
         ia, ib = -1, -1
         for i in range(count):
@@ -645,11 +646,11 @@ def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_of
     affected = affected[:n_aff]
 
     tris = np.empty((12 * n_aff, 3), np.int64)
-    n_tris = 0
+    n_tris = np.int64(0)
     new_node = np.empty(4 * k_nodes + 4, np.int64)
     new_src = np.zeros((4 * k_nodes + 4, 3), np.int64)
     new_coef = np.zeros((4 * k_nodes + 4, 3))
-    n_new = 0
+    n_new = np.int64(0)
     local = np.empty((16, 3), np.int64)
     for a in range(n_aff):
         f = affected[a]
@@ -738,7 +739,9 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
     k_nodes = node_w.shape[0]
     n = positions.shape[0]
     n_vertices = n + new_positions.shape[0]
-    top = node_w.max()
+    top = 0
+    for j in range(k_nodes):
+        top = max(top, node_w[j])
     for f in candidates:
         for c in range(3):
             top = max(top, wf[f, c])
@@ -935,7 +938,8 @@ def _rows(values, src, coef, twin_src, unit):
     n, c = values.shape
     v, t = src.shape[0], twin_src.shape[0]
     out = np.empty((n + v + t, c))
-    out[:n] = values
+    for i in range(n):
+        _set_row(out, i, values[i])
     for i in range(v):
         for q in range(c):
             out[n + i, q] = (coef[i, 0] * values[src[i, 0], q] + coef[i, 1] * values[src[i, 1], q]
@@ -949,17 +953,19 @@ def _rows(values, src, coef, twin_src, unit):
                 for q in range(c):
                     out[n + i, q] /= length
     for i in range(t):
-        out[n + v + i] = out[twin_src[i]]
+        _set_row(out, n + v + i, out[twin_src[i]])
     return out
 
 
-# ---- the stroke, in three compiled steps ------------------------------------------------------------------
+# ---- the stroke, in compiled steps ------------------------------------------------------------------
 # status codes of ``_ends``
 OK, FROM_MISSES, TO_MISSES, NO_MOTION, NO_PLANE = 0, 1, 2, 3, 4
 #: below this sine, three points are too close to one line to define the tear plane's normal
 MIN_SINE = 1e-6
 
 
+# 3-vector helpers: scalar loops, because numba compiles every array expression (``a - b``,
+# ``np.sum(x ** 2)``) into a kernel of its own, which made up most of the first tear's compile time
 @njit(cache=True, nogil=True, error_model="numpy")
 def _cross(u, v):
     out = np.empty(3)
@@ -970,12 +976,45 @@ def _cross(u, v):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _sub(p, q):
+    """p - q (3,)"""
+    out = np.empty(3)
+    for k in range(3):
+        out[k] = p[k] - q[k]
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _norm(u):
+    return math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _distance(p, q):
+    """|p - q| of two (3,) points"""
+    return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _set_row(dst, i, src):
+    """dst[i] = src, by a loop: numba's array-into-array assignment compiles its shape-mismatch
+    message (string formatting), seconds of compile time in every process"""
+    for c in range(src.shape[0]):
+        dst[i, c] = src[c]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _hit_node(face, hit, wfaces, wpos, tol):
     """(kind, id, point) of a scalpel hit: the nearest corner of the hit face when within ``tol``
     (VERTEX, welded id, its position), else (FACE, face, hit)."""
     best, best_d = -1, np.inf
     for k in range(3):
-        d = np.sqrt(np.sum((wpos[wfaces[face, k]] - hit) ** 2))
+        d = _distance(wpos[wfaces[face, k]], hit)
         if d < best_d:
             best, best_d = wfaces[face, k], d
     if best_d <= tol:
@@ -994,8 +1033,9 @@ def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plan
         if cls[wfaces[ident, k]] * cls[wfaces[ident, (k + 1) % 3]] < 0:
             e = face_edges[ident, k]
             t, x, y, z = segment_plane(plane, wpos[edges[e, 0]], wpos[edges[e, 1]])
-            crossing = np.array([x, y, z])
-            if np.sqrt(np.sum((crossing - point) ** 2)) <= tol:
+            if math.sqrt((x - point[0]) ** 2 + (y - point[1]) ** 2 + (z - point[2]) ** 2) <= tol:
+                crossing = np.empty(3)
+                crossing[0], crossing[1], crossing[2] = x, y, z
                 return EDGE, e, crossing
     return kind, ident, point
 
@@ -1006,12 +1046,14 @@ def _boundary_hit(a, b, t_max, boundary, wpos, tol):
     (welded vertex, t) or (-1, t_max). A slit opened wide ends in a wedge-shaped gap whose tip is the
     slit's end vertex: a blade aimed at that vertex (the previous stroke's blade, to continue the
     slit) passes it within rounding and may slip through the gap, so it counts as meeting it."""
-    d = b - a
-    dd = d @ d
+    d = _sub(b, a)
+    dd = _dot(d, d)
     best, best_t = -1, t_max
     for w in boundary:
-        t = min(max(((wpos[w] - a) @ d) / dd, 0.0), 1.0)
-        if t < best_t and np.sqrt(np.sum((a + t * d - wpos[w]) ** 2)) <= tol:
+        p = wpos[w]
+        t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
+        if t < best_t and math.sqrt((a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2
+                                    + (a[2] + t * d[2] - p[2]) ** 2) <= tol:
             best, best_t = w, t
     return best, best_t
 
@@ -1036,17 +1078,22 @@ def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positio
         face, t = _first_hit(lo, hi, left, right, start, count, order, tri, a, b)
         w, t_w = _boundary_hit(a, b, t if face >= 0 else 1.0, boundary, wpos, tol)
         if w >= 0:
-            hits[i] = a + t_w * (b - a)
+            for k in range(3):
+                hits[i, k] = a[k] + t_w * (b[k] - a[k])
             hit_faces[i] = vf_faces[vf_offsets[w]]
-            ends_int[i, 0], ends_int[i, 1], ends_pos[i] = VERTEX, w, wpos[w]
+            ends_int[i, 0], ends_int[i, 1] = VERTEX, w
+            _set_row(ends_pos, i, wpos[w])
             continue
         if face < 0:
             return FROM_MISSES + i, ends_int, ends_pos, hits, hit_faces, plane, cls
-        hits[i] = a + t * (b - a)
+        for k in range(3):
+            hits[i, k] = a[k] + t * (b[k] - a[k])
         hit_faces[i] = face
-        ends_int[i, 0], ends_int[i, 1], ends_pos[i] = _hit_node(face, hits[i], wfaces, wpos, tol)
+        kind, ident, point = _hit_node(face, hits[i], wfaces, wpos, tol)
+        ends_int[i, 0], ends_int[i, 1] = kind, ident
+        _set_row(ends_pos, i, point)
     s0, s1 = ends_pos[0], ends_pos[1]
-    if np.sqrt(np.sum((s1 - s0) ** 2)) <= tol:
+    if _distance(s1, s0) <= tol:
         return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
 
     # the plane through S_i and the blade at t_{i+1}; fallbacks (module docstring): the blade at t_i
@@ -1054,13 +1101,15 @@ def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positio
     hint = np.zeros(3)
     for i in range(2):
         f = hit_faces[i]
-        normal = _cross(positions[faces[f, 1]] - positions[faces[f, 0]],
-                        positions[faces[f, 2]] - positions[faces[f, 0]])
-        length = np.sqrt(np.sum(normal ** 2))
+        corner = positions[faces[f, 0]]
+        normal = _cross(_sub(positions[faces[f, 1]], corner), _sub(positions[faces[f, 2]], corner))
+        length = _norm(normal)
         if length > 0.0:
-            hint += normal / length
-    far0 = np.sqrt(np.sum(_cross(s1 - s0, a0 - s0) ** 2))
-    far1 = np.sqrt(np.sum(_cross(s1 - s0, b0 - s0) ** 2))
+            for k in range(3):
+                hint[k] += normal[k] / length
+    stroke = _sub(s1, s0)
+    far0 = _norm(_cross(stroke, _sub(a0, s0)))
+    far1 = _norm(_cross(stroke, _sub(b0, s0)))
     found = False
     for c in range(4):
         if c == 0:
@@ -1070,10 +1119,12 @@ def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positio
         elif c == 2:
             p, q = (s1, b0) if far0 >= far1 else (s1, a0)
         else:
-            p, q = s1, s0 + hint * np.sqrt(np.sum((s1 - s0) ** 2))
-        u, v = p - s0, q - s0
-        lu, lv = np.sqrt(np.sum(u ** 2)), np.sqrt(np.sum(v ** 2))
-        if lu > tol and lv > tol and np.sqrt(np.sum(_cross(u, v) ** 2)) > MIN_SINE * lu * lv:
+            p, q = s1, np.empty(3)
+            for k in range(3):
+                q[k] = s0[k] + hint[k] * _norm(stroke)
+        u, v = _sub(p, s0), _sub(q, s0)
+        lu, lv = _norm(u), _norm(v)
+        if lu > tol and lv > tol and _norm(_cross(u, v)) > MIN_SINE * lu * lv:
             r = plane_from_points(s0, p, q)
             plane[0], plane[1], plane[2], plane[3] = r[0], r[1], r[2], r[3]
             found = True
@@ -1086,34 +1137,27 @@ def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positio
         if ends_int[i, 0] == VERTEX:
             cls[ends_int[i, 1]] = 0          # a snapped end is on the plane by definition
     for i in range(2):
-        ends_int[i, 0], ends_int[i, 1], ends_pos[i] = _snap_to_edge(
+        kind, ident, point = _snap_to_edge(
             ends_int[i, 0], ends_int[i, 1], ends_pos[i], wfaces, face_edges, edges, wpos, cls, plane, tol)
+        ends_int[i, 0], ends_int[i, 1] = kind, ident
+        _set_row(ends_pos, i, point)          # may be ends_pos[i] itself: a row copied onto itself
     if ends_int[0, 0] == ends_int[1, 0] and ends_int[0, 1] == ends_int[1, 1] and ends_int[0, 0] != FACE:
         return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
     return OK, ends_int, ends_pos, hits, hit_faces, plane, cls
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _append(values, count, value):
-    """values[count] = value, growing the array when full; returns (values, count + 1)."""
-    if count == values.shape[0]:
-        values = np.concatenate((values, np.empty_like(values)))
-    values[count] = value
-    return values, count + 1
+def _torn_faces(path_int, path_float, faces, welded, wfaces, affected, tris, new_node, vf_offsets, vf_faces,
+                n_welded):
+    """The faces of the torn mesh, with what ``_open_slit`` needs.
 
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _cut(path_int, path_float, faces, welded, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets,
-         vf_faces, wpos, positions, plane):
-    """Steps 5-6: re-triangulate the crossed faces and open the slit.
-
-    returns torn_faces (m', 3) (kept faces in order, then the pieces), new_node, new_src, new_coef
-    (``_retriangulate``), and ``_open_slit``'s outputs
+    affected, tris, new_node : from ``_retriangulate``
+    returns torn (m', 3) int64 (the kept faces in order, then the pieces), torn_w (m', 3) int64 their
+    welded corners (new vertex i is welded n_welded + its path node), node_w (k,) int64 the welded
+    vertex of each path node, new_positions (v, 3) float64, candidates (c,) int64 sorted rows of
+    ``torn`` that may touch a path node
     """
-    n, m = positions.shape[0], faces.shape[0]
-    n_welded = wpos.shape[0]
-    affected, tris, new_node, new_src, new_coef = _retriangulate(
-        path_int, path_float, faces, wfaces, face_edges, edges, ef_offsets, ef_faces, wpos, n)
+    n, m = welded.shape[0], faces.shape[0]
     index = np.zeros(m, np.int64)              # row of each kept face in the torn faces, -1 if removed
     for f in affected:
         index[f] = -1
@@ -1140,21 +1184,27 @@ def _cut(path_int, path_float, faces, welded, wfaces, face_edges, edges, ef_offs
         node_w[j] = path_int[j, 1] if path_int[j, 0] == VERTEX else n_welded + j
     new_positions = np.empty((new_node.shape[0], 3))
     for i in range(new_node.shape[0]):
-        new_positions[i] = path_float[new_node[i], 1:4]
-    # the faces that can touch a path node: the pieces, and the kept faces around path vertices
-    candidates = np.empty(16, np.int64)
-    n_cand = np.int64(0)
-    for i in range(first_piece, m_out):
-        candidates, n_cand = _append(candidates, n_cand, i)
+        for c in range(3):
+            new_positions[i, c] = path_float[new_node[i], 1 + c]
+    # the faces that can touch a path node, in increasing order: the kept faces around path vertices,
+    # and the pieces (the last rows)
+    is_candidate = np.zeros(m_out, np.bool_)
     for j in range(k_nodes):
         if path_int[j, 0] == VERTEX:
             w = path_int[j, 1]
             for q in range(vf_offsets[w], vf_offsets[w + 1]):
                 if index[vf_faces[q]] >= 0:
-                    candidates, n_cand = _append(candidates, n_cand, index[vf_faces[q]])
-    split, twins, moved, side_a, side_b = _open_slit(
-        torn, torn_w, node_w, positions, new_positions, plane, np.unique(candidates[:n_cand]))
-    return torn, new_node, new_src, new_coef, split, twins, moved, side_a, side_b
+                    is_candidate[index[vf_faces[q]]] = True
+    n_cand = m_out - first_piece
+    for i in range(first_piece):
+        n_cand += is_candidate[i]
+    candidates = np.empty(n_cand, np.int64)
+    c = 0
+    for i in range(m_out):
+        if i >= first_piece or is_candidate[i]:
+            candidates[c] = i
+            c += 1
+    return torn, torn_w, node_w, new_positions, candidates
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -1182,10 +1232,11 @@ def _vertex_data(vertices, joints, weights, labels, path_float, new_node, new_sr
     out_j = np.empty((total, 4), np.int64)
     out_w = np.empty((total, 4))
     out_l = np.empty(total, np.int64)
-    out_v[:n] = vertices
-    out_j[:n] = joints
-    out_w[:n] = weights
-    out_l[:n] = labels
+    for i in range(n):
+        _set_row(out_v, i, vertices[i])
+        _set_row(out_j, i, joints[i])
+        _set_row(out_w, i, weights[i])
+        out_l[i] = labels[i]
     top = 0
     for i in range(n):
         top = max(top, labels[i])
@@ -1193,25 +1244,29 @@ def _vertex_data(vertices, joints, weights, labels, path_float, new_node, new_sr
     first = np.full(k_nodes, -1, np.int64)
     residual = 0.0
     for i in range(v):
-        out_j[n + i] = new_joints[i]
-        out_w[n + i] = new_weights[i]
+        _set_row(out_j, n + i, new_joints[i])
+        _set_row(out_w, n + i, new_weights[i])
         out_l[n + i] = max(labels[new_src[i, 0]], max(labels[new_src[i, 1]], labels[new_src[i, 2]]))
         j = new_node[i]
         if not posed:
-            out_v[n + i] = path_float[j, 1:4]
+            for c in range(3):
+                out_v[n + i, c] = path_float[j, 1 + c]
         elif first[j] >= 0:
-            out_v[n + i] = out_v[n + first[j]]
+            _set_row(out_v, n + i, out_v[n + first[j]])
         else:
             first[j] = i
-            guess = (new_coef[i, 0] * vertices[new_src[i, 0]] + new_coef[i, 1] * vertices[new_src[i, 1]]
-                     + new_coef[i, 2] * vertices[new_src[i, 2]])
+            guess = np.empty(3)
+            for c in range(3):
+                guess[c] = (new_coef[i, 0] * vertices[new_src[i, 0], c] + new_coef[i, 1] * vertices[new_src[i, 1], c]
+                            + new_coef[i, 2] * vertices[new_src[i, 2], c])
             blend = _blended(new_joints, new_weights, affines, i)
-            out_v[n + i], res = _to_rest(path_float[j, 1:4], guess, blend)
+            x, res = _to_rest(path_float[j, 1:4], guess, blend)
+            _set_row(out_v, n + i, x)
             residual = max(residual, res)
     for i in range(t):
-        out_v[n + v + i] = out_v[twins[i, 0]]
-        out_j[n + v + i] = out_j[twins[i, 0]]
-        out_w[n + v + i] = out_w[twins[i, 0]]
+        _set_row(out_v, n + v + i, out_v[twins[i, 0]])
+        _set_row(out_j, n + v + i, out_j[twins[i, 0]])
+        _set_row(out_w, n + v + i, out_w[twins[i, 0]])
         out_l[n + v + i] = top + 1 + twins[i, 1]
     for i in range(moved.shape[0]):
         if moved[i, 1] < 0:
@@ -1227,20 +1282,23 @@ def _vertex_data(vertices, joints, weights, labels, path_float, new_node, new_sr
         for i in range(t):
             q = moved.shape[0] + i
             ids[q], signs[q], nodes[q] = n + v + i, -1.0, twins[i, 2]
-        delta = 0.5 * opening * normal
         offset = np.empty((k_nodes, 2, 3))
         done = np.zeros((k_nodes, 2), np.bool_)
+        delta = np.empty(3)
         for i in range(k):
             side = 0 if signs[i] > 0 else 1
             j = nodes[i]
             if not done[j, side]:
                 done[j, side] = True
+                for c in range(3):
+                    delta[c] = signs[i] * (0.5 * opening * normal[c])
                 if posed:
-                    offset[j, side] = _solve_linear(_blended(out_j, out_w, affines, ids[i]), signs[i] * delta)
-                else:
-                    offset[j, side] = signs[i] * delta
+                    delta = _solve_linear(_blended(out_j, out_w, affines, ids[i]), delta)
+                for c in range(3):
+                    offset[j, side, c] = delta[c]
         for i in range(k):
-            out_v[ids[i]] += offset[nodes[i], 0 if signs[i] > 0 else 1]
+            for c in range(3):
+                out_v[ids[i], c] += offset[nodes[i], 0 if signs[i] > 0 else 1, c]
     return out_v, out_j, out_w, out_l, residual
 
 
@@ -1375,11 +1433,16 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     if len(path_int) == 2:
         path_int, path_float = _insert_midpoint(path_int, path_float, wpos, topo.edges)
 
-    # 5-6: re-triangulate, open the slit
-    torn_faces, new_node, new_src, new_coef, split, twins, moved, side_a, side_b = _cut(
-        path_int, path_float, faces, topo.welded, topo.faces, topo.face_edges, topo.edges,
-        topo.edge_face_offsets, topo.edge_face_faces, surface.vf_offsets, surface.vf_faces, wpos,
-        surface.positions, plane)
+    # 5-6: re-triangulate, open the slit (separate kernels, so that a cold start compiles them in
+    # parallel: cgaskin.precompile)
+    affected, tris, new_node, new_src, new_coef = _retriangulate(
+        path_int, path_float, faces, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
+        topo.edge_face_faces, wpos, rig.n_vertices)
+    torn_faces, torn_w, node_w, new_positions, candidates = _torn_faces(
+        path_int, path_float, faces, topo.welded, topo.faces, affected, tris, new_node, surface.vf_offsets,
+        surface.vf_faces, len(wpos))
+    split, twins, moved, side_a, side_b = _open_slit(
+        torn_faces, torn_w, node_w, surface.positions, new_positions, plane, candidates)
 
     # 7: the vertex data
     mesh = rig_cached(rig, "tear.arrays", _arrays)

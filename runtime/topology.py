@@ -100,8 +100,8 @@ def _unique_pairs(a, b):
 
     Buckets by the lower element (a counting sort, cache-friendly where a hash table over millions of
     keys is not), then deduplicates within each bucket: by scanning for the small buckets of a mesh,
-    by sorting for large ones (a fan around a pole). Ids increase with the lower element, then with
-    first appearance.
+    through a table indexed by the higher element for large ones (a fan around a pole). Ids increase
+    with the lower element, then with first appearance.
 
     returns ids (N,) int64, pairs (u, 2) int64 with pairs[j, 0] <= pairs[j, 1]
     """
@@ -122,38 +122,37 @@ def _unique_pairs(a, b):
         fill[lo] += 1
     ids = np.empty(n, np.int64)
     pairs = np.empty((n, 2), np.int64)
+    id_of_hi = np.full(0, -1, np.int64)          # for large buckets: pair id by higher element
     count = 0
     for lo in range(top + 1):
         s, e = offsets[lo], offsets[lo + 1]
-        if e - s <= 32:
-            for q in range(s, e):
-                i = member[q]
-                hi = max(a[i], b[i])
-                found = -1
+        large = e - s > 32
+        if large and id_of_hi.shape[0] == 0:
+            id_of_hi = np.full(top + 1, -1, np.int64)
+        for q in range(s, e):
+            i = member[q]
+            hi = max(a[i], b[i])
+            found = -1
+            if large:
+                found = id_of_hi[hi]
+            else:
                 for r in range(s, q):
                     j = member[r]
                     if max(a[j], b[j]) == hi:
                         found = ids[j]
                         break
-                if found < 0:
-                    pairs[count, 0] = lo
-                    pairs[count, 1] = hi
-                    found = count
-                    count += 1
-                ids[i] = found
-        else:
-            his = np.empty(e - s, np.int64)
+            if found < 0:
+                pairs[count, 0] = lo
+                pairs[count, 1] = hi
+                found = count
+                count += 1
+                if large:
+                    id_of_hi[hi] = found
+            ids[i] = found
+        if large:                                # reset the table for the next large bucket
             for q in range(s, e):
                 i = member[q]
-                his[q - s] = max(a[i], b[i])
-            order = np.argsort(his, kind="mergesort")   # stable: first appearance within equal keys
-            for q in range(e - s):
-                i = member[s + order[q]]
-                if q == 0 or his[order[q]] != his[order[q - 1]]:
-                    pairs[count, 0] = lo
-                    pairs[count, 1] = his[order[q]]
-                    count += 1
-                ids[i] = count - 1
+                id_of_hi[max(a[i], b[i])] = -1
     return ids, pairs[:count].copy()
 
 

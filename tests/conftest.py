@@ -14,6 +14,13 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 REPO = Path(__file__).resolve().parent.parent
 
 
+def pytest_sessionstart(session):
+    """Compile the runtime's kernels on every core before the tests call them (on a cold numba cache
+    this saves the suite a good part of its compile time on a 2-core machine; warm, it only loads)."""
+    from cgaskin.precompile import precompile
+    precompile()
+
+
 @pytest.fixture(scope="session")
 def models_dir() -> Path:
     """The real models (env CGASKIN_MODELS, default <repo>/../shared/models); skip if absent."""

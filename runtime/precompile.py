@@ -1,0 +1,154 @@
+"""Compile the runtime's numba kernels before their first call, on every core.
+
+numba compiles a kernel at its first call and caches the machine code beside the source (or under
+``NUMBA_CACHE_DIR``). On a fresh install that first call is slow: skinning, cutting and tearing once
+compile about a minute of kernels, one at a time, on one core. ``precompile()`` finds the kernels
+of ``KERNELS`` that the cache does not hold yet and compiles them in parallel: this process takes
+one share and worker processes the others (one process per core), each writing to the same cache.
+Afterwards every first call only loads from the cache.
+
+``KERNELS`` lists each kernel that the Python side calls, with the argument types it calls it
+with (the runtime converts arrays to C-contiguous int64/float64 before every call, so the types
+do not depend on the caller's arrays). Kernels called only from other kernels are compiled with
+them. A test runs skinning, cuts and tears after ``precompile()`` and fails if any of them still
+compiles a kernel, so the list cannot fall behind the code.
+
+``python -m cgaskin.precompile INDEX ...`` is the worker: it compiles those entries of ``KERNELS``.
+"""
+from __future__ import annotations
+
+import importlib
+import os
+import subprocess
+import sys
+import time
+
+from numba import types
+
+__all__ = ["precompile", "KERNELS"]
+
+# argument types: C-contiguous arrays by dtype and rank ("r": read-only), and scalars
+F1, F2, F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+I1, I2 = types.int64[::1], types.int64[:, ::1]
+S1, U2 = types.int8[::1], types.uint64[:, ::1]
+B1 = types.boolean[::1]
+F1r = types.Array(types.float64, 1, "C", readonly=True)
+F2r = types.Array(types.float64, 2, "C", readonly=True)
+F2ar = types.Array(types.float64, 2, "A", readonly=True)       # np.broadcast_to of one row
+i8, f8, b1 = types.int64, types.float64, types.boolean
+
+#: (module, kernel, argument types, relative compile cost: seconds, cold, on a 2-core reference
+#: machine; used only to share the work out evenly)
+KERNELS = [
+    # skinning and poses
+    ("cgaskin.generated.skinning", "skin_blend", (F2, I2, F2, F2, F2), 0.5),
+    ("cgaskin.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.6),
+    ("cgaskin.generated.kernels", "versor_translator_batch", (F2r, F2), 0.6),
+    ("cgaskin.generated.kernels", "versor_translator_batch", (F2, F2), 0.3),
+    ("cgaskin.generated.kernels", "versor_rotor_batch", (F2r, F1r, F2), 0.3),
+    ("cgaskin.generated.kernels", "versor_rotor_quaternion_batch", (F2r, F2), 0.3),
+    ("cgaskin.generated.kernels", "versor_dilator_batch", (F1r, F2), 0.3),
+    ("cgaskin.generated.kernels", "gp_versor_versor_batch", (F2r, F2r, F2), 0.8),
+    ("cgaskin.generated.kernels", "versor_to_affine_batch", (F2r, F2), 0.4),
+    ("cgaskin.generated.kernels", "versor_residual_batch", (F2r, F2), 0.4),
+    ("cgaskin.generated.kernels", "reverse_versor_batch", (F2r, F2), 0.3),
+    ("cgaskin.generated.kernels", "reverse_versor", (F1r,), 0.2),
+    ("cgaskin.generated.kernels", "versor_log_batch", (F2r, F2), 0.6),
+    ("cgaskin.generated.kernels", "versor_log", (F1r,), 0.4),
+    ("cgaskin.generated.kernels", "versor_exp_batch", (F2r, F2), 0.6),
+    ("cgaskin.generated.kernels", "versor_exp", (F1r,), 0.4),
+    # welded topology, BVH, weights
+    ("cgaskin.topology", "_weld_positions", (U2,), 0.5),
+    ("cgaskin.topology", "_unique_pairs", (I1, I1), 1.0),
+    ("cgaskin.topology", "_corner_pairs", (I2, I1), 0.4),
+    ("cgaskin.topology", "incidence", (I2, i8), 0.3),
+    ("cgaskin.bvh", "_build", (F2, I2, i8, f8), 3.0),
+    ("cgaskin.weights", "blend_weight_rows", (I2, F2, I2, F2), 0.6),
+    # cut
+    ("cgaskin.generated.kernels", "plane_from_normal_distance", (F1, f8), 0.1),
+    ("cgaskin.generated.kernels", "point_plane_distance_batch", (F2ar, F2, F2), 0.3),
+    ("cgaskin.cut", "_classify", (F1, F2, I1, f8), 0.9),
+    ("cgaskin.cut", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.3),
+    ("cgaskin.cut", "_place_in_rest", (F2, F2, I2, F2, F2), 1.5),
+    ("cgaskin.cut", "_lerp_rows", (F2, I1, I1, F1, b1), 0.3),
+    ("cgaskin.cut", "_assemble", (F2, I1, I1, F2), 0.6),
+    ("cgaskin.cut", "_assemble", (I2, I1, I1, I2), 0.6),
+    ("cgaskin.cut", "_ear_clip", (F2, I1), 1.4),
+    # tear
+    ("cgaskin.tear", "_ends", (F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1,
+                               I1, I1, f8), 5.0),
+    ("cgaskin.tear", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 3.3),
+    ("cgaskin.tear", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 6.0),
+    ("cgaskin.tear", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.5),
+    ("cgaskin.tear", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 5.0),
+    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 5.0),
+    ("cgaskin.tear", "_rows", (F2, I2, F2, I1, b1), 1.0),
+]
+
+
+def _dispatcher(index: int):
+    module, name, argtypes, _ = KERNELS[index]
+    return importlib.import_module(module).__dict__[name], argtypes
+
+
+def _is_cached(dispatcher, argtypes) -> bool:
+    """Whether numba's cache holds the kernel for these argument types (loads it, compiles nothing)."""
+    try:
+        return dispatcher._cache.load_overload(argtypes, dispatcher.targetctx) is not None
+    except Exception:           # numba's internals moved: count it as missing (costs time, not results)
+        return False
+
+
+def _shares(indices: list, jobs: int) -> list:
+    """Split ``indices`` into ``jobs`` lists of about equal total cost (largest first, each to the
+    least loaded list)."""
+    shares = [[] for _ in range(jobs)]
+    load = [0.0] * jobs
+    for i in sorted(indices, key=lambda i: -KERNELS[i][3]):
+        j = load.index(min(load))
+        shares[j].append(i)
+        load[j] += KERNELS[i][3]
+    return [s for s in shares if s]
+
+
+def _compile(indices) -> None:
+    for i in indices:
+        dispatcher, argtypes = _dispatcher(i)
+        dispatcher.compile(argtypes)
+
+
+def precompile(jobs: int | None = None, verbose: bool = False) -> int:
+    """Compile every kernel of ``KERNELS`` that numba's cache does not hold yet, in ``jobs``
+    processes (default: one per core); returns how many were compiled. Kernels the cache holds cost
+    a load each. ``verbose`` prints what it does (on stdout) when there is something to compile.
+    With ``NUMBA_DISABLE_JIT=1`` there is nothing to compile."""
+    from numba.core import config
+    if config.DISABLE_JIT:
+        return 0
+    jobs = max(1, os.cpu_count() or 1) if jobs is None else int(jobs)
+    if jobs < 1:
+        raise ValueError(f"jobs must be >= 1, got {jobs}")
+    start = time.perf_counter()
+    missing = [i for i in range(len(KERNELS)) if not _is_cached(*_dispatcher(i))]
+    if not missing:
+        return 0
+    own, *others = _shares(missing, jobs)
+    if verbose:
+        print(f"compiling {len(missing)} numba kernels in {1 + len(others)} processes (once: they are "
+              f"cached for later runs)", flush=True)
+    workers = [subprocess.Popen([sys.executable, "-m", "cgaskin.precompile", *map(str, share)],
+                                stdin=subprocess.DEVNULL) for share in others]
+    try:
+        _compile(own)
+    finally:
+        for worker in workers:
+            worker.wait()
+    # a worker that failed (or a cache that cannot be written) leaves its kernels to be compiled here
+    # at their first call, as without precompile(): slower, never wrong
+    if verbose:
+        print(f"compiled in {time.perf_counter() - start:.1f} s", flush=True)
+    return len(missing)
+
+
+if __name__ == "__main__":
+    _compile(int(arg) for arg in sys.argv[1:])

@@ -1,0 +1,86 @@
+"""cgaskin.precompile: the kernel list is complete (after it, skinning, cutting and tearing compile
+nothing), the work is shared out evenly, and the command line runs it."""
+import importlib
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from cgaskin.cli import main
+
+pc = importlib.import_module("cgaskin.precompile")     # the module (cgaskin.precompile is the function)
+
+# Runs in a fresh interpreter: precompile(), then every main operation, recording what numba compiles
+# (cache loads are not compiles: numba fires "numba:compile" only when it compiles).
+WORKLOAD = textwrap.dedent("""
+    import sys
+    import numpy as np
+    from numba.core import event
+    import cgaskin
+    from cgaskin.precompile import precompile
+
+    precompile()
+    compiled = []
+
+    class Recorder(event.Listener):
+        def on_start(self, ev):
+            f = ev.data["dispatcher"].py_func
+            if f.__module__.startswith("cgaskin"):
+                compiled.append(f"{f.__module__}.{f.__name__}")
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", Recorder())
+    # (rig, joint, a scalpel stroke in three positions across its surface)
+    cases = [(cgaskin.capsule_arm(), 1, [([x, 0.05, 1.0], [x, 0.05, 0.0]) for x in (0.6, 1.2, 1.8)])]
+    if len(sys.argv) > 1:
+        cases.append((cgaskin.load(sys.argv[1]), "b_Spine01_02", [([0, 120, z], [0, 40, z]) for z in (0, 10, 20)]))
+    for rig, joint, blade in cases:
+        posed = rig.rest_pose().rotate(joint, [1, 0, 0], 0.1).translate(joint, [0.01, 0, 0]).dilate(joint, 1.05)
+        for pose in (rig.rest_pose(), posed) + ((rig.pose(0, 0.25),) if rig.clips else ()):
+            cgaskin.skin(rig, pose)
+        for pose in (None, posed):
+            centre = cgaskin.skin(rig, posed).mean(axis=0)
+            cgaskin.cut(rig, [0.3, 1, 0.1], centre, pose=pose, cap=True)
+            torn = cgaskin.tear(rig, blade[0], blade[1], pose=pose, opening=0.01)
+            torn = cgaskin.tear(torn, blade[1], blade[2], pose=pose)
+            cgaskin.skin(torn, posed)
+    print(" ".join(sorted(set(compiled))))
+""")
+
+
+def test_after_precompile_nothing_compiles(models_dir):
+    done = subprocess.run([sys.executable, "-c", WORKLOAD, str(models_dir / "Fox.glb")], capture_output=True,
+                          text=True, timeout=900)
+    assert done.returncode == 0, done.stderr
+    compiled = done.stdout.split()
+    assert compiled == [], f"kernels missing from cgaskin.precompile.KERNELS: {compiled}"
+
+
+def test_shares_are_even_and_complete():
+    indices = list(range(len(pc.KERNELS)))
+    for jobs in (1, 2, 3, 8):
+        shares = pc._shares(indices, jobs)
+        assert sorted(i for share in shares for i in share) == indices
+        assert len(shares) == min(jobs, len(indices))
+        loads = [sum(pc.KERNELS[i][3] for i in share) for share in shares]
+        # largest-first greedy: no share exceeds another by more than one kernel's cost
+        assert max(loads) - min(loads) <= max(k[3] for k in pc.KERNELS)
+
+
+def test_every_listed_kernel_exists():
+    for index, (_, _, argtypes, cost) in enumerate(pc.KERNELS):
+        dispatcher, _ = pc._dispatcher(index)
+        assert len(argtypes) == dispatcher.py_func.__code__.co_argcount and cost > 0
+
+
+def test_command_line(capsys):
+    assert main(["precompile", "--jobs", "0"]) == 2
+    assert "--jobs must be >= 1" in capsys.readouterr().err
+    assert main(["precompile", "--jobs", "1"]) == 0
+    assert main(["precompile"]) == 0                   # the second time: all cached
+    assert "every kernel is compiled and cached already" in capsys.readouterr().out
+    with pytest.raises(ValueError):
+        pc.precompile(jobs=0)
