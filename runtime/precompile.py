@@ -7,13 +7,11 @@ of ``KERNELS`` that the cache does not hold yet and compiles them in parallel: t
 one share and worker processes the others (one process per core), each writing to the same cache.
 Afterwards every first call only loads from the cache.
 
-``KERNELS`` lists each kernel that the Python side calls, with the argument types it calls it
-with (the runtime converts arrays to C-contiguous int64/float64 before every call, so the types
-do not depend on the caller's arrays). Kernels called only from other kernels are compiled with
-them. A test runs skinning, cuts and tears after ``precompile()`` and fails if any of them still
+``KERNELS`` lists each kernel that the Python side calls, with the argument types that the
+runtime's own calls give it (arrays it made or converted itself; a kernel called with other types,
+say read-only arrays of a caller, is compiled at that call as before). Kernels called only from
+other kernels are compiled with them. A test runs skinning, cuts and tears after ``precompile()`` and fails if any of them still
 compiles a kernel, so the list cannot fall behind the code.
-
-``python -m cgaskin.precompile INDEX ...`` is the worker: it compiles those entries of ``KERNELS``.
 """
 from __future__ import annotations
 
@@ -41,48 +39,47 @@ i8, f8, b1 = types.int64, types.float64, types.boolean
 #: machine; used only to share the work out evenly)
 KERNELS = [
     # skinning and poses
-    ("cgaskin.generated.skinning", "skin_blend", (F2, I2, F2, F2, F2), 0.5),
-    ("cgaskin.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.6),
-    ("cgaskin.generated.kernels", "versor_translator_batch", (F2r, F2), 0.6),
-    ("cgaskin.generated.kernels", "versor_translator_batch", (F2, F2), 0.3),
-    ("cgaskin.generated.kernels", "versor_rotor_batch", (F2r, F1r, F2), 0.3),
-    ("cgaskin.generated.kernels", "versor_rotor_quaternion_batch", (F2r, F2), 0.3),
-    ("cgaskin.generated.kernels", "versor_dilator_batch", (F1r, F2), 0.3),
-    ("cgaskin.generated.kernels", "gp_versor_versor_batch", (F2r, F2r, F2), 0.8),
-    ("cgaskin.generated.kernels", "versor_to_affine_batch", (F2r, F2), 0.4),
-    ("cgaskin.generated.kernels", "versor_residual_batch", (F2r, F2), 0.4),
-    ("cgaskin.generated.kernels", "reverse_versor_batch", (F2r, F2), 0.3),
+    ("cgaskin.generated.skinning", "skin_blend", (F2, I2, F2, F2, F2), 0.4),
+    ("cgaskin.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.3),
+    ("cgaskin.generated.kernels", "versor_translator_batch", (F2r, F2), 0.2),
+    ("cgaskin.generated.kernels", "versor_rotor_batch", (F2r, F1r, F2), 0.4),
+    ("cgaskin.generated.kernels", "versor_rotor_quaternion_batch", (F2r, F2), 0.4),
+    ("cgaskin.generated.kernels", "versor_dilator_batch", (F1r, F2), 0.4),
+    ("cgaskin.generated.kernels", "gp_versor_versor_batch", (F2r, F2r, F2), 0.9),
+    ("cgaskin.generated.kernels", "versor_to_affine_batch", (F2r, F2), 0.6),
+    ("cgaskin.generated.kernels", "versor_residual_batch", (F2r, F2), 0.5),
+    ("cgaskin.generated.kernels", "reverse_versor_batch", (F2r, F2), 0.4),
     ("cgaskin.generated.kernels", "reverse_versor", (F1r,), 0.2),
-    ("cgaskin.generated.kernels", "versor_log_batch", (F2r, F2), 0.6),
-    ("cgaskin.generated.kernels", "versor_log", (F1r,), 0.4),
-    ("cgaskin.generated.kernels", "versor_exp_batch", (F2r, F2), 0.6),
-    ("cgaskin.generated.kernels", "versor_exp", (F1r,), 0.4),
+    ("cgaskin.generated.kernels", "versor_log_batch", (F2r, F2), 0.3),
+    ("cgaskin.generated.kernels", "versor_log", (F1r,), 0.2),
+    ("cgaskin.generated.kernels", "versor_exp_batch", (F2r, F2), 0.7),
+    ("cgaskin.generated.kernels", "versor_exp", (F1r,), 0.5),
     # welded topology, BVH, weights
-    ("cgaskin.topology", "_weld_positions", (U2,), 0.5),
-    ("cgaskin.topology", "_unique_pairs", (I1, I1), 1.0),
+    ("cgaskin.topology", "_weld_positions", (U2,), 0.9),
+    ("cgaskin.topology", "_unique_pairs", (I1, I1), 1.4),
     ("cgaskin.topology", "_corner_pairs", (I2, I1), 0.4),
-    ("cgaskin.topology", "incidence", (I2, i8), 0.3),
-    ("cgaskin.bvh", "_build", (F2, I2, i8, f8), 3.0),
-    ("cgaskin.weights", "blend_weight_rows", (I2, F2, I2, F2), 0.6),
+    ("cgaskin.topology", "incidence", (I2, i8), 0.8),
+    ("cgaskin.bvh", "_build", (F2, I2, i8, f8), 2.9),
+    ("cgaskin.weights", "blend_weight_rows", (I2, F2, I2, F2), 1.0),
     # cut
-    ("cgaskin.generated.kernels", "plane_from_normal_distance", (F1, f8), 0.1),
-    ("cgaskin.generated.kernels", "point_plane_distance_batch", (F2ar, F2, F2), 0.3),
-    ("cgaskin.cut", "_classify", (F1, F2, I1, f8), 0.9),
-    ("cgaskin.cut", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.3),
-    ("cgaskin.cut", "_place_in_rest", (F2, F2, I2, F2, F2), 1.5),
-    ("cgaskin.cut", "_lerp_rows", (F2, I1, I1, F1, b1), 0.3),
+    ("cgaskin.generated.kernels", "plane_from_normal_distance", (F1, f8), 0.2),
+    ("cgaskin.generated.kernels", "point_plane_distance_batch", (F2ar, F2, F2), 0.2),
+    ("cgaskin.cut", "_classify", (F1, F2, I1, f8), 0.5),
+    ("cgaskin.cut", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.7),
+    ("cgaskin.cut", "_place_in_rest", (F2, F2, I2, F2, F2), 1.0),
+    ("cgaskin.cut", "_lerp_rows", (F2, I1, I1, F1, b1), 0.5),
     ("cgaskin.cut", "_assemble", (F2, I1, I1, F2), 0.6),
     ("cgaskin.cut", "_assemble", (I2, I1, I1, I2), 0.6),
-    ("cgaskin.cut", "_ear_clip", (F2, I1), 1.4),
+    ("cgaskin.cut", "_ear_clip", (F2, I1), 1.1),
     # tear
     ("cgaskin.tear", "_ends", (F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1,
-                               I1, I1, f8), 5.0),
-    ("cgaskin.tear", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 3.3),
-    ("cgaskin.tear", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 6.0),
-    ("cgaskin.tear", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.5),
-    ("cgaskin.tear", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 5.0),
-    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 5.0),
-    ("cgaskin.tear", "_rows", (F2, I2, F2, I1, b1), 1.0),
+                               I1, I1, f8), 7.2),
+    ("cgaskin.tear", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 3.2),
+    ("cgaskin.tear", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 7.2),
+    ("cgaskin.tear", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.7),
+    ("cgaskin.tear", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 5.1),
+    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 5.1),
+    ("cgaskin.tear", "_rows", (F2, I2, F2, I1, b1), 0.9),
 ]
 
 
@@ -117,6 +114,10 @@ def _compile(indices) -> None:
         dispatcher.compile(argtypes)
 
 
+#: a worker process: compiles the entries of ``KERNELS`` given as arguments
+_WORKER = "import sys; from cgaskin.precompile import _compile; _compile(int(a) for a in sys.argv[1:])"
+
+
 def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     """Compile every kernel of ``KERNELS`` that numba's cache does not hold yet, in ``jobs``
     processes (default: one per core); returns how many were compiled. Kernels the cache holds cost
@@ -136,8 +137,8 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     if verbose:
         print(f"compiling {len(missing)} numba kernels in {1 + len(others)} processes (once: they are "
               f"cached for later runs)", flush=True)
-    workers = [subprocess.Popen([sys.executable, "-m", "cgaskin.precompile", *map(str, share)],
-                                stdin=subprocess.DEVNULL) for share in others]
+    workers = [subprocess.Popen([sys.executable, "-c", _WORKER, *map(str, share)], stdin=subprocess.DEVNULL)
+               for share in others]
     try:
         _compile(own)
     finally:
@@ -148,7 +149,3 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     if verbose:
         print(f"compiled in {time.perf_counter() - start:.1f} s", flush=True)
     return len(missing)
-
-
-if __name__ == "__main__":
-    _compile(int(arg) for arg in sys.argv[1:])

@@ -965,7 +965,7 @@ MIN_SINE = 1e-6
 
 
 # 3-vector helpers: scalar loops, because numba compiles every array expression (``a - b``,
-# ``np.sum(x ** 2)``) into a kernel of its own, which made up most of the first tear's compile time
+# ``np.sum(x ** 2)``) into a kernel of its own, a fraction of a second of compile time each
 @njit(cache=True, nogil=True, error_model="numpy")
 def _cross(u, v):
     out = np.empty(3)

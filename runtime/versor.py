@@ -33,9 +33,13 @@ def _rows(kernel_batch, n_out, *arrays):
     flat = []
     for a, is_vector in arrays:
         if is_vector:
-            flat.append(np.ascontiguousarray(np.broadcast_to(a, lead + a.shape[-1:])).reshape(-1, a.shape[-1]))
+            a = np.ascontiguousarray(np.broadcast_to(a, lead + a.shape[-1:])).reshape(-1, a.shape[-1])
         else:
-            flat.append(np.ascontiguousarray(np.broadcast_to(a, lead)).reshape(-1))
+            a = np.ascontiguousarray(np.broadcast_to(a, lead)).reshape(-1)
+        # read-only views always (broadcasting gives some, copies not): one compiled kernel per type
+        a = a.view()
+        a.flags.writeable = False
+        flat.append(a)
     n = int(np.prod(lead, dtype=np.int64))
     out = np.empty((n, n_out))
     if n:

@@ -1,6 +1,7 @@
 """cgaskin.precompile: the kernel list is complete (after it, skinning, cutting and tearing compile
 nothing), the work is shared out evenly, and the command line runs it."""
 import importlib
+import os
 import subprocess
 import sys
 import textwrap
@@ -11,8 +12,9 @@ from cgaskin.cli import main
 
 pc = importlib.import_module("cgaskin.precompile")     # the module (cgaskin.precompile is the function)
 
-# Runs in a fresh interpreter: precompile(), then every main operation, recording what numba compiles
-# (cache loads are not compiles: numba fires "numba:compile" only when it compiles).
+# Runs in a fresh interpreter: precompile(), then the main operations on the built-in rig and a real
+# model, recording what numba compiles (loading from the cache is not compiling: numba fires
+# "numba:compile" only when it compiles).
 WORKLOAD = textwrap.dedent("""
     import sys
     import numpy as np
@@ -20,7 +22,7 @@ WORKLOAD = textwrap.dedent("""
     import cgaskin
     from cgaskin.precompile import precompile
 
-    precompile()
+    assert precompile() > 0                       # an empty cache: it compiles
     compiled = []
 
     class Recorder(event.Listener):
@@ -51,9 +53,12 @@ WORKLOAD = textwrap.dedent("""
 """)
 
 
-def test_after_precompile_nothing_compiles(models_dir):
+def test_after_precompile_nothing_compiles(models_dir, tmp_path):
+    # an empty cache of its own (NUMBA_CACHE_DIR), so that nothing compiled earlier can stand in for a
+    # kernel missing from the list; the worker processes inherit it
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     done = subprocess.run([sys.executable, "-c", WORKLOAD, str(models_dir / "Fox.glb")], capture_output=True,
-                          text=True, timeout=900)
+                          text=True, timeout=900, env=env)
     assert done.returncode == 0, done.stderr
     compiled = done.stdout.split()
     assert compiled == [], f"kernels missing from cgaskin.precompile.KERNELS: {compiled}"
