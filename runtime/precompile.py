@@ -97,15 +97,19 @@ def _is_cached(dispatcher, argtypes) -> bool:
 
 
 def _shares(indices: list, jobs: int) -> list:
-    """Split ``indices`` into ``jobs`` lists of about equal total cost (largest first, each to the
-    least loaded list)."""
+    """Split ``indices`` into at most ``jobs`` lists of about equal total cost (largest first, each to
+    the least loaded list). The signatures of one kernel stay in one list: numba keeps one cache index
+    per kernel, and two processes writing it at once would each drop the other's entry."""
+    groups = {}
+    for i in indices:
+        groups.setdefault(KERNELS[i][:2], []).append(i)
     shares = [[] for _ in range(jobs)]
     load = [0.0] * jobs
-    for i in sorted(indices, key=lambda i: -KERNELS[i][3]):
+    for group in sorted(groups.values(), key=lambda g: -sum(KERNELS[i][3] for i in g)):
         j = load.index(min(load))
-        shares[j].append(i)
-        load[j] += KERNELS[i][3]
-    return [s for s in shares if s]
+        shares[j] += group
+        load[j] += sum(KERNELS[i][3] for i in group)
+    return [share for share in shares if share]
 
 
 def _compile(indices) -> None:
@@ -137,15 +141,19 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     if verbose:
         print(f"compiling {len(missing)} numba kernels in {1 + len(others)} processes (once: they are "
               f"cached for later runs)", flush=True)
-    workers = [subprocess.Popen([sys.executable, "-c", _WORKER, *map(str, share)], stdin=subprocess.DEVNULL)
+    workers = [subprocess.Popen([sys.executable, "-c", _WORKER, *map(str, share)], stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
                for share in others]
     try:
         _compile(own)
     finally:
-        for worker in workers:
-            worker.wait()
-    # a worker that failed (or a cache that cannot be written) leaves its kernels to be compiled here
-    # at their first call, as without precompile(): slower, never wrong
+        errors = [worker.communicate()[1] for worker in workers]
+    # a worker that failed leaves its kernels to be compiled at their first call, as without
+    # precompile(): slower, never wrong
     if verbose:
         print(f"compiled in {time.perf_counter() - start:.1f} s", flush=True)
+        for worker, error in zip(workers, errors):
+            if worker.returncode:
+                last = error.strip().splitlines()[-1:] or ["no message"]
+                print(f"a compile worker failed ({last[0]}): its kernels compile at their first call", flush=True)
     return len(missing)
