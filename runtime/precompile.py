@@ -78,8 +78,8 @@ KERNELS = [
     ("cgaskin.tear", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 7.2),
     ("cgaskin.tear", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.7),
     ("cgaskin.tear", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 5.1),
-    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 5.1),
-    ("cgaskin.tear", "_rows", (F2, I2, F2, I1, b1), 0.9),
+    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 5.1),
+    ("cgaskin.tear", "_rows", (F2, i8, I2, F2, I1, b1), 0.9),
 ]
 
 

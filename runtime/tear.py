@@ -931,19 +931,17 @@ def _to_rest(target, guess, blend):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _rows(values, src, coef, twin_src, unit):
-    """An attribute (n, c) extended to the torn mesh: the new vertices interpolate their sources
-    (Σ_r coef[i, r] · values[src[i, r]], renormalised to unit length when ``unit``: normals), and the
-    twins copy their vertex. returns (n + v + t, c) float64."""
-    n, c = values.shape
+def _rows(out, n, src, coef, twin_src, unit):
+    """An attribute extended to the torn mesh, in place: ``out`` (n + v + t, c) float64 holds the
+    original rows in its first n; the new vertices' rows interpolate their sources (Σ_r coef[i, r] ·
+    out[src[i, r]], renormalised to unit length when ``unit``: normals), the twins' rows copy their
+    vertex's."""
+    c = out.shape[1]
     v, t = src.shape[0], twin_src.shape[0]
-    out = np.empty((n + v + t, c))
-    for i in range(n):
-        _set_row(out, i, values[i])
     for i in range(v):
         for q in range(c):
-            out[n + i, q] = (coef[i, 0] * values[src[i, 0], q] + coef[i, 1] * values[src[i, 1], q]
-                             + coef[i, 2] * values[src[i, 2], q])
+            out[n + i, q] = (coef[i, 0] * out[src[i, 0], q] + coef[i, 1] * out[src[i, 1], q]
+                             + coef[i, 2] * out[src[i, 2], q])
         if unit:
             length = 0.0
             for q in range(c):
@@ -953,7 +951,7 @@ def _rows(values, src, coef, twin_src, unit):
                 for q in range(c):
                     out[n + i, q] /= length
     for i in range(t):
-        _set_row(out, n + v + i, out[twin_src[i]])
+        _copy_row(out, n + v + i, out, twin_src[i])
     return out
 
 
@@ -1000,12 +998,20 @@ def _distance(p, q):
     return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
 
 
+# Rows are copied by loops: numba's array-into-array assignment (``dst[i] = src``) compiles its
+# shape-mismatch message (string formatting), seconds of compile time in every process.
 @njit(cache=True, nogil=True, error_model="numpy")
 def _set_row(dst, i, src):
-    """dst[i] = src, by a loop: numba's array-into-array assignment compiles its shape-mismatch
-    message (string formatting), seconds of compile time in every process"""
+    """dst[i] = src (c,)"""
     for c in range(src.shape[0]):
         dst[i, c] = src[c]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _copy_row(dst, i, src, j):
+    """dst[i] = src[j] (no view of the row: this runs for every vertex)"""
+    for c in range(src.shape[1]):
+        dst[i, c] = src[j, c]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -1208,8 +1214,8 @@ def _torn_faces(path_int, path_float, faces, welded, wfaces, affected, tris, new
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _vertex_data(vertices, joints, weights, labels, path_float, new_node, new_src, new_coef, twins, moved,
-                 opening, normal, affines, posed):
+def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, new_node, new_src, new_coef, twins, moved, opening,
+                 normal, affines, posed):
     """Step 7 and the vertex arrays of the torn mesh: originals, new vertices, twins.
 
     New vertices get interpolated weights (``_blend_weights``) and, at rest, their path point as
@@ -1221,52 +1227,44 @@ def _vertex_data(vertices, joints, weights, labels, path_float, new_node, new_sr
     offset goes through the inverse blended linear part of the node's first copy on that side (again
     one offset per node and side, for the same reason).
 
+    out_v (N, 3) float64, out_j (N, 4) int64, out_w (N, 4) float64, out_l (N,) int64 with N = n + v + t:
+        the vertex arrays of the torn mesh, the originals in their first n rows (the caller copies
+        them: numpy's copy beats a compiled loop); filled here
     twins (t, 3), moved (s, 4): as ``_open_slit`` returns them
-    returns vertices (N, 3), joints (N, 4), weights (N, 4), labels (N,) with N = n + v + t, and the
-    largest placement residual |skinned new vertex - its posed path point| (0 at rest)
+    returns the largest placement residual |skinned new vertex - its posed path point| (0 at rest)
     """
-    n, v, t = vertices.shape[0], new_node.shape[0], twins.shape[0]
-    total = n + v + t
-    new_joints, new_weights = blend_weight_rows(new_src, new_coef, joints, weights)
-    out_v = np.empty((total, 3))
-    out_j = np.empty((total, 4), np.int64)
-    out_w = np.empty((total, 4))
-    out_l = np.empty(total, np.int64)
-    for i in range(n):
-        _set_row(out_v, i, vertices[i])
-        _set_row(out_j, i, joints[i])
-        _set_row(out_w, i, weights[i])
-        out_l[i] = labels[i]
+    v, t = new_node.shape[0], twins.shape[0]
+    new_joints, new_weights = blend_weight_rows(new_src, new_coef, out_j, out_w)
     top = 0
     for i in range(n):
-        top = max(top, labels[i])
+        top = max(top, out_l[i])
     k_nodes = path_float.shape[0]
     first = np.full(k_nodes, -1, np.int64)
     residual = 0.0
     for i in range(v):
-        _set_row(out_j, n + i, new_joints[i])
-        _set_row(out_w, n + i, new_weights[i])
-        out_l[n + i] = max(labels[new_src[i, 0]], max(labels[new_src[i, 1]], labels[new_src[i, 2]]))
+        _copy_row(out_j, n + i, new_joints, i)
+        _copy_row(out_w, n + i, new_weights, i)
+        out_l[n + i] = max(out_l[new_src[i, 0]], max(out_l[new_src[i, 1]], out_l[new_src[i, 2]]))
         j = new_node[i]
         if not posed:
             for c in range(3):
                 out_v[n + i, c] = path_float[j, 1 + c]
         elif first[j] >= 0:
-            _set_row(out_v, n + i, out_v[n + first[j]])
+            _copy_row(out_v, n + i, out_v, n + first[j])
         else:
             first[j] = i
             guess = np.empty(3)
             for c in range(3):
-                guess[c] = (new_coef[i, 0] * vertices[new_src[i, 0], c] + new_coef[i, 1] * vertices[new_src[i, 1], c]
-                            + new_coef[i, 2] * vertices[new_src[i, 2], c])
+                guess[c] = (new_coef[i, 0] * out_v[new_src[i, 0], c] + new_coef[i, 1] * out_v[new_src[i, 1], c]
+                            + new_coef[i, 2] * out_v[new_src[i, 2], c])
             blend = _blended(new_joints, new_weights, affines, i)
             x, res = _to_rest(path_float[j, 1:4], guess, blend)
             _set_row(out_v, n + i, x)
             residual = max(residual, res)
     for i in range(t):
-        _set_row(out_v, n + v + i, out_v[twins[i, 0]])
-        _set_row(out_j, n + v + i, out_j[twins[i, 0]])
-        _set_row(out_w, n + v + i, out_w[twins[i, 0]])
+        _copy_row(out_v, n + v + i, out_v, twins[i, 0])
+        _copy_row(out_j, n + v + i, out_j, twins[i, 0])
+        _copy_row(out_w, n + v + i, out_w, twins[i, 0])
         out_l[n + v + i] = top + 1 + twins[i, 1]
     for i in range(moved.shape[0]):
         if moved[i, 1] < 0:
@@ -1299,7 +1297,7 @@ def _vertex_data(vertices, joints, weights, labels, path_float, new_node, new_sr
         for i in range(k):
             for c in range(3):
                 out_v[ids[i], c] += offset[nodes[i], 0 if signs[i] > 0 else 1, c]
-    return out_v, out_j, out_w, out_l, residual
+    return residual
 
 
 def _scalpel(value, name):
@@ -1448,15 +1446,17 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     mesh = rig_cached(rig, "tear.arrays", _arrays)
     posed = pose is not None
     affines = surface.affines if posed else np.zeros((1, 12))
-    vertices, joints, weights, labels, residual = _vertex_data(
-        mesh[0], mesh[1], mesh[2], mesh[3], path_float, new_node, new_src, new_coef, twins, moved,
-        opening, plane[:3].copy(), affines, posed)
+    n, added = rig.n_vertices, len(new_node) + len(twins)
+    vertices, joints, weights, labels = (_extended(values, added) for values in mesh[:4])
+    residual = _vertex_data(vertices, joints, weights, labels, n, path_float, new_node, new_src, new_coef,
+                            twins, moved, opening, plane[:3].copy(), affines, posed)
     if residual > PLACEMENT_TOLERANCE * surface.diagonal:
         warnings.warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
                       f"blended transform is singular or nearly so)", TearPlacementWarning, stacklevel=2)
     attributes = {}
     for name, (values, tail) in mesh[4].items():
-        rows = _rows(values, new_src, new_coef, twins[:, 0].copy(), name == "NORMAL")
+        rows = _extended(values, added)
+        _rows(rows, n, new_src, new_coef, twins[:, 0].copy(), name == "NORMAL")
         attributes[name] = rows.reshape((len(rows),) + tail)
     if split.any() or TEAR_LABEL in rig.attributes:
         attributes[TEAR_LABEL] = labels[:, None].astype(np.float64)
@@ -1464,6 +1464,13 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     torn = rig.with_mesh(vertices, torn_faces, joints, weights, attributes)
     return TearResult(rig=torn, plane=plane, points=path_float[:, 1:4].copy(), kinds=path_int[:, 0].copy(),
                       side_a=side_a, side_b=side_b, split=split, hits=hits)
+
+
+def _extended(values, rows: int) -> np.ndarray:
+    """``values`` (n, ...) followed by ``rows`` uninitialised rows, for a kernel to fill."""
+    out = np.empty((len(values) + rows,) + values.shape[1:], values.dtype)
+    out[:len(values)] = values
+    return out
 
 
 def _arrays(rig):
