@@ -148,7 +148,7 @@ def _build(positions, faces, leaf_size, padding):
 
 
 # ---- queries ------------------------------------------------------------------------------------
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, no_cpython_wrapper=True)
 def _segment_box(lo, hi, a, d, t_max):
     """Whether a + t d, t in [0, t_max], meets the box [lo, hi]; returns (hit, t_entry)."""
     t0, t1 = 0.0, t_max
@@ -169,7 +169,7 @@ def _segment_box(lo, hi, a, d, t_max):
     return True, t0
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, no_cpython_wrapper=True)
 def _watertight(tri, i, a, kx, ky, kz, sx, sy, sz):
     """Woop–Benthin–Wald test of the segment a + t d (sheared frame kx, ky, kz, sx, sy, sz) against
     triangle ``i`` of ``tri``; two-sided. Returns t (may lie outside [0, 1]) or NaN for a miss."""
@@ -196,7 +196,7 @@ def _watertight(tri, i, a, kx, ky, kz, sx, sy, sz):
     return (u * sz * az + v * sz * bz + w * sz * cz) / det
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, no_cpython_wrapper=True)
 def _shear(d):
     """The watertight test's per-segment constants: the dominant axis kz and the shear."""
     kz = 0

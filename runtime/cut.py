@@ -135,7 +135,7 @@ def _classify(plane, positions, representative, rel_tol):
     return sign, tol, diag
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _put(out, row, a, b, c):
     out[row, 0] = a
     out[row, 1] = b
@@ -322,7 +322,7 @@ def _split(plane, positions, faces, wfaces, welded, representative, sign, face_v
     return pos_faces, neg_faces, pos_src, neg_src, new_lo, new_hi, new_t, new_point
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _solve3(m, r):
     """x with L x = r for the linear part L (3x3) of a row-major 3x4 map ``m`` (12,), by Cramer's rule;
     returns (x0, x1, x2, det)."""
@@ -632,13 +632,13 @@ def cut(rig: Rig, normal, point, pose=None, cap: bool = False):
 
 
 # ---- caps ---------------------------------------------------------------------------------------------
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _orient(ax, ay, bx, by, cx, cy):
     """Twice the signed area of triangle abc (> 0: counter-clockwise)."""
     return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _is_ear(xy, ids, nxt, p, i, q):
     """Whether corner i (between p and q) of the remaining polygon can be clipped: strictly convex, and
     no other remaining vertex inside or on the triangle (vertices that repeat one of its three, as

@@ -227,7 +227,7 @@ def _shear_nodes(skeleton: Skeleton) -> list:
     return out
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, no_cpython_wrapper=True)
 def _compose_affine(a, b):
     """Row-major 3x4 a ∘ 3x4 b (both as (12,) arrays), as (12,)."""
     out = np.empty(12)

@@ -1,17 +1,18 @@
 """Compile the runtime's numba kernels before their first call, on every core.
 
 numba compiles a kernel at its first call and caches the machine code beside the source (or under
-``NUMBA_CACHE_DIR``). On a fresh install that first call is slow: skinning, cutting and tearing once
-compile about a minute of kernels, one at a time, on one core. ``precompile()`` finds the kernels
-of ``KERNELS`` that the cache does not hold yet and compiles them in parallel: this process takes
-one share and worker processes the others (one process per core), each writing to the same cache.
+``NUMBA_CACHE_DIR``). On a fresh install skinning, cutting and tearing once would compile about
+35 s of kernels (2-core machine), one at a time, on one core. ``precompile()`` finds the kernels of
+``KERNELS`` that the cache does not hold yet and compiles them in parallel: this process takes one
+share and worker processes the others (one process per core), each writing to the same cache.
 Afterwards every first call only loads from the cache.
 
 ``KERNELS`` lists each kernel that the Python side calls, with the argument types that the
 runtime's own calls give it (arrays it made or converted itself; a kernel called with other types,
 say read-only arrays of a caller, is compiled at that call as before). Kernels called only from
-other kernels are compiled with them. A test runs skinning, cuts and tears after ``precompile()`` and fails if any of them still
-compiles a kernel, so the list cannot fall behind the code.
+other kernels are compiled with them (and without a Python wrapper: ``no_cpython_wrapper``). A test
+runs skinning, cuts and tears after ``precompile()`` and fails if any of them still compiles a
+kernel, so the list cannot fall behind the code.
 """
 from __future__ import annotations
 

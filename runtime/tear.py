@@ -92,6 +92,8 @@ PLACEMENT_TOLERANCE = 1e-9
 # int literals: numba compiles a separate copy of a helper for each literal value it is called with
 # (also for a loop counter that starts at a literal: ``n = 0`` gives one copy for Literal[int](0) and
 # one for int64, so such counters start at ``np.int64(0)``).
+# Helpers that only other kernels call are compiled with no_cpython_wrapper=True: numba then builds
+# no Python entry point for them, which shortens a cold start by about a tenth (cgaskin.precompile).
 # path node kinds
 VERTEX, EDGE, FACE = np.int64(0), np.int64(1), np.int64(2)
 # how a path segment runs from the previous node: across a face, or along an edge in the plane
@@ -256,7 +258,7 @@ def _classify(plane, welded_positions, tol, cls):
         cls[w] = 0 if abs(d) <= tol else (1 if d > 0.0 else -1)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _elements(g, wfaces, face_edges, cls, kinds, ids):
     """Where the plane meets face ``g``'s boundary: its corners on the plane (VERTEX, welded id) and
     its edges whose ends lie on opposite sides (EDGE, edge id). Returns how many (<= 3)."""
@@ -273,7 +275,7 @@ def _elements(g, wfaces, face_edges, cls, kinds, ids):
     return count
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target):
     """Append a node of the search tree; its length is its parent's plus the step."""
     ni[n, 0], ni[n, 1], ni[n, 2], ni[n, 3], ni[n, 4] = kind, ident, parent, carrier_kind, carrier
@@ -284,7 +286,7 @@ def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carr
     return n + 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges,
                   t_kind, t_id, vertex_used):
     """Append the node for a boundary element (a vertex on the plane, or the crossing of an edge,
@@ -442,7 +444,7 @@ def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_
 
 
 # ---- re-triangulation of the crossed faces ---------------------------------------------------------------
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _position(code, f, wfaces, wpos, path_float):
     """Position of a polygon element: corner k of face f (code -1-k) or path node ``code``."""
     if code < 0:
@@ -450,7 +452,7 @@ def _position(code, f, wfaces, wpos, path_float):
     return path_float[code, 1:4]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
     """Triangulate a convex polygon (elements ``sub[:count]`` in the face's winding) whose ``flat``
     elements lie inside one of its sides (edge crossings that are not chord ends): a fan from a flat
@@ -475,7 +477,7 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
     return n_out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
     """Split face ``f`` so that the path's pieces in it become edges.
 
@@ -571,7 +573,7 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
     return n_out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _add_unique(values, count, value):
     """Append ``value`` to ``values[:count]`` unless it is there (short lists); grows the array."""
     for q in range(count):
@@ -583,7 +585,7 @@ def _add_unique(values, count, value):
     return values, count + 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges, wpos, new_node, new_src,
                 new_coef, n_new):
     """The new vertex of path node ``code`` as face ``f`` uses it: found among the first ``n_new`` or
@@ -679,7 +681,7 @@ def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_of
 
 
 # ---- opening the slit ------------------------------------------------------------------------------------
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _find(parent, i):
     while parent[i] != i:
         parent[i] = parent[parent[i]]
@@ -687,7 +689,7 @@ def _find(parent, i):
     return i
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _linked(wf, fa, ka, fb, kb, before, after):
     """Whether faces fa and fb (node at corners ka, kb) share an edge from the node that is not a
     path edge (to the previous node ``before`` or the next ``after``; -1 when there is none)."""
@@ -700,7 +702,7 @@ def _linked(wf, fa, ka, fb, kb, before, after):
     return False
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _append_row(rows, count, a, b, c, d):
     """rows[count, :4] = (a, b, c, d) (columns beyond the array's width dropped), growing the
     array when full; returns (rows, count + 1)."""
@@ -879,7 +881,7 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
 
 
 # ---- data of the new vertices -------------------------------------------------------------------------
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _blended(joints, weights, affines, i):
     """(12,) the blended row-major 3x4 map Σ_k w_k A[joints[i, k]] of vertex i."""
     out = np.zeros(12)
@@ -892,7 +894,7 @@ def _blended(joints, weights, affines, i):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _solve_linear(m, r):
     """x with L x = r for the linear part L of a row-major 3x4 map ``m`` (Cramer's rule); NaN if L
     is singular."""
@@ -911,7 +913,7 @@ def _solve_linear(m, r):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _to_rest(target, guess, blend):
     """The rest position x whose blended map ``blend`` (12,) puts it at ``target`` (3,): solved
     relative to ``guess`` (the interpolated rest position, close to the answer) and refined once on
@@ -964,7 +966,7 @@ MIN_SINE = 1e-6
 
 # 3-vector helpers: scalar loops, because numba compiles every array expression (``a - b``,
 # ``np.sum(x ** 2)``) into a kernel of its own, a fraction of a second of compile time each
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _cross(u, v):
     out = np.empty(3)
     out[0] = u[1] * v[2] - u[2] * v[1]
@@ -973,7 +975,7 @@ def _cross(u, v):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _sub(p, q):
     """p - q (3,)"""
     out = np.empty(3)
@@ -982,17 +984,17 @@ def _sub(p, q):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _dot(u, v):
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _norm(u):
     return math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _distance(p, q):
     """|p - q| of two (3,) points"""
     return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
@@ -1000,21 +1002,21 @@ def _distance(p, q):
 
 # Rows are copied by loops: numba's array-into-array assignment (``dst[i] = src``) compiles its
 # shape-mismatch message (string formatting), seconds of compile time in every process.
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _set_row(dst, i, src):
     """dst[i] = src (c,)"""
     for c in range(src.shape[0]):
         dst[i, c] = src[c]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _copy_row(dst, i, src, j):
     """dst[i] = src[j] (no view of the row: this runs for every vertex)"""
     for c in range(src.shape[1]):
         dst[i, c] = src[j, c]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _hit_node(face, hit, wfaces, wpos, tol):
     """(kind, id, point) of a scalpel hit: the nearest corner of the hit face when within ``tol``
     (VERTEX, welded id, its position), else (FACE, face, hit)."""
@@ -1028,7 +1030,7 @@ def _hit_node(face, hit, wfaces, wpos, tol):
     return FACE, face, hit.copy()
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plane, tol):
     """A point inside a face within ``tol`` of where the plane crosses one of the face's edges is that
     crossing (an EDGE node), so that a scalpel through an edge splits both faces on it instead of
@@ -1046,7 +1048,7 @@ def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plan
     return kind, ident, point
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
 def _boundary_hit(a, b, t_max, boundary, wpos, tol):
     """The first boundary vertex within ``tol`` of segment a -> b before parameter ``t_max``:
     (welded vertex, t) or (-1, t_max). A slit opened wide ends in a wedge-shaped gap whose tip is the

@@ -43,7 +43,7 @@ _S33 = np.uint64(33)
 _ROT = np.uint64(0x9E3779B97F4A7C15)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, no_cpython_wrapper=True)
 def _mix(h):
     """The 64-bit finaliser of MurmurHash3: every input bit affects every output bit."""
     h ^= h >> _S33
@@ -54,7 +54,7 @@ def _mix(h):
     return h
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, no_cpython_wrapper=True)
 def _table_size(n):
     size = 16
     while size < 2 * n:
