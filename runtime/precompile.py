@@ -41,46 +41,46 @@ i8, f8, b1 = types.int64, types.float64, types.boolean
 KERNELS = [
     # skinning and poses
     ("cgaskin.generated.skinning", "skin_blend", (F2, I2, F2, F2, F2), 0.4),
-    ("cgaskin.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.3),
-    ("cgaskin.generated.kernels", "versor_translator_batch", (F2r, F2), 0.2),
-    ("cgaskin.generated.kernels", "versor_rotor_batch", (F2r, F1r, F2), 0.4),
-    ("cgaskin.generated.kernels", "versor_rotor_quaternion_batch", (F2r, F2), 0.4),
-    ("cgaskin.generated.kernels", "versor_dilator_batch", (F1r, F2), 0.4),
-    ("cgaskin.generated.kernels", "gp_versor_versor_batch", (F2r, F2r, F2), 0.9),
-    ("cgaskin.generated.kernels", "versor_to_affine_batch", (F2r, F2), 0.6),
-    ("cgaskin.generated.kernels", "versor_residual_batch", (F2r, F2), 0.5),
-    ("cgaskin.generated.kernels", "reverse_versor_batch", (F2r, F2), 0.4),
+    ("cgaskin.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.8),
+    ("cgaskin.generated.kernels", "versor_translator_batch", (F2r, F2), 0.3),
+    ("cgaskin.generated.kernels", "versor_rotor_batch", (F2r, F1r, F2), 0.2),
+    ("cgaskin.generated.kernels", "versor_rotor_quaternion_batch", (F2r, F2), 0.1),
+    ("cgaskin.generated.kernels", "versor_dilator_batch", (F1r, F2), 0.3),
+    ("cgaskin.generated.kernels", "gp_versor_versor_batch", (F2r, F2r, F2), 0.7),
+    ("cgaskin.generated.kernels", "versor_to_affine_batch", (F2r, F2), 0.4),
+    ("cgaskin.generated.kernels", "versor_residual_batch", (F2r, F2), 0.2),
+    ("cgaskin.generated.kernels", "reverse_versor_batch", (F2r, F2), 0.2),
     ("cgaskin.generated.kernels", "reverse_versor", (F1r,), 0.2),
-    ("cgaskin.generated.kernels", "versor_log_batch", (F2r, F2), 0.3),
-    ("cgaskin.generated.kernels", "versor_log", (F1r,), 0.2),
-    ("cgaskin.generated.kernels", "versor_exp_batch", (F2r, F2), 0.7),
-    ("cgaskin.generated.kernels", "versor_exp", (F1r,), 0.5),
+    ("cgaskin.generated.kernels", "versor_log_batch", (F2r, F2), 0.5),
+    ("cgaskin.generated.kernels", "versor_log", (F1r,), 0.4),
+    ("cgaskin.generated.kernels", "versor_exp_batch", (F2r, F2), 0.4),
+    ("cgaskin.generated.kernels", "versor_exp", (F1r,), 0.2),
     # welded topology, BVH, weights
-    ("cgaskin.topology", "_weld_positions", (U2,), 0.9),
-    ("cgaskin.topology", "_unique_pairs", (I1, I1), 1.4),
-    ("cgaskin.topology", "_corner_pairs", (I2, I1), 0.4),
-    ("cgaskin.topology", "incidence", (I2, i8), 0.8),
-    ("cgaskin.bvh", "_build", (F2, I2, i8, f8), 2.9),
-    ("cgaskin.weights", "blend_weight_rows", (I2, F2, I2, F2), 1.0),
+    ("cgaskin.topology", "_weld_positions", (U2,), 0.4),
+    ("cgaskin.topology", "_unique_pairs", (I1, I1), 0.7),
+    ("cgaskin.topology", "_corner_pairs", (I2, I1), 0.2),
+    ("cgaskin.topology", "incidence", (I2, i8), 0.3),
+    ("cgaskin.bvh", "_build", (F2, I2, i8, f8), 1.5),
+    ("cgaskin.weights", "blend_weight_rows", (I2, F2, I2, F2), 0.6),
     # cut
-    ("cgaskin.generated.kernels", "plane_from_normal_distance", (F1, f8), 0.2),
-    ("cgaskin.generated.kernels", "point_plane_distance_batch", (F2ar, F2, F2), 0.2),
-    ("cgaskin.cut", "_classify", (F1, F2, I1, f8), 0.5),
-    ("cgaskin.cut", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.7),
-    ("cgaskin.cut", "_place_in_rest", (F2, F2, I2, F2, F2), 1.0),
-    ("cgaskin.cut", "_lerp_rows", (F2, I1, I1, F1, b1), 0.5),
-    ("cgaskin.cut", "_assemble", (F2, I1, I1, F2), 0.6),
-    ("cgaskin.cut", "_assemble", (I2, I1, I1, I2), 0.6),
-    ("cgaskin.cut", "_ear_clip", (F2, I1), 1.1),
+    ("cgaskin.generated.kernels", "plane_from_normal_distance", (F1, f8), 0.1),
+    ("cgaskin.generated.kernels", "point_plane_distance_batch", (F2ar, F2, F2), 0.3),
+    ("cgaskin.cut", "_classify", (F1, F2, I1, f8), 0.4),
+    ("cgaskin.cut", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.1),
+    ("cgaskin.cut", "_place_in_rest", (F2, F2, I2, F2, F2), 1.2),
+    ("cgaskin.cut", "_lerp_rows", (F2, I1, I1, F1, b1), 0.3),
+    ("cgaskin.cut", "_assemble", (F2, I1, I1, F2), 0.3),
+    ("cgaskin.cut", "_assemble", (I2, I1, I1, I2), 0.2),
+    ("cgaskin.cut", "_ear_clip", (F2, I1), 0.5),
     # tear
     ("cgaskin.tear", "_ends", (F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1,
-                               I1, I1, f8), 7.2),
-    ("cgaskin.tear", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 3.2),
-    ("cgaskin.tear", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 7.2),
-    ("cgaskin.tear", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.7),
-    ("cgaskin.tear", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 5.1),
-    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 5.1),
-    ("cgaskin.tear", "_rows", (F2, i8, I2, F2, I1, b1), 0.9),
+                               I1, I1, f8), 6.0),
+    ("cgaskin.tear", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 2.1),
+    ("cgaskin.tear", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 4.4),
+    ("cgaskin.tear", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.0),
+    ("cgaskin.tear", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 2.9),
+    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 3.4),
+    ("cgaskin.tear", "_rows", (F2, i8, I2, F2, I1, b1), 0.3),
 ]
 
 
@@ -131,7 +131,9 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     from numba.core import config
     if config.DISABLE_JIT:
         return 0
-    jobs = max(1, os.cpu_count() or 1) if jobs is None else int(jobs)
+    if jobs is None:        # the cores this process may run on (os.cpu_count() counts the machine's)
+        jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    jobs = int(jobs)
     if jobs < 1:
         raise ValueError(f"jobs must be >= 1, got {jobs}")
     start = time.perf_counter()
