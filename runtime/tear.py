@@ -557,7 +557,7 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
             continue
         e = inner[q]
         pe = path_float[e, 1:4]
-        best, best_score = 0, -np.inf
+        best, best_score, best_k = 0, -np.inf, 0
         for i in range(n_out):
             la, lb, lc = barycentric(_position(out[i, 0], f, wfaces, wpos, path_float),
                                      _position(out[i, 1], f, wfaces, wpos, path_float),
@@ -565,12 +565,42 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
             score = min(la, min(lb, lc))
             if score > best_score:
                 best, best_score = i, score
-        a, b, c = out[best, 0], out[best, 1], out[best, 2]
-        out[best, 0], out[best, 1], out[best, 2] = e, a, b
+                best_k = 0 if la == score else (1 if lb == score else 2)
+        n_out = _insert_node(out, n_out, best, e, best_score <= ON_EDGE, best_k)
+    return n_out
+
+
+#: a point whose smallest barycentric coordinate in a triangle is at most this lies on the edge
+#: opposite that corner (to rounding): splitting the triangle in three there would leave one of zero
+#: area, so the edge is split instead
+ON_EDGE = 1e-9
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _insert_node(out, n_out, t, e, on_edge, k):
+    """Insert element ``e`` into triangle row ``t`` of ``out[:n_out]``, keeping the winding: three
+    triangles around it, or, when ``on_edge`` (e on the edge opposite corner k), two in ``t`` and two
+    in the triangle across that edge (three in ``t`` if no row of ``out`` shares the edge: e then
+    lies on the face's own border, which the path's edge crossings cover). Returns the row count."""
+    a, b, c = out[t, k], out[t, (k + 1) % 3], out[t, (k + 2) % 3]
+    across, x = -1, a
+    if on_edge:
+        for i in range(n_out):
+            for r in range(3):
+                if out[i, r] == c and out[i, (r + 1) % 3] == b:
+                    across = i
+                    x = out[i, (r + 2) % 3]
+    if across < 0:
+        out[t, 0], out[t, 1], out[t, 2] = e, a, b
         out[n_out, 0], out[n_out, 1], out[n_out, 2] = e, b, c
         out[n_out + 1, 0], out[n_out + 1, 1], out[n_out + 1, 2] = e, c, a
-        n_out += 2
-    return n_out
+        return n_out + 2
+    # e splits edge b-c: (a, b, e), (a, e, c) here and (x, c, e), (x, e, b) across
+    out[t, 0], out[t, 1], out[t, 2] = a, b, e
+    out[n_out, 0], out[n_out, 1], out[n_out, 2] = a, e, c
+    out[across, 0], out[across, 1], out[across, 2] = x, c, e
+    out[n_out + 1, 0], out[n_out + 1, 1], out[n_out + 1, 2] = x, e, b
+    return n_out + 2
 
 
 @njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
@@ -583,6 +613,26 @@ def _add_unique(values, count, value):
         values = np.concatenate((values, np.empty_like(values)))
     values[count] = value
     return values, count + 1
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _segment_coordinates(a, b, c, p):
+    """Coordinates (λa, λb, λc) of p on the longest side of a triangle of zero area (its nearest
+    point there; all weight on a when the three corners coincide)."""
+    best, la, lb, lc = -1.0, 1.0, 0.0, 0.0
+    for k in range(3):
+        u = a if k == 0 else (b if k == 1 else c)
+        v = b if k == 0 else (c if k == 1 else a)
+        length2 = _distance(u, v) ** 2
+        if length2 > best:
+            best = length2
+            t = 0.0
+            if length2 > 0.0:
+                t = min(max(((p[0] - u[0]) * (v[0] - u[0]) + (p[1] - u[1]) * (v[1] - u[1])
+                             + (p[2] - u[2]) * (v[2] - u[2])) / length2, 0.0), 1.0)
+            coords = (1.0 - t, t, 0.0) if k == 0 else ((0.0, 1.0 - t, t) if k == 1 else (t, 0.0, 1.0 - t))
+            la, lb, lc = coords
+    return la, lb, lc
 
 
 @njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
@@ -612,6 +662,10 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
                 return q, n_new
         la, lb, lc = barycentric(wpos[wfaces[f, 0]], wpos[wfaces[f, 1]], wpos[wfaces[f, 2]],
                                  path_float[code, 1:4])
+        if not (math.isfinite(la) and math.isfinite(lb) and math.isfinite(lc)):
+            # a face of zero area (the file's, or a sliver): its longest side is all there is of it
+            la, lb, lc = _segment_coordinates(wpos[wfaces[f, 0]], wpos[wfaces[f, 1]], wpos[wfaces[f, 2]],
+                                              path_float[code, 1:4])
         # a point on the face's boundary may come out a rounding error outside
         la, lb, lc = max(la, 0.0), max(lb, 0.0), max(lc, 0.0)
         total = la + lb + lc
@@ -1262,7 +1316,8 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, new_node, new_src, n
             blend = _blended(new_joints, new_weights, affines, i)
             x, res = _to_rest(path_float[j, 1:4], guess, blend)
             _set_row(out_v, n + i, x)
-            residual = max(residual, res)
+            if not res <= residual:          # NaN too: a residual that is not a number is reported
+                residual = res
     for i in range(t):
         _copy_row(out_v, n + v + i, out_v, twins[i, 0])
         _copy_row(out_j, n + v + i, out_j, twins[i, 0])
@@ -1452,7 +1507,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     vertices, joints, weights, labels = (_extended(values, added) for values in mesh[:4])
     residual = _vertex_data(vertices, joints, weights, labels, n, path_float, new_node, new_src, new_coef,
                             twins, moved, opening, plane[:3].copy(), affines, posed)
-    if residual > PLACEMENT_TOLERANCE * surface.diagonal:
+    if not residual <= PLACEMENT_TOLERANCE * surface.diagonal:
         warnings.warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
                       f"blended transform is singular or nearly so)", TearPlacementWarning, stacklevel=2)
     attributes = {}

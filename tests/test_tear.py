@@ -429,6 +429,29 @@ def test_stroke_inside_one_face_still_opens():
     check_stroke(rig, result, None)
 
 
+def test_stroke_towards_a_corner_on_the_plane_leaves_no_sliver():
+    """A stroke inside one face whose line runs through a corner of that face (here the capsule's
+    pole, which the tear plane holds): the end node lies on the fan edge from the midpoint to that
+    corner, which is split there instead of leaving a triangle of zero area; the next stroke from the
+    same blade then starts at the end vertex and continues the slit (a case hypothesis found)."""
+    rig = get_rig("capsule")
+    blade_0 = np.array([[-0.3424427784925041, -0.10355683722229911, 0.02059873565023741],
+                        [-0.1237259026236233, -0.06005134565733722, 0.01194495532903511]])
+    blade_1 = np.array([[-0.3443222962082748, -0.09446749372898598, 0.0187907528180556],
+                        [-0.12560542033939398, -0.05096200216402409, 0.0101369724968533]])
+    blade_2 = np.array([[-0.30730265569658965, 0.01497309382001193, 0.07527482588065143],
+                        [-0.1673238551405059, 0.00943467441444245, 0.04743131127907582]])
+    first = tear_stroke(rig, blade_0, blade_1)
+    assert list(first.kinds) == [2, 2, 2]                     # inside one face
+    torn = first.rig
+    points, faces = np.asarray(torn.vertices), np.asarray(torn.faces)
+    assert areas(points, faces).min() > 1e-9 * diagonal(points) ** 2
+    second = tear_stroke(torn, blade_1, blade_2)
+    assert second.kinds[0] == 0 and second.split[0]
+    np.testing.assert_array_equal(second.points[0], first.points[-1])
+    check_stroke(torn, second, None, 0.0)
+
+
 def test_long_stroke_round_the_capsule_takes_the_short_way():
     rig = get_rig("capsule")
     result = tear_stroke(rig, *capsule_blades(0.2, 2.8))
