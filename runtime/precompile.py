@@ -113,19 +113,28 @@ def _shares(indices: list, jobs: int) -> list:
     return [share for share in shares if share]
 
 
-def _compile(indices) -> None:
+def _compile(indices) -> list:
+    """Compile these entries of ``KERNELS``; returns a line for each that failed (it is then compiled
+    at its first call, with the types of that call, as without precompile: slower, never wrong)."""
+    failed = []
     for i in indices:
         dispatcher, argtypes = _dispatcher(i)
-        dispatcher.compile(argtypes)
+        try:
+            dispatcher.compile(argtypes)
+        except Exception as exc:
+            first_line = (str(exc).splitlines() or [""])[0]
+            failed.append(f"{KERNELS[i][0]}.{KERNELS[i][1]}: {type(exc).__name__}: {first_line}")
+    return failed
 
 
-#: a worker process: compiles the entries of ``KERNELS`` given as arguments
-_WORKER = "import sys; from cgaskin.precompile import _compile; _compile(int(a) for a in sys.argv[1:])"
+#: a worker process: compiles the entries of ``KERNELS`` given as arguments, reports failures on stderr
+_WORKER = ("import sys; from cgaskin.precompile import _compile\n"
+           "for line in _compile(int(a) for a in sys.argv[1:]): print('FAILED', line, file=sys.stderr)")
 
 
 def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     """Compile every kernel of ``KERNELS`` that numba's cache does not hold yet, in ``jobs``
-    processes (default: one per core); returns how many were compiled. Kernels the cache holds cost
+    processes (default: one per core); returns how many were missing. Kernels the cache holds cost
     a load each. ``verbose`` prints what it does (on stdout) when there is something to compile.
     With ``NUMBA_DISABLE_JIT=1`` there is nothing to compile."""
     from numba.core import config
@@ -148,15 +157,20 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
                for share in others]
     try:
-        _compile(own)
+        failed = _compile(own)
+    except BaseException:                  # interrupted: stop the workers too
+        for worker in workers:
+            worker.kill()
+        raise
     finally:
-        errors = [worker.communicate()[1] for worker in workers]
-    # a worker that failed leaves its kernels to be compiled at their first call, as without
-    # precompile(): slower, never wrong
+        reports = [worker.communicate()[1] for worker in workers]
+    for worker, report in zip(workers, reports):
+        lines = report.strip().splitlines()
+        failed += [line[len("FAILED "):] for line in lines if line.startswith("FAILED ")]
+        if worker.returncode:               # the worker itself failed: the rest of its share is left
+            failed.append(f"a compile worker: {lines[-1] if lines else 'no message'}")
     if verbose:
         print(f"compiled in {time.perf_counter() - start:.1f} s", flush=True)
-        for worker, error in zip(workers, errors):
-            if worker.returncode:
-                last = error.strip().splitlines()[-1:] or ["no message"]
-                print(f"a compile worker failed ({last[0]}): its kernels compile at their first call", flush=True)
+        for line in failed:
+            print(f"not precompiled ({line}); compiled at its first call instead", flush=True)
     return len(missing)
