@@ -17,12 +17,15 @@ kernel, so the list cannot fall behind the code.
 from __future__ import annotations
 
 import importlib
+import numbers
 import os
 import subprocess
 import sys
 import time
 
 from numba import types
+
+from .errors import InvalidInputError
 
 __all__ = ["precompile", "KERNELS"]
 
@@ -142,9 +145,9 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
         return 0
     if jobs is None:        # the cores this process may run on (os.cpu_count() counts the machine's)
         jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
+        raise InvalidInputError(f"jobs must be a whole number of processes >= 1, got {jobs!r}")
     jobs = int(jobs)
-    if jobs < 1:
-        raise ValueError(f"jobs must be >= 1, got {jobs}")
     start = time.perf_counter()
     missing = [i for i in range(len(KERNELS)) if not _is_cached(*_dispatcher(i))]
     if not missing:

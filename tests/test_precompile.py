@@ -8,6 +8,7 @@ import textwrap
 
 import pytest
 
+from cgaskin import InvalidInputError, precompile
 from cgaskin.cli import main
 
 pc = importlib.import_module("cgaskin.precompile")     # the module (cgaskin.precompile is the function)
@@ -90,12 +91,16 @@ def test_every_listed_kernel_exists():
 
 def test_command_line(capsys):
     assert main(["precompile", "--jobs", "0"]) == 2
-    assert "--jobs must be >= 1" in capsys.readouterr().err
+    assert "cgaskin precompile: error: jobs must be a whole number of processes >= 1, got 0" in capsys.readouterr().err
     assert main(["precompile", "--jobs", "1"]) == 0
     assert main(["precompile"]) == 0                   # the second time: all cached
     assert "every kernel is compiled and cached already" in capsys.readouterr().out
-    with pytest.raises(ValueError):
-        pc.precompile(jobs=0)
+
+
+@pytest.mark.parametrize("jobs", [0, -2, 1.5, "2", True, [2]])
+def test_bad_jobs(jobs):
+    with pytest.raises(InvalidInputError, match="jobs must be a whole number of processes >= 1"):
+        precompile(jobs=jobs)
 
 
 def test_failures_cost_time_not_results(tmp_path):
