@@ -619,20 +619,21 @@ def _add_unique(values, count, value):
 def _segment_coordinates(a, b, c, p):
     """Coordinates (λa, λb, λc) of p on the longest side of a triangle of zero area (its nearest
     point there; all weight on a when the three corners coincide)."""
-    best, la, lb, lc = -1.0, 1.0, 0.0, 0.0
+    corners = (a, b, c)
+    coords = np.zeros(3)
+    coords[0] = 1.0
+    longest = 0.0
     for k in range(3):
-        u = a if k == 0 else (b if k == 1 else c)
-        v = b if k == 0 else (c if k == 1 else a)
-        length2 = _distance(u, v) ** 2
-        if length2 > best:
-            best = length2
-            t = 0.0
-            if length2 > 0.0:
-                t = min(max(((p[0] - u[0]) * (v[0] - u[0]) + (p[1] - u[1]) * (v[1] - u[1])
-                             + (p[2] - u[2]) * (v[2] - u[2])) / length2, 0.0), 1.0)
-            coords = (1.0 - t, t, 0.0) if k == 0 else ((0.0, 1.0 - t, t) if k == 1 else (t, 0.0, 1.0 - t))
-            la, lb, lc = coords
-    return la, lb, lc
+        u, v = corners[k], corners[(k + 1) % 3]
+        length2 = (v[0] - u[0]) ** 2 + (v[1] - u[1]) ** 2 + (v[2] - u[2]) ** 2
+        if length2 > longest:
+            longest = length2
+            t = ((p[0] - u[0]) * (v[0] - u[0]) + (p[1] - u[1]) * (v[1] - u[1])
+                 + (p[2] - u[2]) * (v[2] - u[2])) / length2
+            t = min(max(t, 0.0), 1.0)
+            coords[:] = 0.0
+            coords[k], coords[(k + 1) % 3] = 1.0 - t, t
+    return coords[0], coords[1], coords[2]
 
 
 @njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
@@ -1008,7 +1009,6 @@ def _rows(out, n, src, coef, twin_src, unit):
                     out[n + i, q] /= length
     for i in range(t):
         _copy_row(out, n + v + i, out, twin_src[i])
-    return out
 
 
 # ---- the stroke, in compiled steps ------------------------------------------------------------------

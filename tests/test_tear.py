@@ -614,3 +614,20 @@ def test_bvh_cache_and_checks():
     with pytest.raises(InvalidInputError):
         bvh.first_hit([0, 0, 0], [0, 0, 0])
     np.testing.assert_array_equal(bvh.triangle(7), rig.vertices[rig.faces[7]])
+
+
+def test_points_in_a_face_of_zero_area_get_finite_coordinates():
+    """A face of zero area has no barycentric coordinates (the generated kernel divides by its
+    area): a path point in one takes its place on the face's longest side."""
+    import importlib
+    from numba import njit
+    coordinates = importlib.import_module("cgaskin.tear")._segment_coordinates
+
+    @njit
+    def call(a, b, c, p):
+        return coordinates(a, b, c, p)
+
+    a, b, c = np.array([0.0, 0, 0]), np.array([2.0, 0, 0]), np.array([1.0, 0, 0])
+    np.testing.assert_allclose(call(a, b, c, np.array([0.5, 1.0, 0])), (0.75, 0.25, 0.0))
+    np.testing.assert_allclose(call(b, c, a, np.array([1.5, 0, 0])), (0.75, 0.0, 0.25))
+    np.testing.assert_allclose(call(a, a, a, np.array([0.5, 1.0, 0])), (1.0, 0.0, 0.0))
