@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 import cgaskin
-from cgaskin.cut import cut
+from cgaskin.surgery.cut.api import cut
 from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.topology import topology
+from cgaskin.surgery.topology import topology
 
 from ._timing import median_seconds, print_table
 

@@ -17,7 +17,7 @@ from numba import njit, prange
 
 import cgaskin
 from cgaskin import versor
-from cgaskin.skinning import bone_affines
+from cgaskin.animation.skinning import bone_affines
 
 from ._timing import median_seconds, print_table
 

@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 import cgaskin
-from cgaskin.bvh import TriangleBVH, _first_hit
-from cgaskin.pose import skin
+from cgaskin.surgery.bvh import TriangleBVH, _first_hit
+from cgaskin.animation.pose import skin
 from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.tear import TearPathError, tear_stroke
+from cgaskin.surgery.tear.stroke import TearPathError, tear_stroke
 
 from ._timing import median_seconds, print_table
 

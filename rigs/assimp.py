@@ -34,7 +34,7 @@ import warnings
 from dataclasses import replace
 
 from ..errors import ModelFormatError
-from ..rig import Rig
+from ..animation.rig import Rig
 
 __all__ = ["load_assimp", "assimp_executable", "DEFAULT_TIMEOUT_S"]
 

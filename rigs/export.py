@@ -29,9 +29,9 @@ import numpy as np
 import pygltflib
 
 from ..errors import InvalidInputError
-from ..rig import CHANNEL_PATHS, INTERPOLATIONS, Rig
-from ..validate import check_mesh
-from ..validate import EXACT_SUM_TOLERANCE
+from ..animation.rig import CHANNEL_PATHS, INTERPOLATIONS, Rig
+from ..animation.validate import check_mesh
+from ..animation.validate import EXACT_SUM_TOLERANCE
 from .gltf import WEIGHT_RESIDUALS, trs_to_matrix
 
 __all__ = ["save_gltf", "save_mesh"]

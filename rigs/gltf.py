@@ -41,9 +41,9 @@ import pygltflib
 
 from ..baselines import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
 from ..errors import CgaskinError, InvalidInputError, ModelFormatError, NoSkinError
-from ..rig import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip, Rig, Skeleton
-from .. import validate
-from ..validate import check_mesh
+from ..animation.rig import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip, Rig, Skeleton
+from ..animation import validate
+from ..animation.validate import check_mesh
 
 __all__ = ["load_gltf", "trs_to_matrix", "matrix_to_trs", "quat_to_matrix", "matrix_to_quat"]
 

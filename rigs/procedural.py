@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..rig import Channel, Clip, Rig, Skeleton
+from ..animation.rig import Channel, Clip, Rig, Skeleton
 
 __all__ = ["capsule_arm"]
 

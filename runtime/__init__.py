@@ -2,18 +2,22 @@
 
 The runtime calls only the kernels in ``cgaskin.generated`` (emitted by ``cgaskin build``).
 """
+import sys as _sys
+
 from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError,
                      NoSkinError)
-from .rig import Channel, Clip, Rig, Skeleton
-from .skinning import skin_affine, skin_vertices
-from .pose import Pose, clip_from_poses, skin, skin_normals
-from . import baselines, versor
-from .validate import check_mesh
-from .cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
-from .topology import Topology, rig_topology
-from .bvh import TriangleBVH
-from .tear import TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
-from .precompile import precompile
+from .animation.rig import Channel, Clip, Rig, Skeleton
+from .animation.skinning import skin_affine, skin_vertices
+from .animation.pose import Pose, clip_from_poses, skin, skin_normals
+from . import baselines
+from .algebra import versor
+_sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move
+from .animation.validate import check_mesh
+from .surgery.cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
+from .surgery.topology import Topology, rig_topology
+from .surgery.bvh import TriangleBVH
+from .surgery.tear import TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
+from .app.precompile import precompile
 
 __version__ = "0.1.0"
 

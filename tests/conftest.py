@@ -17,7 +17,7 @@ REPO = Path(__file__).resolve().parent.parent
 def pytest_sessionstart(session):
     """Compile the runtime's kernels on every core before the tests call them (on a cold numba cache
     this saves the suite a good part of its compile time on a 2-core machine; warm, it only loads)."""
-    from cgaskin.precompile import precompile
+    from cgaskin.app.precompile import precompile
     precompile()
 
 

@@ -5,7 +5,7 @@ import pytest
 
 import cgaskin
 from cgaskin import capsule_arm
-from cgaskin.cli import main
+from cgaskin.app.cli import main
 
 
 def read_mesh(path):

@@ -21,11 +21,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 import cgaskin
-from cgaskin.cut import (CAP_VERTEX, NEW_VERTEX, PlaneMissesMeshWarning, cut, cut_details)
+from cgaskin.surgery.cut.api import (CAP_VERTEX, NEW_VERTEX, PlaneMissesMeshWarning, cut, cut_details)
 from cgaskin.errors import InvalidInputError
-from cgaskin.rig import Rig, Skeleton
+from cgaskin.animation.rig import Rig, Skeleton
 from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.topology import clear_topology_cache, rig_topology, topology
+from cgaskin.surgery.topology import clear_topology_cache, rig_topology, topology
 
 MODELS = ["Arm5.glb", "3Cylinder4bones.glb", "Fox.glb"]
 #: geometric tolerance of the cut checks, in units of the bounding-box diagonal
@@ -602,7 +602,7 @@ def test_other_dtypes_are_accepted():
 
 
 def test_placement_in_rest_space():
-    from cgaskin.cut import _place_in_rest
+    from cgaskin.surgery.cut.api import _place_in_rest
     rng = np.random.default_rng(3)
     affines = rng.normal(size=(3, 12))
     joints = np.array([[0, 1, 2, 0], [0, 0, 0, 0]])

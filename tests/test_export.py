@@ -8,10 +8,10 @@ import pytest
 
 from cgaskin import rigs
 from cgaskin.errors import InvalidInputError, ModelFormatError
-from cgaskin.rig import Channel, Clip, Rig, Skeleton
+from cgaskin.animation.rig import Channel, Clip, Rig, Skeleton
 from cgaskin.rigs.export import save_gltf
 from cgaskin.rigs.gltf import load_gltf, trs_to_matrix
-from cgaskin.validate import check_mesh
+from cgaskin.animation.validate import check_mesh
 
 MODELS = ["Arm5.glb", "3Cylinder4bones.glb", "PlaneWith3Bones.glb", "Fox.glb", "simple_skin.gltf",
           "quad_skin.glb"]

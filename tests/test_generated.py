@@ -29,7 +29,7 @@ def test_check_names_a_stale_file(tmp_path):
 
 
 def test_cli_check_exit_code():
-    done = subprocess.run([sys.executable, "-m", "cgaskin.cli", "build", "--check"], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-m", "cgaskin.app.cli", "build", "--check"], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
 
 

@@ -9,9 +9,9 @@ import textwrap
 import pytest
 
 from cgaskin import InvalidInputError, precompile
-from cgaskin.cli import main
+from cgaskin.app.cli import main
 
-pc = importlib.import_module("cgaskin.precompile")     # the module (cgaskin.precompile is the function)
+pc = importlib.import_module("cgaskin.app.precompile")     # the module (cgaskin.precompile is the function)
 
 # Runs in a fresh interpreter: precompile(), then the main operations on the built-in rig and a real
 # model, recording what numba compiles (loading from the cache is not compiling: numba fires
@@ -21,7 +21,7 @@ WORKLOAD = textwrap.dedent("""
     import numpy as np
     from numba.core import event
     import cgaskin
-    from cgaskin.precompile import precompile
+    from cgaskin.app.precompile import precompile
 
     assert precompile() > 0                       # an empty cache: it compiles
     compiled = []
@@ -109,7 +109,7 @@ def test_failures_cost_time_not_results(tmp_path):
     script = textwrap.dedent("""
         import importlib
         from numba import types
-        pc = importlib.import_module("cgaskin.precompile")
+        pc = importlib.import_module("cgaskin.app.precompile")
         listed = {k[1]: k for k in pc.KERNELS}
         wrong = ("cgaskin.generated.kernels", "segment_plane", (types.float64,) * 3, 1.0)
         pc.KERNELS = [listed["reverse_versor"], wrong]

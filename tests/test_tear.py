@@ -21,11 +21,11 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 import cgaskin
-from cgaskin.bvh import TriangleBVH, triangle_bvh
+from cgaskin.surgery.bvh import TriangleBVH, triangle_bvh
 from cgaskin.errors import InvalidInputError, MissesMeshError
-from cgaskin.pose import skin
+from cgaskin.animation.pose import skin
 from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.tear import (SNAP_TOLERANCE, TEAR_LABEL, TearPathError, tear, tear_stroke,
+from cgaskin.surgery.tear.stroke import (SNAP_TOLERANCE, TEAR_LABEL, TearPathError, tear, tear_stroke,
                           tear_topology)
 
 PLANE_TOL = 1e-9        # path vertices on the tear plane, relative to the diagonal
@@ -244,7 +244,7 @@ def run_random_stroke(name, rig, pose, data, opening=0.0):
         result = tear_stroke(rig, scalpel_from, scalpel_to, pose=pose, opening=opening)
     except TearPathError:
         # legitimate only when the section really does not join the two hits
-        from cgaskin.tear import _surface, _ends
+        from cgaskin.surgery.tear.stroke import _surface, _ends
         surf = _surface(rig, pose)
         topo = surf.topo
         status, _, _, _, _, plane, _ = _ends(
@@ -621,7 +621,7 @@ def test_points_in_a_face_of_zero_area_get_finite_coordinates():
     area): a path point in one takes its place on the face's longest side."""
     import importlib
     from numba import njit
-    coordinates = importlib.import_module("cgaskin.tear")._segment_coordinates
+    coordinates = importlib.import_module("cgaskin.surgery.tear.stroke")._segment_coordinates
 
     @njit
     def call(a, b, c, p):

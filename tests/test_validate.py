@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from cgaskin.errors import InvalidInputError
-from cgaskin.validate import EXACT_SUM_TOLERANCE, WEIGHT_SUM_TOLERANCE, check_mesh
+from cgaskin.animation.validate import EXACT_SUM_TOLERANCE, WEIGHT_SUM_TOLERANCE, check_mesh
 
 
 def quad(joints=None, weights=None):

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._checks import float_array
-from .errors import InvalidInputError
-from .generated import kernels as K
-from .generated.layout import LOG_BLADES, LOG_SIZE, VERSOR_BLADES, VERSOR_SIZE
+from .._shared.checks import float_array
+from ..errors import InvalidInputError
+from ..generated import kernels as K
+from ..generated.layout import LOG_BLADES, LOG_SIZE, VERSOR_BLADES, VERSOR_SIZE
 
 __all__ = ["VERSOR_BLADES", "LOG_BLADES", "identity", "translator", "rotor", "rotor_from_quaternion",
            "dilator", "motor", "compose", "reverse", "inverse", "normalise", "apply", "to_matrix",

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import versor
-from .errors import InvalidInputError
+from ..algebra import versor
+from ..errors import InvalidInputError
 from .rig import Clip
 
 ROTATION_BLENDS = ("slerp", "linear")

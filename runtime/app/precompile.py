@@ -25,7 +25,7 @@ import time
 
 from numba import types
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 __all__ = ["precompile", "KERNELS"]
 
@@ -44,7 +44,7 @@ i8, f8, b1 = types.int64, types.float64, types.boolean
 KERNELS = [
     # skinning and poses
     ("cgaskin.generated.skinning", "skin_blend", (F2, I2, F2, F2, F2), 0.4),
-    ("cgaskin.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.8),
+    ("cgaskin.animation.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.8),
     ("cgaskin.generated.kernels", "versor_translator_batch", (F2r, F2), 0.3),
     ("cgaskin.generated.kernels", "versor_rotor_batch", (F2r, F1r, F2), 0.2),
     ("cgaskin.generated.kernels", "versor_rotor_quaternion_batch", (F2r, F2), 0.1),
@@ -59,31 +59,31 @@ KERNELS = [
     ("cgaskin.generated.kernels", "versor_exp_batch", (F2r, F2), 0.4),
     ("cgaskin.generated.kernels", "versor_exp", (F1r,), 0.2),
     # welded topology, BVH, weights
-    ("cgaskin.topology", "_weld_positions", (U2,), 0.4),
-    ("cgaskin.topology", "_unique_pairs", (I1, I1), 0.7),
-    ("cgaskin.topology", "_corner_pairs", (I2, I1), 0.2),
-    ("cgaskin.topology", "incidence", (I2, i8), 0.3),
-    ("cgaskin.bvh", "_build", (F2, I2, i8, f8), 1.5),
-    ("cgaskin.weights", "blend_weight_rows", (I2, F2, I2, F2), 0.6),
+    ("cgaskin.surgery.topology", "_weld_positions", (U2,), 0.4),
+    ("cgaskin.surgery.topology", "_unique_pairs", (I1, I1), 0.7),
+    ("cgaskin.surgery.topology", "_corner_pairs", (I2, I1), 0.2),
+    ("cgaskin.surgery.topology", "incidence", (I2, i8), 0.3),
+    ("cgaskin.surgery.bvh", "_build", (F2, I2, i8, f8), 1.5),
+    ("cgaskin.surgery.new_vertices", "blend_weight_rows", (I2, F2, I2, F2), 0.6),
     # cut
     ("cgaskin.generated.kernels", "plane_from_normal_distance", (F1, f8), 0.1),
     ("cgaskin.generated.kernels", "point_plane_distance_batch", (F2ar, F2, F2), 0.3),
-    ("cgaskin.cut", "_classify", (F1, F2, I1, f8), 0.4),
-    ("cgaskin.cut", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.1),
-    ("cgaskin.cut", "_place_in_rest", (F2, F2, I2, F2, F2), 1.2),
-    ("cgaskin.cut", "_lerp_rows", (F2, I1, I1, F1, b1), 0.3),
-    ("cgaskin.cut", "_assemble", (F2, I1, I1, F2), 0.3),
-    ("cgaskin.cut", "_assemble", (I2, I1, I1, I2), 0.2),
-    ("cgaskin.cut", "_ear_clip", (F2, I1), 0.5),
+    ("cgaskin.surgery.cut.api", "_classify", (F1, F2, I1, f8), 0.4),
+    ("cgaskin.surgery.cut.api", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.1),
+    ("cgaskin.surgery.cut.api", "_place_in_rest", (F2, F2, I2, F2, F2), 1.2),
+    ("cgaskin.surgery.cut.api", "_lerp_rows", (F2, I1, I1, F1, b1), 0.3),
+    ("cgaskin.surgery.cut.api", "_assemble", (F2, I1, I1, F2), 0.3),
+    ("cgaskin.surgery.cut.api", "_assemble", (I2, I1, I1, I2), 0.2),
+    ("cgaskin.surgery.cut.api", "_ear_clip", (F2, I1), 0.5),
     # tear
-    ("cgaskin.tear", "_ends", (F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1,
+    ("cgaskin.surgery.tear.stroke", "_ends", (F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1,
                                I1, I1, f8), 6.0),
-    ("cgaskin.tear", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 2.1),
-    ("cgaskin.tear", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 4.4),
-    ("cgaskin.tear", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.0),
-    ("cgaskin.tear", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 2.9),
-    ("cgaskin.tear", "_vertex_data", (F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 3.4),
-    ("cgaskin.tear", "_rows", (F2, i8, I2, F2, I1, b1), 0.3),
+    ("cgaskin.surgery.tear.stroke", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 2.1),
+    ("cgaskin.surgery.tear.stroke", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 4.4),
+    ("cgaskin.surgery.tear.stroke", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.0),
+    ("cgaskin.surgery.tear.stroke", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 2.9),
+    ("cgaskin.surgery.tear.stroke", "_vertex_data", (F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 3.4),
+    ("cgaskin.surgery.tear.stroke", "_rows", (F2, i8, I2, F2, I1, b1), 0.3),
 ]
 
 
@@ -131,7 +131,7 @@ def _compile(indices) -> list:
 
 
 #: a worker process: compiles the entries of ``KERNELS`` given as arguments, reports failures on stderr
-_WORKER = ("import sys; from cgaskin.precompile import _compile\n"
+_WORKER = ("import sys; from cgaskin.app.precompile import _compile\n"
            "for line in _compile(int(a) for a in sys.argv[1:]): print('FAILED', line, file=sys.stderr)")
 
 

@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 MAX_INFLUENCES = 4
 #: Rows whose sum is off 1 by more than this are reported (a warning) before being renormalised.

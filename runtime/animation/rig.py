@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 INTERPOLATIONS = ("STEP", "LINEAR", "CUBICSPLINE")
 CHANNEL_PATHS = {"translation": 3, "rotation": 4, "scale": 3}

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 __all__ = ["Topology", "topology", "rig_topology", "rig_cached", "clear_topology_cache", "directed_loops"]
 

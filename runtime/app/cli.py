@@ -8,7 +8,7 @@ import warnings
 
 def _build(args) -> int:
     try:
-        from .codegen import build
+        from ..codegen import build
     except ImportError as exc:                        # sympy is a build-time extra
         print(f"cgaskin build needs sympy: pip install 'cgaskin[build]' ({exc})", file=sys.stderr)
         return 2
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     commands.register(sub)
 
     args = parser.parse_args(argv)
-    from .errors import CgaskinError
+    from ..errors import CgaskinError
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning

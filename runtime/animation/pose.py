@@ -13,12 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from . import versor
-from ._checks import float_array
-from .baselines import matrix_to_trs, trs_matrix
-from .animation import sample_clip
-from .errors import InvalidInputError
-from .generated.kernels import gp_versor_versor, versor_to_affine
+from ..algebra import versor
+from .._shared.checks import float_array
+from ..baselines import matrix_to_trs, trs_matrix
+from .clip import sample_clip
+from ..errors import InvalidInputError
+from ..generated.kernels import gp_versor_versor, versor_to_affine
 from .rig import Channel, Clip, Rig, Skeleton
 from .skinning import skin_affine
 

@@ -52,14 +52,14 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .errors import InvalidInputError
-from .generated.kernels import (affine_point, plane_from_normal_distance, plane_from_points,
+from ...errors import InvalidInputError
+from ...generated.kernels import (affine_point, plane_from_normal_distance, plane_from_points,
                                 point_plane_distance, point_plane_distance_batch, segment_plane)
-from .pose import check_pose
-from .rig import Rig
-from .skinning import skin_affine
-from .weights import blend_weight_rows
-from .topology import Topology, directed_loops, rig_cached, rig_topology, topology
+from ...animation.pose import check_pose
+from ...animation.rig import Rig
+from ...animation.skinning import skin_affine
+from ..new_vertices import blend_weight_rows
+from ..topology import Topology, directed_loops, rig_cached, rig_topology, topology
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
            "PLACEMENT_TOLERANCE"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 
 def float_array(value, name: str, last: int | None = None, ndim: int | None = None) -> np.ndarray:

@@ -68,14 +68,14 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._checks import float_array
-from .bvh import TriangleBVH, _first_hit
-from .errors import CgaskinError, InvalidInputError, MissesMeshError
-from .generated.kernels import (affine_point, barycentric, plane_from_points, point_plane_distance,
+from ..._shared.checks import float_array
+from ..bvh import TriangleBVH, _first_hit
+from ...errors import CgaskinError, InvalidInputError, MissesMeshError
+from ...generated.kernels import (affine_point, barycentric, plane_from_points, point_plane_distance,
                                 segment_plane)
-from .rig import Rig
-from .weights import blend_weight_rows
-from .topology import Topology, incidence, rig_cached, rig_topology, topology
+from ...animation.rig import Rig
+from ..new_vertices import blend_weight_rows
+from ..topology import Topology, incidence, rig_cached, rig_topology, topology
 
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
            "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]
@@ -234,7 +234,7 @@ def _surface(rig, pose) -> _Surface:
     rig_cached(rig, "tear.checks", _mesh_checks)
     if pose is None:
         return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, r.vertices, None))
-    from .pose import check_pose, skin
+    from ...animation.pose import check_pose, skin
     check_pose(rig, pose)
     cache = _posed_cache(rig)
     entry = cache.get(id(pose))

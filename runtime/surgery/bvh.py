@@ -23,8 +23,8 @@ import weakref
 import numpy as np
 from numba import njit
 
-from ._checks import float_array, index_array
-from .errors import InvalidInputError
+from .._shared.checks import float_array, index_array
+from ..errors import InvalidInputError
 
 __all__ = ["TriangleBVH", "triangle_bvh", "LEAF_SIZE"]
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._checks import float_array, index_array
-from .errors import InvalidInputError
-from .generated import kernels as K
-from .generated.skinning import skin_blend, skin_blend_parallel
-from .versor import _versor_arg
+from .._shared.checks import float_array, index_array
+from ..errors import InvalidInputError
+from ..generated import kernels as K
+from ..generated.skinning import skin_blend, skin_blend_parallel
+from ..algebra.versor import _versor_arg
 
 # numba's thread pool costs ~10 ms per parallel call on a 2-core machine; below this many vertices
 # the serial loop wins (benchmarks/bench_skinning.py measures the crossover).

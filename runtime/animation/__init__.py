@@ -1,0 +1,1 @@
+"""The animation layer: the rig data model, clips, poses and skinning."""
