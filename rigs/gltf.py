@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 import pygltflib
 
-from ..baselines import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
+from ..algebra.transforms import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
 from ..errors import CgaskinError, InvalidInputError, ModelFormatError, NoSkinError
 from ..animation.rig import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip, Rig, Skeleton
 from ..animation import validate
@@ -94,7 +94,7 @@ _PACKAGE_DIRS = {os.path.dirname(__file__), os.path.dirname(validate.__file__)}
 # --- transforms (shared with the exporter) -----------------------------------------------------
 
 def trs_to_matrix(translation, rotation, scale) -> np.ndarray:
-    """The glTF local matrix T @ R @ S (see ``cgaskin.baselines.trs_matrix``).
+    """The glTF local matrix T @ R @ S (see ``cgaskin.algebra.transforms.trs_matrix``).
 
     translation : (3,) float; rotation : (4,) float unit quaternion (x, y, z, w); scale : (3,) float
     returns : (4, 4) float64

@@ -15,7 +15,7 @@ from numba import njit
 
 from ..algebra import versor
 from .._shared.checks import float_array
-from ..baselines import matrix_to_trs, trs_matrix
+from ..algebra.transforms import matrix_to_trs, trs_matrix
 from .clip import sample_clip
 from ..errors import InvalidInputError
 from ..generated.kernels import gp_versor_versor, versor_to_affine
