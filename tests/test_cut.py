@@ -21,7 +21,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 import cgaskin
-from cgaskin.surgery.cut.api import (CAP_VERTEX, NEW_VERTEX, PlaneMissesMeshWarning, cut, cut_details)
+from cgaskin.surgery.cut import (CAP_VERTEX, NEW_VERTEX, PlaneMissesMeshWarning, cut, cut_details)
 from cgaskin.errors import InvalidInputError
 from cgaskin.animation.rig import Rig, Skeleton
 from cgaskin.rigs.procedural import capsule_arm
@@ -602,7 +602,7 @@ def test_other_dtypes_are_accepted():
 
 
 def test_placement_in_rest_space():
-    from cgaskin.surgery.cut.api import _place_in_rest
+    from cgaskin.surgery.new_vertices import _place_in_rest
     rng = np.random.default_rng(3)
     affines = rng.normal(size=(3, 12))
     joints = np.array([[0, 1, 2, 0], [0, 0, 0, 0]])

@@ -244,7 +244,8 @@ def run_random_stroke(name, rig, pose, data, opening=0.0):
         result = tear_stroke(rig, scalpel_from, scalpel_to, pose=pose, opening=opening)
     except TearPathError:
         # legitimate only when the section really does not join the two hits
-        from cgaskin.surgery.tear.stroke import _surface, _ends
+        from cgaskin.surgery.surface import _surface
+        from cgaskin.surgery.tear.locate import _ends
         surf = _surface(rig, pose)
         topo = surf.topo
         status, _, _, _, _, plane, _ = _ends(
@@ -621,7 +622,7 @@ def test_points_in_a_face_of_zero_area_get_finite_coordinates():
     area): a path point in one takes its place on the face's longest side."""
     import importlib
     from numba import njit
-    coordinates = importlib.import_module("cgaskin.surgery.tear.stroke")._segment_coordinates
+    coordinates = importlib.import_module("cgaskin.surgery.tear.retriangulate")._segment_coordinates
 
     @njit
     def call(a, b, c, p):

@@ -1,6 +1,6 @@
 """Cut a skinned mesh with a plane into two rigs."""
-from .api import (CutResult, PlaneMissesMeshWarning, cut, cut_details, ON_PLANE_TOLERANCE,
-                  PLACEMENT_TOLERANCE)
+from .api import ON_PLANE_TOLERANCE, PLACEMENT_TOLERANCE, PlaneMissesMeshWarning, cut, cut_details
+from .result import CAP_VERTEX, NEW_VERTEX, CutResult
 
-__all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
-           "PLACEMENT_TOLERANCE"]
+__all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "NEW_VERTEX", "CAP_VERTEX",
+           "ON_PLANE_TOLERANCE", "PLACEMENT_TOLERANCE"]

@@ -1,0 +1,126 @@
+"""The surface a tear walks on: welded topology (label-aware), positions, BVH, boundary; cached per
+rig and pose."""
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InvalidInputError
+from .bvh import TriangleBVH
+from .topology import Topology, incidence, rig_cached, rig_topology, topology
+
+#: per-vertex attribute that tells slit copies apart from seam copies (see the module docstring)
+TEAR_LABEL = "_TEAR"
+
+
+def _labels(rig) -> np.ndarray:
+    """(n,) int64 tear labels of the rig's vertices (0 without the attribute)."""
+    values = rig.attributes.get(TEAR_LABEL)
+    if values is None:
+        return np.zeros(rig.n_vertices, np.int64)
+    values = np.asarray(values, dtype=np.float64).reshape(rig.n_vertices, -1)[:, 0]
+    if not np.isfinite(values).all():
+        raise InvalidInputError(f"attribute {TEAR_LABEL} holds non-finite values")
+    return np.rint(values).astype(np.int64)
+
+
+def _build_tear_topology(rig) -> Topology:
+    labels = _labels(rig)
+    if not labels.any():
+        return rig_topology(rig)
+    # weld by position (the shared topology), then split each welded vertex by label: the pair
+    # (welded id, label) is numbered through ``topology`` itself, fed with one exact float per pair
+    by_position = rig_topology(rig).welded
+    key = by_position * (int(labels.max()) + 1) + labels
+    keys = np.zeros((rig.n_vertices, 3))
+    keys[:, 0] = key.astype(np.float64)        # exact below 2**53
+    return topology(keys, rig.faces)
+
+
+def tear_topology(rig) -> Topology:
+    """The welded topology that ``tear`` walks on: vertices are one when their positions and their
+    ``TEAR_LABEL`` values are equal (so seams weld and earlier slits stay open). Cached per rig."""
+    return rig_cached(rig, "tear.topology", _build_tear_topology)
+
+
+@dataclass(frozen=True, eq=False)
+class _Surface:
+    """What one stroke needs of a rig in one pose (rest when posed is None).
+
+    positions : (n, 3) float64 surface positions of every vertex (skinned when posed)
+    welded_positions : (w, 3) float64, positions of the welded vertices (their representatives)
+    topo : Topology (label-aware, ``tear_topology``)
+    vf_offsets, vf_faces : CSR welded vertex -> faces
+    bvh : TriangleBVH over ``positions``
+    boundary : (b,) int64 welded vertices on a boundary edge (borders, earlier slits)
+    diagonal : float, bounding-box diagonal of ``positions``
+    affines : (B, 12) bone maps of the pose, or None at rest
+    """
+
+    positions: np.ndarray
+    welded_positions: np.ndarray
+    topo: Topology
+    vf_offsets: np.ndarray
+    vf_faces: np.ndarray
+    bvh: TriangleBVH
+    boundary: np.ndarray
+    diagonal: float
+    affines: np.ndarray | None
+
+
+def _mesh_checks(rig):
+    """Shapes and values the tear relies on, checked once per rig."""
+    n = len(rig.vertices)
+    vertices = np.asarray(rig.vertices)
+    faces = np.asarray(rig.faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or not np.isfinite(vertices).all():
+        raise InvalidInputError(f"rig.vertices must be a finite (n, 3) array, got shape {vertices.shape}")
+    if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0 or faces.dtype.kind not in "iu":
+        raise InvalidInputError(f"rig.faces must be a non-empty (m, 3) integer array, got {faces.shape}")
+    joints, weights = np.asarray(rig.joints), np.asarray(rig.weights)
+    if joints.shape != (n, 4) or weights.shape != (n, 4) or joints.dtype.kind not in "iu":
+        raise InvalidInputError(f"rig.joints and rig.weights must have shape ({n}, 4), got "
+                                f"{joints.shape} and {weights.shape}")
+    if not np.isfinite(weights).all() or (weights < 0).any():
+        raise InvalidInputError("rig.weights must be finite and >= 0")
+    for name, values in rig.attributes.items():
+        if len(np.asarray(values)) != n:
+            raise InvalidInputError(f"attribute {name!r} has {len(values)} rows for {n} vertices")
+    return True
+
+
+def _build_surface(rig, positions, affines) -> _Surface:
+    topo = tear_topology(rig)
+    positions = np.ascontiguousarray(positions, dtype=np.float64)
+    welded_positions = np.ascontiguousarray(positions[topo.representative])
+    vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
+    bvh = TriangleBVH(positions, rig.faces)
+    boundary = np.unique(topo.edges[topo.boundary_edges])
+    diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0)))
+    return _Surface(positions, welded_positions, topo, vf_offsets, vf_faces, bvh, boundary, diagonal,
+                    affines)
+
+
+# posed surfaces: id(pose) -> (weak reference to the pose, surface), per rig through rig_cached
+def _posed_cache(rig) -> dict:
+    return rig_cached(rig, "tear.posed", lambda _rig: {})
+
+
+def _surface(rig, pose) -> _Surface:
+    rig_cached(rig, "tear.checks", _mesh_checks)
+    if pose is None:
+        return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, r.vertices, None))
+    from ..animation.pose import check_pose, skin
+    check_pose(rig, pose)
+    cache = _posed_cache(rig)
+    entry = cache.get(id(pose))
+    if entry is not None and entry[0]() is pose:
+        return entry[1]
+    surface = _build_surface(rig, skin(rig, pose), pose.bone_affines())
+    if len(cache) > 8:                 # a few poses per rig are plenty: drop the oldest
+        cache.pop(next(iter(cache)))
+    key = id(pose)
+    cache[key] = (weakref.ref(pose, lambda _r, c=cache, k=key: c.pop(k, None)), surface)
+    return surface

@@ -1,0 +1,166 @@
+"""Steps 2-3 of a tear stroke: where the blade meets the skin at t_i and t_{i+1}, the tear plane,
+and the side of every welded vertex."""
+import math
+
+import numpy as np
+from numba import njit
+
+from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
+from ..bvh import _first_hit
+from .nodes import EDGE, FACE, VERTEX
+from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
+
+
+# status codes of ``_ends``
+OK, FROM_MISSES, TO_MISSES, NO_MOTION, NO_PLANE = 0, 1, 2, 3, 4
+
+
+#: below this sine, three points are too close to one line to define the tear plane's normal
+MIN_SINE = 1e-6
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _classify(plane, welded_positions, tol, cls):
+    """Side of every welded vertex: +1 / -1, or 0 within ``tol`` of the plane (signed distance up(x)·π
+    through the generated kernel). Writes ``cls`` (w,) int8."""
+    for w in range(welded_positions.shape[0]):
+        d = point_plane_distance(plane, welded_positions[w])
+        cls[w] = 0 if abs(d) <= tol else (1 if d > 0.0 else -1)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _hit_node(face, hit, wfaces, wpos, tol):
+    """(kind, id, point) of a scalpel hit: the nearest corner of the hit face when within ``tol``
+    (VERTEX, welded id, its position), else (FACE, face, hit)."""
+    best, best_d = -1, np.inf
+    for k in range(3):
+        d = _distance(wpos[wfaces[face, k]], hit)
+        if d < best_d:
+            best, best_d = wfaces[face, k], d
+    if best_d <= tol:
+        return VERTEX, best, wpos[best].copy()
+    return FACE, face, hit.copy()
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plane, tol):
+    """A point inside a face within ``tol`` of where the plane crosses one of the face's edges is that
+    crossing (an EDGE node), so that a scalpel through an edge splits both faces on it instead of
+    leaving a zero-area sliver."""
+    if kind != FACE:
+        return kind, ident, point
+    for k in range(3):
+        if cls[wfaces[ident, k]] * cls[wfaces[ident, (k + 1) % 3]] < 0:
+            e = face_edges[ident, k]
+            t, x, y, z = segment_plane(plane, wpos[edges[e, 0]], wpos[edges[e, 1]])
+            if math.sqrt((x - point[0]) ** 2 + (y - point[1]) ** 2 + (z - point[2]) ** 2) <= tol:
+                crossing = np.empty(3)
+                crossing[0], crossing[1], crossing[2] = x, y, z
+                return EDGE, e, crossing
+    return kind, ident, point
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _boundary_hit(a, b, t_max, boundary, wpos, tol):
+    """The first boundary vertex within ``tol`` of segment a -> b before parameter ``t_max``:
+    (welded vertex, t) or (-1, t_max). A slit opened wide ends in a wedge-shaped gap whose tip is the
+    slit's end vertex: a blade aimed at that vertex (the previous stroke's blade, to continue the
+    slit) passes it within rounding and may slip through the gap, so it counts as meeting it."""
+    d = _sub(b, a)
+    dd = _dot(d, d)
+    best, best_t = -1, t_max
+    for w in boundary:
+        p = wpos[w]
+        t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
+        if t < best_t and math.sqrt((a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2
+                                    + (a[2] + t * d[2] - p[2]) ** 2) <= tol:
+            best, best_t = w, t
+    return best, best_t
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positions, faces, wpos,
+          wfaces, face_edges, edges, vf_offsets, vf_faces, boundary, tol):
+    """Steps 2-3: where the blade meets the skin at both times, the tear plane, and the side of
+    every welded vertex.
+
+    returns status (OK or why not), ends_int (2, 2) (kind, id) of S_i and S_{i+1}, ends_pos (2, 3),
+    hits (2, 3) the raw scalpel hits, hit_faces (2,), plane (4,), cls (w,) int8
+    """
+    ends_int = np.zeros((2, 2), np.int64)
+    ends_pos = np.zeros((2, 3))
+    hits = np.zeros((2, 3))
+    hit_faces = np.full(2, -1, np.int64)
+    plane = np.zeros(4)
+    cls = np.zeros(wpos.shape[0], np.int8)
+    for i in range(2):
+        a, b = (a0, b0) if i == 0 else (a1, b1)
+        face, t = _first_hit(lo, hi, left, right, start, count, order, tri, a, b)
+        w, t_w = _boundary_hit(a, b, t if face >= 0 else 1.0, boundary, wpos, tol)
+        if w >= 0:
+            for k in range(3):
+                hits[i, k] = a[k] + t_w * (b[k] - a[k])
+            hit_faces[i] = vf_faces[vf_offsets[w]]
+            ends_int[i, 0], ends_int[i, 1] = VERTEX, w
+            _set_row(ends_pos, i, wpos[w])
+            continue
+        if face < 0:
+            return FROM_MISSES + i, ends_int, ends_pos, hits, hit_faces, plane, cls
+        for k in range(3):
+            hits[i, k] = a[k] + t * (b[k] - a[k])
+        hit_faces[i] = face
+        kind, ident, point = _hit_node(face, hits[i], wfaces, wpos, tol)
+        ends_int[i, 0], ends_int[i, 1] = kind, ident
+        _set_row(ends_pos, i, point)
+    s0, s1 = ends_pos[0], ends_pos[1]
+    if _distance(s1, s0) <= tol:
+        return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
+
+    # the plane through S_i and the blade at t_{i+1}; fallbacks (module docstring): the blade at t_i
+    # (its end further from the line S_i S_{i+1} first), then the mean normal of the hit faces
+    hint = np.zeros(3)
+    for i in range(2):
+        f = hit_faces[i]
+        corner = positions[faces[f, 0]]
+        normal = _cross(_sub(positions[faces[f, 1]], corner), _sub(positions[faces[f, 2]], corner))
+        length = _norm(normal)
+        if length > 0.0:
+            for k in range(3):
+                hint[k] += normal[k] / length
+    stroke = _sub(s1, s0)
+    far0 = _norm(_cross(stroke, _sub(a0, s0)))
+    far1 = _norm(_cross(stroke, _sub(b0, s0)))
+    found = False
+    for c in range(4):
+        if c == 0:
+            p, q = a1, b1
+        elif c == 1:
+            p, q = (s1, a0) if far0 >= far1 else (s1, b0)
+        elif c == 2:
+            p, q = (s1, b0) if far0 >= far1 else (s1, a0)
+        else:
+            p, q = s1, np.empty(3)
+            for k in range(3):
+                q[k] = s0[k] + hint[k] * _norm(stroke)
+        u, v = _sub(p, s0), _sub(q, s0)
+        lu, lv = _norm(u), _norm(v)
+        if lu > tol and lv > tol and _norm(_cross(u, v)) > MIN_SINE * lu * lv:
+            r = plane_from_points(s0, p, q)
+            plane[0], plane[1], plane[2], plane[3] = r[0], r[1], r[2], r[3]
+            found = True
+            break
+    if not found:
+        return NO_PLANE, ends_int, ends_pos, hits, hit_faces, plane, cls
+
+    _classify(plane, wpos, tol, cls)
+    for i in range(2):
+        if ends_int[i, 0] == VERTEX:
+            cls[ends_int[i, 1]] = 0          # a snapped end is on the plane by definition
+    for i in range(2):
+        kind, ident, point = _snap_to_edge(
+            ends_int[i, 0], ends_int[i, 1], ends_pos[i], wfaces, face_edges, edges, wpos, cls, plane, tol)
+        ends_int[i, 0], ends_int[i, 1] = kind, ident
+        _set_row(ends_pos, i, point)          # may be ends_pos[i] itself: a row copied onto itself
+    if ends_int[0, 0] == ends_int[1, 0] and ends_int[0, 1] == ends_int[1, 1] and ends_int[0, 0] != FACE:
+        return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
+    return OK, ends_int, ends_pos, hits, hit_faces, plane, cls

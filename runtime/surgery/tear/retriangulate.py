@@ -1,0 +1,301 @@
+"""Step 5 of a tear stroke: split the crossed faces so that the path is a chain of mesh edges, and
+create the new vertices (edge crossings and points inside faces)."""
+import math
+
+import numpy as np
+from numba import njit
+
+from ...generated.kernels import barycentric
+from .nodes import EDGE, FACE, FACE_CARRIER, VERTEX
+from ...algebra.vec3 import _distance
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _position(code, f, wfaces, wpos, path_float):
+    """Position of a polygon element: corner k of face f (code -1-k) or path node ``code``."""
+    if code < 0:
+        return wpos[wfaces[f, -1 - code]]
+    return path_float[code, 1:4]
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
+    """Triangulate a convex polygon (elements ``sub[:count]`` in the face's winding) whose ``flat``
+    elements lie inside one of its sides (edge crossings that are not chord ends): a fan from a flat
+    element (never collinear with two consecutive others), else the shorter diagonal of a quad, else a
+    fan from the first element. Appends to ``out`` from row ``n_out``; returns the new row count."""
+    if count < 3:
+        return n_out
+    p = -1
+    for i in range(count):
+        if flat[i]:
+            p = i
+            break
+    if p < 0 and count == 4:
+        d02 = _distance(_position(sub[0], f, wfaces, wpos, path_float), _position(sub[2], f, wfaces, wpos, path_float))
+        d13 = _distance(_position(sub[1], f, wfaces, wpos, path_float), _position(sub[3], f, wfaces, wpos, path_float))
+        p = 0 if d02 <= d13 else 1
+    if p < 0:
+        p = 0
+    for i in range(1, count - 1):
+        out[n_out, 0], out[n_out, 1], out[n_out, 2] = sub[p], sub[(p + i) % count], sub[(p + i + 1) % count]
+        n_out += 1
+    return n_out
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
+    """Split face ``f`` so that the path's pieces in it become edges.
+
+    The face's boundary becomes a polygon: its corners (a path node where the corner is one) with the
+    path's edge crossings inserted on their edges. Then: with no path node inside, the chord between
+    two boundary elements splits the polygon into two convex pieces (``_convex_fan`` each), or without
+    a chord (a face that only shares a crossed edge) a fan from the crossing; with path nodes inside
+    (the ends, and the midpoint of a one-segment path), a fan from the one that the chords here share
+    over the whole polygon, then each other inside node fanned within the fan triangle that holds it.
+    Every piece keeps the face's winding.
+
+    Rows of ``out`` get element codes: -1-k for corner k, j >= 0 for path node j. Returns the row count.
+    """
+    k_nodes = path_int.shape[0]
+    poly = np.empty(6, np.int64)
+    flat = np.zeros(6, np.bool_)
+    count = np.int64(0)
+    for k in range(3):
+        code = -1 - k
+        for j in range(k_nodes):
+            if path_int[j, 0] == VERTEX and path_int[j, 1] == wfaces[f, k]:
+                code = j
+        poly[count], flat[count] = code, False
+        count += 1
+        for j in range(k_nodes):
+            if path_int[j, 0] == EDGE and path_int[j, 1] == face_edges[f, k]:
+                poly[count], flat[count] = j, True
+                count += 1
+    inner = np.empty(3, np.int64)
+    n_inner = np.int64(0)
+    chord_a, chord_b = -1, -1
+    hub_count = np.zeros(3, np.int64)
+    for j in range(k_nodes):
+        if path_int[j, 0] == FACE and path_int[j, 1] == f:
+            inner[n_inner] = j
+            n_inner += 1
+    for j in range(1, k_nodes):
+        if path_int[j, 2] == FACE_CARRIER and path_int[j, 3] == f:
+            chord_a, chord_b = j - 1, j
+            for q in range(n_inner):
+                if inner[q] == j - 1 or inner[q] == j:
+                    hub_count[q] += 1
+    n_out = np.int64(0)
+    if n_inner == 0:
+        ia, ib = -1, -1
+        for i in range(count):
+            if poly[i] == chord_a and chord_a >= 0:
+                ia = i
+            if poly[i] == chord_b and chord_b >= 0:
+                ib = i
+        gap = (ib - ia) % count if ia >= 0 and ib >= 0 else 0
+        if gap < 2 or gap > count - 2:
+            return _convex_fan(poly, flat, count, f, wfaces, wpos, path_float, out, np.int64(0))
+        sub = np.empty(6, np.int64)
+        subflat = np.zeros(6, np.bool_)
+        for start, stop in ((ia, ib), (ib, ia)):
+            size = (stop - start) % count + 1
+            for i in range(size):
+                sub[i] = poly[(start + i) % count]
+                subflat[i] = flat[(start + i) % count] and 0 < i < size - 1
+            n_out = _convex_fan(sub, subflat, size, f, wfaces, wpos, path_float, out, n_out)
+        return n_out
+    # a fan over the whole polygon from the inner node that every chord here touches (the hub)
+    hub = 0
+    for q in range(1, n_inner):
+        if hub_count[q] > hub_count[hub]:
+            hub = q
+    s = inner[hub]
+    for i in range(count):
+        out[n_out, 0], out[n_out, 1], out[n_out, 2] = s, poly[i], poly[(i + 1) % count]
+        n_out += 1
+    # every other inner node goes into the triangle that holds it best (largest smallest
+    # barycentric coordinate, generated kernel), fanned there: it is joined to the hub, which is a
+    # corner of every fan triangle (the other inner node lies beyond the hub, in another one)
+    for q in range(n_inner):
+        if q == hub:
+            continue
+        e = inner[q]
+        pe = path_float[e, 1:4]
+        best, best_score, best_k = 0, -np.inf, 0
+        for i in range(n_out):
+            la, lb, lc = barycentric(_position(out[i, 0], f, wfaces, wpos, path_float),
+                                     _position(out[i, 1], f, wfaces, wpos, path_float),
+                                     _position(out[i, 2], f, wfaces, wpos, path_float), pe)
+            score = min(la, min(lb, lc))
+            if score > best_score:
+                best, best_score = i, score
+                best_k = 0 if la == score else (1 if lb == score else 2)
+        n_out = _insert_node(out, n_out, best, e, best_score <= ON_EDGE, best_k)
+    return n_out
+
+
+#: a point whose smallest barycentric coordinate in a triangle is at most this lies on the edge
+#: opposite that corner (to rounding): splitting the triangle in three there would leave one of zero
+#: area, so the edge is split instead
+ON_EDGE = 1e-9
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _insert_node(out, n_out, t, e, on_edge, k):
+    """Insert element ``e`` into triangle row ``t`` of ``out[:n_out]``, keeping the winding: three
+    triangles around it, or, when ``on_edge`` (e on the edge opposite corner k), two in ``t`` and two
+    in the triangle across that edge (three in ``t`` if no row of ``out`` shares the edge: e then
+    lies on the face's own border, which the path's edge crossings cover). Returns the row count."""
+    a, b, c = out[t, k], out[t, (k + 1) % 3], out[t, (k + 2) % 3]
+    across, x = -1, a
+    if on_edge:
+        for i in range(n_out):
+            for r in range(3):
+                if out[i, r] == c and out[i, (r + 1) % 3] == b:
+                    across = i
+                    x = out[i, (r + 2) % 3]
+    if across < 0:
+        out[t, 0], out[t, 1], out[t, 2] = e, a, b
+        out[n_out, 0], out[n_out, 1], out[n_out, 2] = e, b, c
+        out[n_out + 1, 0], out[n_out + 1, 1], out[n_out + 1, 2] = e, c, a
+        return n_out + 2
+    # e splits edge b-c: (a, b, e), (a, e, c) here and (x, c, e), (x, e, b) across
+    out[t, 0], out[t, 1], out[t, 2] = a, b, e
+    out[n_out, 0], out[n_out, 1], out[n_out, 2] = a, e, c
+    out[across, 0], out[across, 1], out[across, 2] = x, c, e
+    out[n_out + 1, 0], out[n_out + 1, 1], out[n_out + 1, 2] = x, e, b
+    return n_out + 2
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _add_unique(values, count, value):
+    """Append ``value`` to ``values[:count]`` unless it is there (short lists); grows the array."""
+    for q in range(count):
+        if values[q] == value:
+            return values, count
+    if count == values.shape[0]:
+        values = np.concatenate((values, np.empty_like(values)))
+    values[count] = value
+    return values, count + 1
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _segment_coordinates(a, b, c, p):
+    """Coordinates (λa, λb, λc) of p on the longest side of a triangle of zero area (its nearest
+    point there; all weight on a when the three corners coincide)."""
+    corners = (a, b, c)
+    coords = np.zeros(3)
+    coords[0] = 1.0
+    longest = 0.0
+    for k in range(3):
+        u, v = corners[k], corners[(k + 1) % 3]
+        length2 = (v[0] - u[0]) ** 2 + (v[1] - u[1]) ** 2 + (v[2] - u[2]) ** 2
+        if length2 > longest:
+            longest = length2
+            t = ((p[0] - u[0]) * (v[0] - u[0]) + (p[1] - u[1]) * (v[1] - u[1])
+                 + (p[2] - u[2]) * (v[2] - u[2])) / length2
+            t = min(max(t, 0.0), 1.0)
+            coords[:] = 0.0
+            coords[k], coords[(k + 1) % 3] = 1.0 - t, t
+    return coords[0], coords[1], coords[2]
+
+
+@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges, wpos, new_node, new_src,
+                new_coef, n_new):
+    """The new vertex of path node ``code`` as face ``f`` uses it: found among the first ``n_new`` or
+    appended. An edge crossing has one per attribute-split copy of its edge (the pair of vertex ids
+    of the face's corners there), with coefficients (1 - s, s) by the edge parameter from the face's
+    own corner; a point inside the face has one, with its barycentric coordinates (generated
+    kernel). returns (index among the new vertices, new count)."""
+    if path_int[code, 0] == EDGE:
+        e = path_int[code, 1]
+        k = 0
+        while face_edges[f, k] != e:
+            k += 1
+        va, vb = faces[f, k], faces[f, (k + 1) % 3]
+        for q in range(n_new):
+            if new_node[q] == code and ((new_src[q, 0] == va and new_src[q, 1] == vb)
+                                        or (new_src[q, 0] == vb and new_src[q, 1] == va)):
+                return q, n_new
+        s = path_float[code, 0] if wfaces[f, k] == edges[e, 0] else 1.0 - path_float[code, 0]
+        new_src[n_new, 0], new_src[n_new, 1], new_src[n_new, 2] = va, vb, va
+        new_coef[n_new, 0], new_coef[n_new, 1], new_coef[n_new, 2] = 1.0 - s, s, 0.0
+    else:
+        for q in range(n_new):
+            if new_node[q] == code:
+                return q, n_new
+        la, lb, lc = barycentric(wpos[wfaces[f, 0]], wpos[wfaces[f, 1]], wpos[wfaces[f, 2]],
+                                 path_float[code, 1:4])
+        if not (math.isfinite(la) and math.isfinite(lb) and math.isfinite(lc)):
+            # a face of zero area (the file's, or a sliver): its longest side is all there is of it
+            la, lb, lc = _segment_coordinates(wpos[wfaces[f, 0]], wpos[wfaces[f, 1]], wpos[wfaces[f, 2]],
+                                              path_float[code, 1:4])
+        # a point on the face's boundary may come out a rounding error outside
+        la, lb, lc = max(la, 0.0), max(lb, 0.0), max(lc, 0.0)
+        total = la + lb + lc
+        new_src[n_new, 0], new_src[n_new, 1], new_src[n_new, 2] = faces[f, 0], faces[f, 1], faces[f, 2]
+        new_coef[n_new, 0], new_coef[n_new, 1], new_coef[n_new, 2] = la / total, lb / total, lc / total
+    new_node[n_new] = code
+    return n_new, n_new + 1
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_offsets, ef_faces, wpos,
+                   n_vertices):
+    """Split every face the path crosses (and every face on a crossed edge) and create the new vertices.
+
+    returns
+        affected (a,) int64 faces replaced by their pieces
+        tris (q, 3) int64 the pieces, as vertex ids of the torn mesh (new vertices from ``n_vertices``)
+        new_node (v,) int64 path node of each new vertex
+        new_src (v, 3) int64, new_coef (v, 3) float64: each new vertex interpolates the data of the
+            vertices new_src with coefficients new_coef (``_new_vertex``)
+    """
+    k_nodes = path_int.shape[0]
+    affected = np.empty(4 * k_nodes + 8, np.int64)
+    n_aff = np.int64(0)
+    for j in range(k_nodes):
+        if path_int[j, 2] == FACE_CARRIER:
+            affected, n_aff = _add_unique(affected, n_aff, path_int[j, 3])
+        if path_int[j, 0] == FACE:
+            affected, n_aff = _add_unique(affected, n_aff, path_int[j, 1])
+        if path_int[j, 0] == EDGE:
+            e = path_int[j, 1]
+            for r in range(ef_offsets[e], ef_offsets[e + 1]):
+                affected, n_aff = _add_unique(affected, n_aff, ef_faces[r])
+    affected = affected[:n_aff]
+
+    tris = np.empty((12 * n_aff, 3), np.int64)
+    n_tris = np.int64(0)
+    new_node = np.empty(4 * k_nodes + 4, np.int64)
+    new_src = np.zeros((4 * k_nodes + 4, 3), np.int64)
+    new_coef = np.zeros((4 * k_nodes + 4, 3))
+    n_new = np.int64(0)
+    local = np.empty((16, 3), np.int64)
+    for a in range(n_aff):
+        f = affected[a]
+        n_local = _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, local)
+        for i in range(n_local):
+            for c in range(3):
+                code = local[i, c]
+                if code < 0:                                   # a corner of the face
+                    tris[n_tris, c] = faces[f, -1 - code]
+                elif path_int[code, 0] == VERTEX:              # a corner that is on the path
+                    k = 0
+                    while wfaces[f, k] != path_int[code, 1]:
+                        k += 1
+                    tris[n_tris, c] = faces[f, k]
+                else:                                          # a new vertex
+                    if n_new + 1 >= new_node.shape[0]:
+                        new_node = np.concatenate((new_node, np.empty_like(new_node)))
+                        new_src = np.concatenate((new_src, np.zeros_like(new_src)))
+                        new_coef = np.concatenate((new_coef, np.zeros_like(new_coef)))
+                    vid, n_new = _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
+                                             wpos, new_node, new_src, new_coef, n_new)
+                    tris[n_tris, c] = n_vertices + vid
+            n_tris += 1
+    return (affected, tris[:n_tris].copy(), new_node[:n_new].copy(), new_src[:n_new].copy(),
+            new_coef[:n_new].copy())
