@@ -1,0 +1,44 @@
+"""glTF 2.0 constants of the loader and exporter: component types, accessor shapes, GLB chunk
+tags, primitive modes, and the loader's limits and tolerances (a table module, no logic)."""
+from __future__ import annotations
+
+import numpy as np
+
+# --- glTF constants (spec 3.6.2) ---------------------------------------------------------------
+COMPONENT_DTYPES = {
+    5120: np.dtype("<i1"),  # BYTE
+    5121: np.dtype("<u1"),  # UNSIGNED_BYTE
+    5122: np.dtype("<i2"),  # SHORT
+    5123: np.dtype("<u2"),  # UNSIGNED_SHORT
+    5125: np.dtype("<u4"),  # UNSIGNED_INT
+    5126: np.dtype("<f4"),  # FLOAT
+}
+COMPONENT_NAMES = {5120: "byte", 5121: "unsigned byte", 5122: "short", 5123: "unsigned short",
+                   5125: "unsigned int", 5126: "float"}
+#: (columns, rows) of each accessor type; vectors are a single column
+TYPE_SHAPES = {"SCALAR": (1, 1), "VEC2": (1, 2), "VEC3": (1, 3), "VEC4": (1, 4),
+               "MAT2": (2, 2), "MAT3": (3, 3), "MAT4": (4, 4)}
+#: spec 3.11 "normalized" integers: f = max(c / (2^(bits-1) - 1), -1) signed, c / (2^bits - 1) unsigned
+NORMALIZED_DIVISORS = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
+INTEGER_INDEX_TYPES = (5121, 5123, 5125)
+
+GLB_MAGIC = b"glTF"
+GLB_JSON_CHUNK = 0x4E4F534A
+GLB_BIN_CHUNK = 0x004E4942
+
+MODE_NAMES = {0: "POINTS", 1: "LINES", 2: "LINE_LOOP", 3: "LINE_STRIP", 4: "TRIANGLES",
+              5: "TRIANGLE_STRIP", 6: "TRIANGLE_FAN"}
+#: extensions that change how geometry is stored: files that require them cannot be read here
+UNSUPPORTED_EXTENSIONS = {"KHR_draco_mesh_compression", "EXT_meshopt_compression",
+                          "KHR_meshopt_compression"}
+#: an accessor without bufferView is materialised as zeros: refuse absurd counts (a corrupted
+#: file must not make us allocate gigabytes)
+MAX_BUFFERLESS_COMPONENTS = 1 << 26
+#: quaternions further than this from unit length are renormalised; closer ones are kept as
+#: stored so that a save -> load round trip is exact (renormalising is not idempotent in floats)
+QUAT_UNIT_TOLERANCE = 1e-12
+#: application-specific attributes (spec 3.7.2.1: custom semantics start with "_") that cgaskin
+#: writes next to WEIGHTS_n: float64 weights w = (WEIGHTS_n + LO) + LO2 exactly, all float32
+WEIGHT_RESIDUALS = ("_CGASKIN_WEIGHTS_{}_LO", "_CGASKIN_WEIGHTS_{}_LO2")
+#: inverse bind matrices and node matrices must be affine: last row (0, 0, 0, 1) within this
+AFFINE_TOLERANCE = 1e-6

@@ -1,0 +1,138 @@
+"""Mesh primitives of a glTF document (spec 3.7 "Geometry"): one primitive -> positions, triangles,
+joints and weights (residuals of ``save_gltf`` applied), NORMAL / TEXCOORD_0 / "_NAME" attributes.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pygltflib
+
+from ._gltf_constants import COMPONENT_NAMES, INTEGER_INDEX_TYPES, MODE_NAMES, WEIGHT_RESIDUALS
+from ._gltf_document import _GltfFile
+
+
+# --- meshes -----------------------------------------------------------------------------------------
+
+def _attribute_map(f: _GltfFile, prim, where: str) -> dict:
+    attrs = prim.attributes
+    if isinstance(attrs, pygltflib.Attributes):
+        attrs = vars(attrs)
+    if not isinstance(attrs, dict):
+        raise f.error(f"{where}: attributes must be a JSON object, got {attrs!r}")
+    return {k: v for k, v in attrs.items() if v is not None}
+
+
+def _triangles(f: _GltfFile, mode: int, idx: np.ndarray, where: str) -> np.ndarray:
+    """Faces (m, 3) int64 of a TRIANGLES / TRIANGLE_STRIP / TRIANGLE_FAN index sequence."""
+    n = len(idx)
+    if mode == 4:
+        if n % 3:
+            raise f.error(f"{where}: TRIANGLES needs a multiple of 3 indices/vertices, got {n}")
+        return idx.reshape(-1, 3)
+    if n < 3:
+        return np.zeros((0, 3), dtype=np.int64)
+    i = np.arange(n - 2)
+    if mode == 5:
+        # spec 3.7.2.1: triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), which keeps the winding
+        faces = np.stack([idx[i], idx[i + 1 + i % 2], idx[i + 2 - i % 2]], axis=1)
+    else:
+        faces = np.stack([idx[i + 1], idx[i + 2], np.full(n - 2, idx[0])], axis=1)
+    # strips are stitched with degenerate triangles: they carry no surface, drop them
+    keep = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+    return faces[keep]
+
+
+def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
+    """Decode one triangle primitive; for points and lines return the mode's name instead.
+
+    returns dict: positions (n, 3) float64, faces (m, 3) int64, joints (n, 4s) int64,
+        weights (n, 4s) float64, attributes {name: (n, c) float64}
+    """
+    where = f"mesh {m} primitive {p}"
+    mode = 4 if prim.mode is None else prim.mode
+    if mode not in MODE_NAMES:
+        raise f.error(f"{where} has unknown mode {mode!r}")
+    if mode < 4:
+        return MODE_NAMES[mode]
+    attrs = _attribute_map(f, prim, where)
+    if "POSITION" not in attrs:
+        raise f.error(f"{where} has no POSITION attribute")
+    _, _, ptype, n = f.accessor_info(attrs["POSITION"], f"{where} POSITION")
+    if ptype != "VEC3":
+        raise f.error(f"{where} POSITION must be VEC3, got {ptype}")
+    for name, acc in attrs.items():
+        count = f.accessor_info(acc, f"{where} {name}")[3]
+        if count != n:
+            raise f.error(f"{where}: attribute {name} has {count} elements but POSITION has {n}; "
+                          f"all attributes of a primitive must have one element per vertex")
+    positions = f.accessor(attrs["POSITION"], f"{where} POSITION").astype(np.float64)
+    bad = ~np.isfinite(positions)
+    if bad.any():
+        v = int(np.flatnonzero(bad.any(axis=1))[0])
+        raise f.error(f"{where} POSITION (accessor {attrs['POSITION']}) holds non-finite coordinates: "
+                      f"vertex {v} is {positions[v].tolist()} ({int(bad.any(axis=1).sum())} such vertices)")
+
+    if prim.indices is not None:
+        _, ctype, itype, _ = f.accessor_info(prim.indices, f"{where} indices")
+        if ctype not in INTEGER_INDEX_TYPES or itype != "SCALAR":
+            raise f.error(f"{where} indices must be SCALAR unsigned byte/short/int, got "
+                          f"{itype} {COMPONENT_NAMES[ctype]}")
+        idx = f.accessor(prim.indices, f"{where} indices")
+        bad = idx >= n
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise f.error(f"{where}: index {int(idx[k])} at position {k} of accessor {prim.indices} "
+                          f"is out of range: the primitive has {n} vertices "
+                          f"({int(bad.sum())} bad indices)")
+    else:
+        idx = np.arange(n, dtype=np.int64)  # non-indexed: vertices taken in order
+    faces = _triangles(f, mode, idx, where)
+
+    out = {"positions": positions, "faces": faces, "attributes": {}}
+    residuals = {r.format(s) for r in WEIGHT_RESIDUALS for s in range(8)}
+    # NORMAL, TEXCOORD_0 and application-specific attributes ("_NAME", e.g. the tear's "_TEAR"
+    # labels): carried through cut, tear and export
+    custom = [(name, None) for name in attrs if name.startswith("_") and name not in residuals]
+    for name, width in (("NORMAL", 3), ("TEXCOORD_0", 2), *custom):
+        if name in attrs:
+            _, ctype, atype, _ = f.accessor_info(attrs[name], f"{where} {name}")
+            values = f.accessor(attrs[name], f"{where} {name}")
+            if values.ndim == 1:
+                values = values[:, None]
+            if values.ndim != 2 or (width is not None and values.shape[1] != width) or values.dtype != np.float64:
+                raise f.error(f"{where} {name} must be VEC{width or 'n'} of floats or normalized "
+                              f"integers, got {atype} {COMPONENT_NAMES[ctype]}")
+            if not np.isfinite(values).all():
+                v = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
+                raise f.error(f"{where} {name} holds non-finite values (vertex {v}: {values[v].tolist()})")
+            out["attributes"][name] = values
+
+    sets = sorted({int(k.split("_")[1]) for k in attrs
+                   if k.split("_")[0] in ("JOINTS", "WEIGHTS") and k.split("_")[-1].isdigit()})
+    for s in sets:
+        if f"JOINTS_{s}" not in attrs or f"WEIGHTS_{s}" not in attrs:
+            raise f.error(f"{where} has only one of JOINTS_{s} / WEIGHTS_{s}; they come in pairs")
+    if skinned and 0 not in sets:
+        raise f.error(f"{where} belongs to a skinned node but has no JOINTS_0/WEIGHTS_0")
+    joints, weights = [], []
+    for s in sets:
+        _, jtype, jshape, _ = f.accessor_info(attrs[f"JOINTS_{s}"], f"{where} JOINTS_{s}")
+        _, wtype, wshape, _ = f.accessor_info(attrs[f"WEIGHTS_{s}"], f"{where} WEIGHTS_{s}")
+        j = f.accessor(attrs[f"JOINTS_{s}"], f"{where} JOINTS_{s}")
+        w = f.accessor(attrs[f"WEIGHTS_{s}"], f"{where} WEIGHTS_{s}")
+        if jshape != "VEC4" or j.dtype != np.int64:
+            raise f.error(f"{where} JOINTS_{s} must be VEC4 unsigned byte/short, got "
+                          f"{jshape} {COMPONENT_NAMES[jtype]}{' normalized' if j.dtype != np.int64 else ''}")
+        if wshape != "VEC4" or w.dtype != np.float64:
+            raise f.error(f"{where} WEIGHTS_{s} must be VEC4 float or normalized unsigned "
+                          f"byte/short, got {wshape} {COMPONENT_NAMES[wtype]} (not normalized)")
+        for name in (r.format(s) for r in WEIGHT_RESIDUALS):
+            if name in attrs:  # written by save_gltf: restores the float64 weights exactly
+                residual = f.accessor(attrs[name], f"{where} {name}")
+                if residual.shape != w.shape or residual.dtype != np.float64:
+                    raise f.error(f"{where} {name} must be VEC4 float like WEIGHTS_{s}")
+                w = w + residual
+        joints.append(j)
+        weights.append(w)
+    out["joints"] = np.concatenate(joints, axis=1) if joints else np.zeros((n, 0), dtype=np.int64)
+    out["weights"] = np.concatenate(weights, axis=1) if weights else np.zeros((n, 0))
+    return out
