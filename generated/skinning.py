@@ -5,7 +5,7 @@ generator: 1
 sympy: 1.14.0
 algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
 spec hash: bc8591ffb7b4efdd
-imports kernels (hash 2a3be177f2b68d0c)
+imports kernels (hash c0a6e13f582d3d5f)
 """
 
 from numba import njit, prange

@@ -28,6 +28,39 @@ def test_check_names_a_stale_file(tmp_path):
     assert "generated/kernels.py" in messages[0]
 
 
+def test_check_ignores_only_the_sympy_version(tmp_path, monkeypatch):
+    # generated/ as another sympy release would write it, with the same kernels
+    with monkeypatch.context() as m:
+        m.setattr(build.sympy, "__version__", "0.0.0-other")
+        files = build.render()
+    assert "sympy: 0.0.0-other" in files["kernels.py"]
+    for name, text in files.items():
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    messages = []
+    assert build.build(check=True, directory=tmp_path, log=messages.append) == 0, "\n".join(messages)
+
+    # any other difference is still stale: the header's spec hash, and a kernel line
+    kernels = tmp_path / "kernels.py"
+    text = kernels.read_text(encoding="utf-8")
+    spec_line = next(line for line in text.splitlines() if line.startswith("spec hash: "))
+    kernels.write_text(text.replace(spec_line, "spec hash: 0000000000000000", 1), encoding="utf-8")
+    messages = []
+    assert build.build(check=True, directory=tmp_path, log=messages.append) == 1
+    assert "generated/kernels.py" in messages[0]
+    kernels.write_text(text.replace("v_s * v_s", "v_s * v_s * 1.0", 1), encoding="utf-8")
+    messages = []
+    assert build.build(check=True, directory=tmp_path, log=messages.append) == 1
+    assert "generated/kernels.py" in messages[0]
+    # a file that lost its sympy line differs too
+    layout = tmp_path / "layout.py"
+    layout.write_text("".join(line for line in files["layout.py"].splitlines(keepends=True)
+                              if not line.startswith("sympy:")), encoding="utf-8")
+    kernels.write_text(text, encoding="utf-8")
+    messages = []
+    assert build.build(check=True, directory=tmp_path, log=messages.append) == 1
+    assert "generated/layout.py" in messages[0]
+
+
 def test_cli_check_exit_code():
     done = subprocess.run([sys.executable, "-m", "cgaskin.app.cli", "build", "--check"], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
