@@ -31,7 +31,7 @@ HEADER_END = '\n"""\n'
 
 
 def _digest(text: str) -> str:
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
 
 def _header(title: str, spec_hash: str, imports: dict[str, str]) -> str:
@@ -167,7 +167,7 @@ def build(check: bool = False, directory: Path = GENERATED_DIR, log=print) -> in
     stale = []
     for name, text in files.items():
         path = directory / name
-        current = path.read_text() if path.exists() else None
+        current = path.read_text(encoding="utf-8") if path.exists() else None
         if check:
             differs = current is None or _without_sympy_version(current) != _without_sympy_version(text)
         else:
@@ -175,7 +175,7 @@ def build(check: bool = False, directory: Path = GENERATED_DIR, log=print) -> in
         if differs:
             stale.append(name)
             if not check:
-                path.write_text(text)
+                path.write_text(text, encoding="utf-8")
     elapsed = time.perf_counter() - start
     if check:
         for name in stale:

@@ -20,9 +20,10 @@ def test_generated_is_fresh():
 
 def test_check_names_a_stale_file(tmp_path):
     for name, text in build.render().items():
-        (tmp_path / name).write_text(text)
+        (tmp_path / name).write_text(text, encoding="utf-8")
     kernels = tmp_path / "kernels.py"
-    kernels.write_text(kernels.read_text().replace("v_s * v_s", "v_s * v_s * 1.0", 1))
+    kernels.write_text(kernels.read_text(encoding="utf-8").replace("v_s * v_s", "v_s * v_s * 1.0", 1),
+                       encoding="utf-8")
     messages = []
     assert build.build(check=True, directory=tmp_path, log=messages.append) == 1
     assert "generated/kernels.py" in messages[0]
@@ -64,6 +65,26 @@ def test_check_ignores_only_the_sympy_version(tmp_path, monkeypatch):
 def test_cli_check_exit_code():
     done = subprocess.run([sys.executable, "-m", "cgaskin.app.cli", "build", "--check"], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+# A locale whose preferred encoding is ASCII: no C.UTF-8 coercion, no UTF-8 mode. Generated files hold
+# ∞, − and Σ, so reading or writing them in the locale's encoding fails here.
+ASCII_LOCALE = {"LC_ALL": "C", "LANG": "C", "PYTHONUTF8": "0", "PYTHONCOERCECLOCALE": "0"}
+
+
+def test_build_under_an_ascii_locale(tmp_path):
+    env = {**os.environ, **ASCII_LOCALE}
+    probe = "import codecs, locale; print(codecs.lookup(locale.getpreferredencoding(False)).name)"
+    encoding = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True)
+    assert encoding.stdout.strip() == "ascii", encoding.stdout + encoding.stderr   # else this test proves nothing
+    done = subprocess.run([sys.executable, "-m", "cgaskin.app.cli", "build", "--check"], env=env,
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
+    write = f"from cgaskin.codegen import build; build.build(directory=__import__('pathlib').Path({str(tmp_path)!r}))"
+    done = subprocess.run([sys.executable, "-c", write], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
+    for name, text in build.render().items():
+        assert (tmp_path / name).read_bytes() == text.encode("utf-8"), name
 
 
 def test_build_is_fast():
