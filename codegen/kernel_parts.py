@@ -1,0 +1,64 @@
+"""Blade layouts of the kernels' arrays and the multivector pieces several kernel families build from.
+
+The conventions these follow are in catalogue.py's docstring (design.md §2).
+"""
+from __future__ import annotations
+
+import sympy
+from sympy import Rational
+
+from .symbolic import MV
+
+VERSOR = ("s", "e12", "e13", "e23", "e1i", "e2i", "e3i", "e123i", "eio", "e12io", "e13io", "e23io")
+MOTOR = VERSOR[:8]
+ROTOR = ("s", "e12", "e13", "e23")
+PLANE = ("e1", "e2", "e3", "ei")                 # dual plane n + d e∞ stored as (n1, n2, n3, d)
+LOG = ("e12", "e13", "e23", "e1i", "e2i", "e3i", "eio")
+AFFINE_LABELS = tuple(f"A[{r},{c}]" for r in range(3) for c in range(4))
+HALF = Rational(1, 2)
+
+
+def _euclid(k, mv, blades=("e1", "e2", "e3")):
+    return [mv[b] for b in blades]
+
+
+def _rotor_from_quaternion(k, q):
+    x, y, z, w = (k.poly(c) for c in q)
+    return k.mv(ROTOR, [w, -z, y, -x])
+
+
+def _translator(k, t):
+    t1, t2, t3 = (k.poly(c) for c in t)
+    return k.mv(("s", "e1i", "e2i", "e3i"), [1, -t1 * HALF, -t2 * HALF, -t3 * HALF])
+
+
+def _dilator(k, cosh_half, sinh_half):
+    return k.mv(("s", "eio"), [k.poly(cosh_half), -k.poly(sinh_half)])
+
+
+def _down(k, X: MV):
+    """Euclidean point of a conformal point: Euclidean part over the e0 coefficient."""
+    w = X["eo"]
+    return [sympy.Mul(c.as_expr(), sympy.Pow(w.as_expr(), -1)) for c in _euclid(k, X)]
+
+
+E_PAIRS = (("s", "eio"), ("e12", "e12io"), ("e13", "e13io"), ("e23", "e23io"))
+
+
+def _idempotent_versor(k, v):
+    """The versor rewritten on the idempotents P± = (1 ± e∞0)/2: each pair (a, a e∞0) becomes
+    p = a + b on P+ and m = a − b on P−. Products of P+ and P− vanish, so sandwiches expand into
+    sums of products of p's and m's with no cancellation between the halves of a dilator:
+    relative error ~ε·s instead of ~ε·s² (design.md §3.4). Declares the intermediates."""
+    pm = []
+    for a, b in E_PAIRS:
+        p_sym, m_sym = k.intermediate(f"{v[0].name[:-2]}_p{a}", f"{v[0].name[:-2]}_m{a}")
+        va, vb = v[VERSOR.index(a)], v[VERSOR.index(b)]
+        k.let(p_sym, va + vb)
+        k.let(m_sym, va - vb)
+        pm.append((a, b, p_sym, m_sym))
+    values = list(v)
+    for a, b, p_sym, m_sym in pm:
+        values[VERSOR.index(a)] = (k.poly(p_sym) + k.poly(m_sym)) * HALF
+        values[VERSOR.index(b)] = (k.poly(p_sym) - k.poly(m_sym)) * HALF
+    return k.mv(VERSOR, values)

@@ -1,0 +1,106 @@
+"""Geometry kernels: planes, point-plane distances, segment-plane meets, barycentric coordinates."""
+from __future__ import annotations
+
+from sympy import sqrt
+
+from . import algebra
+from .ir import CodegenError, KernelBuilder
+from .kernel_parts import PLANE, VERSOR, _euclid, _idempotent_versor
+from .symbolic import MV, up
+
+
+# ---- planes, distances, meets, barycentric ---------------------------------------------------------
+def plane_from_normal_distance():
+    k = KernelBuilder("plane_from_normal_distance",
+                      "Dual plane n̂ + d e∞ (n normalised, d scaled to match) of {x : n·x = d}.")
+    n, d = k.array("n", 3), k.scalar("d")
+    inv = k.intermediate("inv_len")[0]
+    k.let(inv, 1 / sqrt(sum(c ** 2 for c in n)))
+    P = k.mv(PLANE, [n[0], n[1], n[2], d])
+    k.output_multivector("plane", P, PLANE, scale=inv)
+    return k.build()
+
+
+def plane_from_points():
+    k = KernelBuilder("plane_from_points",
+                      "Dual plane through a, b, c (normal along (b−a)×(c−a)), computed relative to a for "
+                      "accuracy far from the origin: π' = −(e0 ∧ up(b−a) ∧ up(c−a) ∧ e∞)*, then "
+                      "normalised and moved back by d = n̂·a.")
+    a, b, c = k.array("a", 3), k.array("b", 3), k.array("c", 3)
+    # the edge vectors are intermediates, so that the products below stay in relative coordinates
+    # (expanding b − a into the products would reintroduce absolute ones: error ~ε|a|²)
+    u = k.intermediate("u0", "u1", "u2")
+    w = k.intermediate("w0", "w1", "w2")
+    n1, n2, n3, inv = k.intermediate("n1", "n2", "n3", "inv_len")
+    for syms, other in ((u, b), (w, c)):
+        for s_, oi, ai in zip(syms, other, a):
+            k.let(s_, oi - ai)
+    o = MV(k.ring, {algebra.mask_of("eo"): k.ring.one})
+    inf = MV(k.ring, {algebra.mask_of("ei"): k.ring.one})
+    U = up(k.ring, [k.poly(e) for e in u])
+    W = up(k.ring, [k.poly(e) for e in w])
+    P = -((o ^ U ^ W ^ inf).dual())
+    if P["ei"] != 0:
+        raise CodegenError("plane through the origin must have no e∞ part")
+    for sym, e in zip((n1, n2, n3), _euclid(k, P)):
+        k.let(sym, e)
+    k.let(inv, 1 / sqrt(n1 ** 2 + n2 ** 2 + n3 ** 2))
+    k.output(["plane[e1]", "plane[e2]", "plane[e3]", "plane[e∞]"],
+             [n1 * inv, n2 * inv, n3 * inv, (n1 * a[0] + n2 * a[1] + n3 * a[2]) * inv])
+    return k.build()
+
+
+def plane_transform():
+    k = KernelBuilder("plane_transform", "The plane moved by a versor: V π Ṽ, renormalised to a unit normal.")
+    v, p = k.multivector("v", VERSOR), k.multivector("plane", PLANE)
+    inv = k.intermediate("inv_len")[0]
+    V = _idempotent_versor(k, v)
+    moved = V * k.mv(PLANE, p) * V.reverse()
+    n = _euclid(k, moved)
+    k.let(inv, 1 / sqrt(sum(c.as_expr() ** 2 for c in n)))
+    k.output_multivector("plane", moved.grade(1), PLANE, scale=inv)
+    return k.build()
+
+
+def point_plane_distance():
+    k = KernelBuilder("point_plane_distance",
+                      "Signed distance up(x)·π = n·x − d of a point from a unit dual plane π = n + d e∞.")
+    p, x = k.multivector("plane", PLANE), k.array("x", 3)
+    X = up(k.ring, [k.poly(c) for c in x])
+    k.output(["distance"], [X.lc(k.mv(PLANE, p))["s"]])
+    return k.build()
+
+
+def segment_plane():
+    k = KernelBuilder("segment_plane",
+                      "Where segment a→b meets plane π: t = d_a / (d_a − d_b) with d the signed distances "
+                      "up(·)·π, and the point a + t (b − a). t is outside [0, 1] when the segment misses.")
+    p, a, b = k.multivector("plane", PLANE), k.array("a", 3), k.array("b", 3)
+    P = k.mv(PLANE, p)
+    da, db, t = k.intermediate("da", "db", "t")
+    k.let(da, up(k.ring, [k.poly(c) for c in a]).lc(P)["s"])
+    k.let(db, up(k.ring, [k.poly(c) for c in b]).lc(P)["s"])
+    k.let(t, da / (da - db))
+    k.output(["t", "x[0]", "x[1]", "x[2]"], [t] + [ai + t * (bi - ai) for ai, bi in zip(a, b)])
+    return k.build()
+
+
+def barycentric():
+    k = KernelBuilder("barycentric",
+                      "Barycentric coordinates (λa, λb, λc) of p projected on triangle abc, relative to a: "
+                      "with u = b−a, w = c−a, q = p−a: λb = (q∧w)·(u∧w)~/|u∧w|², λc = (u∧q)·(u∧w)~/|u∧w|².")
+    a, b, c, pt = (k.array(n, 3) for n in ("a", "b", "c", "p"))
+    ub, wb, qb = (k.intermediate(*(f"{n}{i}" for i in range(3))) for n in ("u", "w", "q"))
+    for syms, other in ((ub, b), (wb, c), (qb, pt)):
+        for s_, oi, ai in zip(syms, other, a):
+            k.let(s_, oi - ai)
+    vec = lambda syms: k.mv(("e1", "e2", "e3"), syms)  # noqa: E731
+    U, W, Q = vec(ub), vec(wb), vec(qb)
+    area = U ^ W
+    area_rev = area.reverse()
+    inv = k.intermediate("inv_area2")[0]
+    k.let(inv, 1 / (area * area_rev)["s"].as_expr())
+    lb = ((Q ^ W) * area_rev)["s"].as_expr() * inv
+    lc = ((U ^ Q) * area_rev)["s"].as_expr() * inv
+    k.output(["λa", "λb", "λc"], [1 - lb - lc, lb, lc])
+    return k.build()
