@@ -26,7 +26,8 @@ from ._gltf_constants import (COMPONENT_DTYPES, COMPONENT_NAMES, INTEGER_INDEX_T
                               MAX_BUFFERLESS_COMPONENTS, NORMALIZED_DIVISORS, TYPE_SHAPES)
 
 
-#: directories of cgaskin's modules: warnings point past them, at the user's call
+#: directories of cgaskin's modules: warnings point past them, at the user's call (this module's
+#: folder, rigs/, holds every module of the loader; validate's holds ``check_mesh``)
 _PACKAGE_DIRS = {os.path.dirname(__file__), os.path.dirname(validate.__file__)}
 
 

@@ -1,11 +1,13 @@
 """Mesh primitives of a glTF document (spec 3.7 "Geometry"): one primitive -> positions, triangles,
-joints and weights (residuals of ``save_gltf`` applied), NORMAL / TEXCOORD_0 / "_NAME" attributes.
+joints and weights (residuals of ``save_gltf`` applied), NORMAL / TEXCOORD_0 / "_NAME" attributes;
+the primitives of all skinned mesh nodes merged into one mesh, joint slots mapped to bones.
 """
 from __future__ import annotations
 
 import numpy as np
 import pygltflib
 
+from ..errors import NoSkinError
 from ._gltf_constants import COMPONENT_NAMES, INTEGER_INDEX_TYPES, MODE_NAMES, WEIGHT_RESIDUALS
 from ._gltf_document import _GltfFile
 
@@ -136,3 +138,61 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
     out["joints"] = np.concatenate(joints, axis=1) if joints else np.zeros((n, 0), dtype=np.int64)
     out["weights"] = np.concatenate(weights, axis=1) if weights else np.zeros((n, 0))
     return out
+
+
+def _merge_primitives(f: _GltfFile, skinned: list[tuple[int, int]], slot_maps: dict):
+    """Read every triangle primitive of the skinned mesh nodes and merge them into one mesh.
+
+    skinned : [(file node, skin)] in scene order; slot_maps : {skin: (joints,) int64 bone of each
+        joint slot}
+    returns : vertices (n, 3) float64, faces (m, 3) int64, joints (n, 4s) int64 bone indices,
+        weights (n, 4s) float64 (s: the most JOINTS_n/WEIGHTS_n sets of a primitive), attributes
+        {name: (n, c) float64} that every primitive has
+    """
+    nodes = f.items("nodes")
+    parts, skipped_modes = [], []
+    for i, s in skinned:
+        m = nodes[i].mesh
+        primitives = f.items("meshes")[m].primitives or []
+        for p, prim in enumerate(primitives):
+            part = _read_primitive(f, m, p, prim, skinned=True)
+            if isinstance(part, str):
+                skipped_modes.append(part)
+                continue
+            j, w = part["joints"], part["weights"]
+            slots = slot_maps[s]
+            bad = (w > 0) & ((j < 0) | (j >= len(slots)))
+            if bad.any():
+                v = int(np.flatnonzero(bad.any(axis=1))[0])
+                raise f.error(f"mesh {m} primitive {p}: vertex {v} is weighted to joint "
+                              f"{int(j[bad][0])} but skin {s} has {len(slots)} joints")
+            j = np.where(w > 0, j, 0)  # unused slots may hold anything: point them at slot 0
+            part["joints"] = slots[j]
+            parts.append(part)
+    if skipped_modes:
+        f.warn(f"skipped {len(skipped_modes)} primitives that are not triangles "
+               f"({', '.join(sorted(set(skipped_modes)))})")
+    if not parts:
+        raise f.error("the skinned meshes hold no triangle primitive", cls=NoSkinError)
+
+    offsets = np.cumsum([0] + [len(part["positions"]) for part in parts])
+    vertices = np.concatenate([part["positions"] for part in parts])
+    faces = np.concatenate([part["faces"] + off for part, off in zip(parts, offsets)])
+    width = max(part["weights"].shape[1] for part in parts)
+
+    def padded(key, dtype):
+        return np.concatenate([np.pad(part[key], ((0, 0), (0, width - part[key].shape[1])))
+                               for part in parts]).astype(dtype)
+
+    joints, weights = padded("joints", np.int64), padded("weights", np.float64)
+    attributes = {}
+    names = dict.fromkeys(name for part in parts for name in part["attributes"])
+    for name in names:
+        have = [name in part["attributes"] for part in parts]
+        if all(have):
+            attributes[name] = np.concatenate([part["attributes"][name] for part in parts])
+        elif any(have):
+            f.warn(f"dropped attribute {name}: only {sum(have)} of {len(parts)} merged primitives have it")
+    if len(faces) == 0:
+        raise f.error("the skinned meshes hold no triangle (all primitives are empty or degenerate)")
+    return vertices, faces, joints, weights, attributes

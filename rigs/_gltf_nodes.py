@@ -1,8 +1,8 @@
 """Node hierarchy and skins of a glTF document (spec 3.5 "Nodes and hierarchy", 3.8 "Skins").
 
 Parents (a tree, no cycles), the default scene's nodes, node transforms (TRS or matrix), the
-bones of the skins used, the skeleton order (joints and their ancestors, parents first) and unique
-joint names.
+bones of the skins used, the skeleton order (joints and their ancestors, parents first), unique
+joint names, and the ``Skeleton`` built from them.
 """
 from __future__ import annotations
 
@@ -11,19 +11,9 @@ import heapq
 import numpy as np
 
 from ..algebra.transforms import matrix_to_trs, trs_matrix
+from ..animation.rig import Skeleton
 from ._gltf_constants import AFFINE_TOLERANCE, COMPONENT_NAMES, QUAT_UNIT_TOLERANCE
 from ._gltf_document import _GltfFile
-
-
-# --- transforms (shared with the exporter) -----------------------------------------------------
-
-def trs_to_matrix(translation, rotation, scale) -> np.ndarray:
-    """The glTF local matrix T @ R @ S (see ``cgaskin.algebra.transforms.trs_matrix``).
-
-    translation : (3,) float; rotation : (4,) float unit quaternion (x, y, z, w); scale : (3,) float
-    returns : (4, 4) float64
-    """
-    return trs_matrix(translation, rotation, scale)
 
 
 # --- scene graph --------------------------------------------------------------------------------
@@ -104,7 +94,7 @@ def _node_transform(f: _GltfFile, i: int, node):
         raise f.error(f"node {i} rotation is the zero quaternion")
     if abs(norm - 1.0) > QUAT_UNIT_TOLERANCE:
         q = q / norm
-    m = trs_to_matrix(t, q, s)
+    m = trs_matrix(t, q, s)
     if not np.isfinite(m).all():
         raise f.error(f"node {i} transform overflows (translation {t}, scale {s})")
     return t, q, s, m
@@ -193,3 +183,29 @@ def _unique_names(f: _GltfFile, order: list[int]) -> list[str]:
         used.add(name)
         names.append(name)
     return names
+
+
+def _build_skeleton(f: _GltfFile, bone_file_nodes: list[int], inverse_bind: np.ndarray,
+                    parents: list[int]):
+    """The ``Skeleton`` of the merged skins and the map file node -> skeleton node.
+
+    bone_file_nodes : file node of each bone; inverse_bind : (b, 4, 4) float64;
+    parents : parent file node of every file node (-1 for roots)
+    returns : (Skeleton, {file node: skeleton node})
+    """
+    nodes = f.items("nodes")
+    order = _skeleton_order(bone_file_nodes, parents, lambda i: nodes[i].children or [])
+    node_to_skeleton = {node: k for k, node in enumerate(order)}
+    transforms = [_node_transform(f, i, nodes[i]) for i in order]
+    skeleton = Skeleton(
+        names=_unique_names(f, order),
+        parents=np.array([node_to_skeleton[parents[i]] if parents[i] != -1 else -1 for i in order],
+                         dtype=np.int64),
+        rest_translations=np.array([t[0] for t in transforms]).reshape(-1, 3),
+        rest_rotations=np.array([t[1] for t in transforms]).reshape(-1, 4),
+        rest_scales=np.array([t[2] for t in transforms]).reshape(-1, 3),
+        rest_matrices=np.array([t[3] for t in transforms]).reshape(-1, 4, 4),
+        bone_nodes=np.array([node_to_skeleton[i] for i in bone_file_nodes], dtype=np.int64),
+        inverse_bind=inverse_bind,
+    )
+    return skeleton, node_to_skeleton

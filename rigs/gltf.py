@@ -22,6 +22,12 @@ returned as float64 holding exactly the float32 values, except the weights, whic
 in float64 so that every row sums to 1 (``check_mesh``). Files written by ``save_gltf`` carry the
 float64 weights' rounding residuals in two application-specific attributes (``WEIGHT_RESIDUALS``),
 from which they are rebuilt exactly; other readers ignore them and use the float32 WEIGHTS_0.
+
+This module is the driver; the work is done by private modules, one topic each:
+``_gltf_container`` (file bytes -> document), ``_gltf_document`` (``_GltfFile``: checked access
+to the JSON, buffers and accessors), ``_gltf_nodes`` (hierarchy, node transforms, skins,
+skeleton), ``_gltf_mesh`` (primitives, merged mesh), ``_gltf_clips`` (animations) and
+``_gltf_constants`` (the tables).
 """
 from __future__ import annotations
 
@@ -30,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..algebra.transforms import matrix_to_quat, matrix_to_trs, quat_to_matrix
+from ..algebra.transforms import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
 from ..errors import CgaskinError, InvalidInputError, ModelFormatError, NoSkinError
-from ..animation.rig import Rig, Skeleton
+from ..animation.rig import Rig
 from ..animation.validate import check_mesh
 # the constants are re-exported: they were public names of this module before its split
 from ._gltf_constants import (AFFINE_TOLERANCE, COMPONENT_DTYPES, COMPONENT_NAMES,  # noqa: F401
@@ -43,11 +49,21 @@ from ._gltf_constants import (AFFINE_TOLERANCE, COMPONENT_DTYPES, COMPONENT_NAME
 from ._gltf_clips import _read_clips
 from ._gltf_container import _read_document
 from ._gltf_document import _GltfFile
-from ._gltf_mesh import _read_primitive
-from ._gltf_nodes import (_node_transform, _parents, _read_skins, _scene_nodes, _skeleton_order,
-                          _unique_names, trs_to_matrix)
+from ._gltf_mesh import _merge_primitives, _read_primitive
+from ._gltf_nodes import _build_skeleton, _parents, _read_skins, _scene_nodes
 
 __all__ = ["load_gltf", "trs_to_matrix", "matrix_to_trs", "quat_to_matrix", "matrix_to_quat"]
+
+
+# --- transforms (shared with the exporter) -----------------------------------------------------
+
+def trs_to_matrix(translation, rotation, scale) -> np.ndarray:
+    """The glTF local matrix T @ R @ S (see ``cgaskin.algebra.transforms.trs_matrix``).
+
+    translation : (3,) float; rotation : (4,) float unit quaternion (x, y, z, w); scale : (3,) float
+    returns : (4, 4) float64
+    """
+    return trs_matrix(translation, rotation, scale)
 
 
 # --- the loader ---------------------------------------------------------------------------------------
@@ -94,6 +110,8 @@ def load_gltf(path) -> Rig:
 
 
 def _build_rig(f: _GltfFile) -> Rig:
+    """The rig of a read document: scene, skins, merged mesh (checked by ``check_mesh``), skeleton,
+    clips. Every problem raises ``ModelFormatError`` (``NoSkinError`` when nothing is skinned)."""
     nodes = f.items("nodes")
     parents = _parents(f)
     scene_nodes = _scene_nodes(f, parents)
@@ -122,53 +140,7 @@ def _build_rig(f: _GltfFile) -> Rig:
     skin_indices = sorted({s for _, s in skinned})
     bone_file_nodes, inverse_bind, slot_maps = _read_skins(f, skin_indices)
     n_bones = len(bone_file_nodes)
-
-    # --- merge the primitives -------------------------------------------------------------------
-    parts, skipped_modes = [], []
-    for i, s in skinned:
-        m = nodes[i].mesh
-        primitives = f.items("meshes")[m].primitives or []
-        for p, prim in enumerate(primitives):
-            part = _read_primitive(f, m, p, prim, skinned=True)
-            if isinstance(part, str):
-                skipped_modes.append(part)
-                continue
-            j, w = part["joints"], part["weights"]
-            slots = slot_maps[s]
-            bad = (w > 0) & ((j < 0) | (j >= len(slots)))
-            if bad.any():
-                v = int(np.flatnonzero(bad.any(axis=1))[0])
-                raise f.error(f"mesh {m} primitive {p}: vertex {v} is weighted to joint "
-                              f"{int(j[bad][0])} but skin {s} has {len(slots)} joints")
-            j = np.where(w > 0, j, 0)  # unused slots may hold anything: point them at slot 0
-            part["joints"] = slots[j]
-            parts.append(part)
-    if skipped_modes:
-        f.warn(f"skipped {len(skipped_modes)} primitives that are not triangles "
-               f"({', '.join(sorted(set(skipped_modes)))})")
-    if not parts:
-        raise f.error("the skinned meshes hold no triangle primitive", cls=NoSkinError)
-
-    offsets = np.cumsum([0] + [len(part["positions"]) for part in parts])
-    vertices = np.concatenate([part["positions"] for part in parts])
-    faces = np.concatenate([part["faces"] + off for part, off in zip(parts, offsets)])
-    width = max(part["weights"].shape[1] for part in parts)
-
-    def padded(key, dtype):
-        return np.concatenate([np.pad(part[key], ((0, 0), (0, width - part[key].shape[1])))
-                               for part in parts]).astype(dtype)
-
-    joints, weights = padded("joints", np.int64), padded("weights", np.float64)
-    attributes = {}
-    names = dict.fromkeys(name for part in parts for name in part["attributes"])
-    for name in names:
-        have = [name in part["attributes"] for part in parts]
-        if all(have):
-            attributes[name] = np.concatenate([part["attributes"][name] for part in parts])
-        elif any(have):
-            f.warn(f"dropped attribute {name}: only {sum(have)} of {len(parts)} merged primitives have it")
-    if len(faces) == 0:
-        raise f.error("the skinned meshes hold no triangle (all primitives are empty or degenerate)")
+    vertices, faces, joints, weights, attributes = _merge_primitives(f, skinned, slot_maps)
 
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -180,21 +152,7 @@ def _build_rig(f: _GltfFile) -> Rig:
     for warning in caught:  # re-issued so that they point at the caller of load, not in here
         f.warn(str(warning.message), prefix=False)
 
-    # --- skeleton -----------------------------------------------------------------------------------
-    order = _skeleton_order(bone_file_nodes, parents, lambda i: nodes[i].children or [])
-    node_to_skeleton = {node: k for k, node in enumerate(order)}
-    transforms = [_node_transform(f, i, nodes[i]) for i in order]
-    skeleton = Skeleton(
-        names=_unique_names(f, order),
-        parents=np.array([node_to_skeleton[parents[i]] if parents[i] != -1 else -1 for i in order],
-                         dtype=np.int64),
-        rest_translations=np.array([t[0] for t in transforms]).reshape(-1, 3),
-        rest_rotations=np.array([t[1] for t in transforms]).reshape(-1, 4),
-        rest_scales=np.array([t[2] for t in transforms]).reshape(-1, 3),
-        rest_matrices=np.array([t[3] for t in transforms]).reshape(-1, 4, 4),
-        bone_nodes=np.array([node_to_skeleton[i] for i in bone_file_nodes], dtype=np.int64),
-        inverse_bind=inverse_bind,
-    )
+    skeleton, node_to_skeleton = _build_skeleton(f, bone_file_nodes, inverse_bind, parents)
     clips = _read_clips(f, node_to_skeleton)
     return Rig(vertices=vertices, faces=faces, joints=joints, weights=weights, skeleton=skeleton,
                clips=clips, attributes=attributes, name=f.path.stem)
