@@ -11,7 +11,7 @@ e0 coefficient, which for the 12-blade type never depends on the point — the h
 """
 from __future__ import annotations
 
-from .kernel_parts import AFFINE_LABELS, LOG, MOTOR, PLANE, ROTOR, VERSOR
+from .kernel_parts import AFFINE_LABELS, LOG, MOTOR, PLANE, VERSOR
 from .kernels_exp_log import versor_exp, versor_log
 from .kernels_geometry import (barycentric, plane_from_normal_distance, plane_from_points, plane_transform,
                                point_plane_distance, segment_plane)
@@ -20,11 +20,12 @@ from .kernels_versor import (gp_motor_motor, gp_versor_versor, inverse_versor, r
                              versor_from_matrix, versor_normalise, versor_residual, versor_rotor,
                              versor_rotor_quaternion, versor_translator)
 
-
+# the order of the kernels in generated/kernels.py
 KERNELS = (versor_translator, versor_rotor, versor_rotor_quaternion, versor_dilator, versor_from_matrix,
            gp_motor_motor, gp_versor_versor, reverse_versor, inverse_versor, versor_residual,
            versor_normalise, sandwich_versor_point, versor_to_affine, affine_point,
            plane_from_normal_distance, plane_from_points, plane_transform, point_plane_distance,
            segment_plane, barycentric, versor_log, versor_exp)
 
-__all__ = ["AFFINE_LABELS", "KERNELS", "LOG", "MOTOR", "PLANE", "ROTOR", "VERSOR"]
+# the layouts are re-exported for build.py, which prints them into generated/layout.py
+__all__ = ["AFFINE_LABELS", "KERNELS", "LOG", "MOTOR", "PLANE", "VERSOR"]

@@ -18,34 +18,38 @@ AFFINE_LABELS = tuple(f"A[{r},{c}]" for r in range(3) for c in range(4))
 HALF = Rational(1, 2)
 
 
-def _euclid(k, mv, blades=("e1", "e2", "e3")):
+def euclid(k, mv, blades=("e1", "e2", "e3")):
+    """The coefficients of mv on e1, e2, e3 (or on ``blades``)."""
     return [mv[b] for b in blades]
 
 
-def _rotor_from_quaternion(k, q):
+def rotor_from_quaternion(k, q):
+    """Rotor w − x e23 + y e13 − z e12 of the quaternion q = (x, y, z, w) (not normalised here)."""
     x, y, z, w = (k.poly(c) for c in q)
     return k.mv(ROTOR, [w, -z, y, -x])
 
 
-def _translator(k, t):
+def translator(k, t):
+    """Translator T(t) = 1 − ½ t e∞."""
     t1, t2, t3 = (k.poly(c) for c in t)
     return k.mv(("s", "e1i", "e2i", "e3i"), [1, -t1 * HALF, -t2 * HALF, -t3 * HALF])
 
 
-def _dilator(k, cosh_half, sinh_half):
+def dilator(k, cosh_half, sinh_half):
+    """Dilator cosh(ln s/2) − sinh(ln s/2) e∞0, from those two values."""
     return k.mv(("s", "eio"), [k.poly(cosh_half), -k.poly(sinh_half)])
 
 
-def _down(k, X: MV):
+def down(k, X: MV):
     """Euclidean point of a conformal point: Euclidean part over the e0 coefficient."""
     w = X["eo"]
-    return [sympy.Mul(c.as_expr(), sympy.Pow(w.as_expr(), -1)) for c in _euclid(k, X)]
+    return [sympy.Mul(c.as_expr(), sympy.Pow(w.as_expr(), -1)) for c in euclid(k, X)]
 
 
 E_PAIRS = (("s", "eio"), ("e12", "e12io"), ("e13", "e13io"), ("e23", "e23io"))
 
 
-def _idempotent_versor(k, v):
+def idempotent_versor(k, v):
     """The versor rewritten on the idempotents P± = (1 ± e∞0)/2: each pair (a, a e∞0) becomes
     p = a + b on P+ and m = a − b on P−. Products of P+ and P− vanish, so sandwiches expand into
     sums of products of p's and m's with no cancellation between the halves of a dilator:

@@ -6,7 +6,7 @@ from sympy import Piecewise, Rational, cos, sin, sqrt, atan2, log
 
 from . import algebra
 from .ir import KernelBuilder
-from .kernel_parts import HALF, LOG, ROTOR, VERSOR, _dilator, _translator
+from .kernel_parts import HALF, LOG, ROTOR, VERSOR, dilator, translator
 
 # Below these, closed forms divide 0 by 0: use Taylor series accurate to far below 1e-16.
 SMALL_ANGLE = 1e-4
@@ -24,8 +24,6 @@ def _series(x2, coefficients):
     return acc
 
 
-
-# ---- logarithm and exponential -----------------------------------------------------------------------
 def versor_log():
     k = KernelBuilder(
         "versor_log",
@@ -113,6 +111,6 @@ def versor_exp():
     sc = k.poly(sy["sinc_half"])
     w1, w2, w3 = (k.poly(sy[n]) for n in ("w1", "w2", "w3"))
     R = k.mv(ROTOR, [k.poly(sy["cos_half"]), -sc * w3, sc * w2, -sc * w1])
-    V = _translator(k, (sy["t1"], sy["t2"], sy["t3"])) * R * _dilator(k, sy["ch"], sy["sh"])
+    V = translator(k, (sy["t1"], sy["t2"], sy["t3"])) * R * dilator(k, sy["ch"], sy["sh"])
     k.output_multivector("V", V, VERSOR)
     return k.build()

@@ -5,11 +5,10 @@ from sympy import sqrt
 
 from . import algebra
 from .ir import CodegenError, KernelBuilder
-from .kernel_parts import PLANE, VERSOR, _euclid, _idempotent_versor
+from .kernel_parts import PLANE, VERSOR, euclid, idempotent_versor
 from .symbolic import MV, up
 
 
-# ---- planes, distances, meets, barycentric ---------------------------------------------------------
 def plane_from_normal_distance():
     k = KernelBuilder("plane_from_normal_distance",
                       "Dual plane n̂ + d e∞ (n normalised, d scaled to match) of {x : n·x = d}.")
@@ -42,7 +41,7 @@ def plane_from_points():
     P = -((o ^ U ^ W ^ inf).dual())
     if P["ei"] != 0:
         raise CodegenError("plane through the origin must have no e∞ part")
-    for sym, e in zip((n1, n2, n3), _euclid(k, P)):
+    for sym, e in zip((n1, n2, n3), euclid(k, P)):
         k.let(sym, e)
     k.let(inv, 1 / sqrt(n1 ** 2 + n2 ** 2 + n3 ** 2))
     k.output(["plane[e1]", "plane[e2]", "plane[e3]", "plane[e∞]"],
@@ -54,9 +53,9 @@ def plane_transform():
     k = KernelBuilder("plane_transform", "The plane moved by a versor: V π Ṽ, renormalised to a unit normal.")
     v, p = k.multivector("v", VERSOR), k.multivector("plane", PLANE)
     inv = k.intermediate("inv_len")[0]
-    V = _idempotent_versor(k, v)
+    V = idempotent_versor(k, v)
     moved = V * k.mv(PLANE, p) * V.reverse()
-    n = _euclid(k, moved)
+    n = euclid(k, moved)
     k.let(inv, 1 / sqrt(sum(c.as_expr() ** 2 for c in n)))
     k.output_multivector("plane", moved.grade(1), PLANE, scale=inv)
     return k.build()

@@ -2,13 +2,12 @@
 from __future__ import annotations
 
 from .ir import CodegenError, KernelBuilder
-from .kernel_parts import AFFINE_LABELS, VERSOR, _down, _euclid, _idempotent_versor
+from .kernel_parts import AFFINE_LABELS, VERSOR, down, euclid, idempotent_versor
 from .symbolic import up
 
 
-# ---- points: direct sandwich and the hoisted affine form ------------------------------------------
 def _sandwich_point(k, v, x):
-    V = _idempotent_versor(k, v)
+    V = idempotent_versor(k, v)
     return V * up(k.ring, [k.poly(c) for c in x]) * V.reverse()
 
 
@@ -16,7 +15,7 @@ def sandwich_versor_point():
     k = KernelBuilder("sandwich_versor_point",
                       "down(V up(x) Ṽ): the full sandwich on one point (use versor_to_affine for many).")
     v, x = k.multivector("v", VERSOR), k.array("x", 3)
-    k.output(["x'[0]", "x'[1]", "x'[2]"], _down(k, _sandwich_point(k, v, x)))
+    k.output(["x'[0]", "x'[1]", "x'[2]"], down(k, _sandwich_point(k, v, x)))
     return k.build()
 
 
@@ -32,7 +31,7 @@ def hoist_affine(k, X, x_syms):
     if any(any(mon[i] for i in idx) for mon in weight.monoms()):
         raise CodegenError(f"{k.name}: the point weight depends on the point; cannot hoist")
     rows = []
-    for c in _euclid(k, X):
+    for c in euclid(k, X):
         by_degree: dict[int, object] = {}
         for mon, coef in c.terms():
             degrees = [mon[i] for i in idx]

@@ -5,14 +5,14 @@ import sympy
 from sympy import Piecewise, cos, sin, sqrt
 
 from .ir import KernelBuilder
-from .kernel_parts import HALF, MOTOR, ROTOR, VERSOR, _dilator, _rotor_from_quaternion, _translator
+from .kernel_parts import HALF, MOTOR, ROTOR, VERSOR, dilator, rotor_from_quaternion, translator
 
 
 # ---- construction -------------------------------------------------------------------------------
 def versor_translator():
     k = KernelBuilder("versor_translator", "Translator T(t) = 1 − ½ t e∞ as a versor; t : (3,).")
     t = k.array("t", 3)
-    k.output_multivector("T", _translator(k, t), VERSOR)
+    k.output_multivector("T", translator(k, t), VERSOR)
     return k.build()
 
 
@@ -37,7 +37,7 @@ def versor_rotor_quaternion():
     q = k.array("q", 4)
     inv = k.intermediate("inv_len")[0]
     k.let(inv, 1 / sqrt(sum(c ** 2 for c in q)))
-    k.output_multivector("R", _rotor_from_quaternion(k, q), VERSOR, scale=inv)
+    k.output_multivector("R", rotor_from_quaternion(k, q), VERSOR, scale=inv)
     return k.build()
 
 
@@ -50,7 +50,7 @@ def versor_dilator():
     k.let(root, sqrt(s))
     k.let(ch, (s + 1) / (2 * root))
     k.let(sh, (s - 1) / (2 * root))
-    k.output_multivector("D", _dilator(k, ch, sh), VERSOR)
+    k.output_multivector("D", dilator(k, ch, sh), VERSOR)
     return k.build()
 
 
@@ -86,7 +86,7 @@ def versor_from_matrix():
         k.let(sym, value)
     k.let(ch, (s + 1) / (2 * sqrt(s)))
     k.let(sh, (s - 1) / (2 * sqrt(s)))
-    V = _translator(k, [M[0][3], M[1][3], M[2][3]]) * _rotor_from_quaternion(k, q) * _dilator(k, ch, sh)
+    V = translator(k, [M[0][3], M[1][3], M[2][3]]) * rotor_from_quaternion(k, q) * dilator(k, ch, sh)
     k.output_multivector("V", V, VERSOR)
     return k.build()
 
@@ -158,6 +158,6 @@ def versor_normalise():
     tinf = inf_part * R.reverse()                                      # = −½ λ (c − sh) t e∞
     for sym, b in zip((t1, t2, t3), ("e1i", "e2i", "e3i")):
         k.let(sym, -2 * tinf[b].as_expr() * lam_inv)
-    out = _translator(k, (t1, t2, t3)) * R * _dilator(k, ch, sh)
+    out = translator(k, (t1, t2, t3)) * R * dilator(k, ch, sh)
     k.output_multivector("V", out, VERSOR)
     return k.build()
