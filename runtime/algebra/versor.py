@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.checks import float_array
+from .._shared.jit import F1r, F2, F2r, precompiled
 from ..errors import InvalidInputError
 from ..generated import kernels as K
 from ..generated.layout import LOG_BLADES, LOG_SIZE, VERSOR_BLADES, VERSOR_SIZE
@@ -19,6 +20,22 @@ __all__ = ["VERSOR_BLADES", "LOG_BLADES", "identity", "translator", "rotor", "ro
            "dilator", "motor", "compose", "reverse", "inverse", "normalise", "apply", "to_matrix",
            "to_affine", "from_matrix", "log", "exp", "blend_linear", "blend_log", "to_clifford",
            "from_clifford", "is_versor"]
+
+# the generated kernels these functions call, with the argument types ``_rows`` gives them
+precompiled(K.versor_translator_batch, (F2r, F2), cost=0.3)
+precompiled(K.versor_rotor_batch, (F2r, F1r, F2), cost=0.2)
+precompiled(K.versor_rotor_quaternion_batch, (F2r, F2), cost=0.1)
+precompiled(K.versor_dilator_batch, (F1r, F2), cost=0.3)
+precompiled(K.gp_versor_versor_batch, (F2r, F2r, F2), cost=0.7)
+precompiled(K.versor_to_affine_batch, (F2r, F2), cost=0.4)
+precompiled(K.versor_residual_batch, (F2r, F2), cost=0.2)
+precompiled(K.reverse_versor_batch, (F2r, F2), cost=0.2)
+precompiled(K.versor_log_batch, (F2r, F2), cost=0.5)
+precompiled(K.versor_exp_batch, (F2r, F2), cost=0.4)
+# compiled inside the batch kernels above; listed so that one process owns each cache index
+precompiled(K.reverse_versor, (F1r,), cost=0.2)
+precompiled(K.versor_log, (F1r,), cost=0.4)
+precompiled(K.versor_exp, (F1r,), cost=0.2)
 
 VERSOR_TOLERANCE = 1e-6        # relative residual of V Ṽ beyond which an array is not a versor
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ..algebra import versor
 from .._shared.checks import float_array
@@ -21,6 +20,7 @@ from ..errors import InvalidInputError
 from ..generated.kernels import gp_versor_versor, versor_to_affine
 from .rig import Channel, Clip, Rig, Skeleton
 from .skinning import skin_affine
+from .._shared.jit import helper, kernel, B1, F2, F3, I1
 
 FRAMES = ("parent", "local")
 
@@ -227,7 +227,7 @@ def _shear_nodes(skeleton: Skeleton) -> list:
     return out
 
 
-@njit(cache=True, error_model="numpy", nogil=True, no_cpython_wrapper=True)
+@helper
 def _compose_affine(a, b):
     """Row-major 3x4 a ∘ 3x4 b (both as (12,) arrays), as (12,)."""
     out = np.empty(12)
@@ -240,7 +240,7 @@ def _compose_affine(a, b):
     return out
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@kernel((I1, F2, F3, B1, I1, F2, F2), cost=1.8)
 def _bone_affines(parents, versors, matrices, similar, bone_nodes, ibm, out):
     """Globals along the hierarchy (versor products while every ancestor is a similarity, exact
     matrices below any that is not), then each bone's 3x4 map G @ IBM."""

@@ -13,10 +13,13 @@ from .._shared.checks import float_array, index_array
 from ..errors import InvalidInputError
 from ..generated import kernels as K
 from ..generated.skinning import skin_blend, skin_blend_parallel
+from .._shared.jit import F2, I2, precompiled
 from ..algebra.versor import _versor_arg
 
 # numba's thread pool costs ~10 ms per parallel call on a 2-core machine; below this many vertices
 # the serial loop wins (benchmarks/bench_skinning.py measures the crossover).
+precompiled(skin_blend, (F2, I2, F2, F2, F2), cost=0.4)
+
 PARALLEL_THRESHOLD = 100_000
 
 

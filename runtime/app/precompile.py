@@ -9,7 +9,8 @@ Afterwards every first call only loads from the cache.
 
 ``KERNELS`` lists each kernel that the Python side calls, with the argument types that the
 runtime's own calls give it (arrays it made or converted itself; a kernel called with other types,
-say read-only arrays of a caller, is compiled at that call as before). Kernels called only from
+say read-only arrays of a caller, is compiled at that call as before), recorded where each kernel
+is defined (``cgaskin._shared.jit``). Kernels called only from
 other kernels are compiled with them (and without a Python wrapper: ``no_cpython_wrapper``). A test
 runs skinning, cuts and tears after ``precompile()`` and fails if any of them still compiles a
 kernel, so the list cannot fall behind the code.
@@ -23,68 +24,15 @@ import subprocess
 import sys
 import time
 
-from numba import types
-
+from .._shared.jit import SIGNATURES
 from ..errors import InvalidInputError
 
 __all__ = ["precompile", "KERNELS"]
 
-# argument types: C-contiguous arrays by dtype and rank ("r": read-only), and scalars
-F1, F2, F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
-I1, I2 = types.int64[::1], types.int64[:, ::1]
-S1, U2 = types.int8[::1], types.uint64[:, ::1]
-B1 = types.boolean[::1]
-F1r = types.Array(types.float64, 1, "C", readonly=True)
-F2r = types.Array(types.float64, 2, "C", readonly=True)
-F2ar = types.Array(types.float64, 2, "A", readonly=True)       # np.broadcast_to of one row
-i8, f8, b1 = types.int64, types.float64, types.boolean
-
-#: (module, kernel, argument types, relative compile cost: seconds, cold, on a 2-core reference
-#: machine; used only to share the work out evenly)
-KERNELS = [
-    # skinning and poses
-    ("cgaskin.generated.skinning", "skin_blend", (F2, I2, F2, F2, F2), 0.4),
-    ("cgaskin.animation.pose", "_bone_affines", (I1, F2, F3, B1, I1, F2, F2), 1.8),
-    ("cgaskin.generated.kernels", "versor_translator_batch", (F2r, F2), 0.3),
-    ("cgaskin.generated.kernels", "versor_rotor_batch", (F2r, F1r, F2), 0.2),
-    ("cgaskin.generated.kernels", "versor_rotor_quaternion_batch", (F2r, F2), 0.1),
-    ("cgaskin.generated.kernels", "versor_dilator_batch", (F1r, F2), 0.3),
-    ("cgaskin.generated.kernels", "gp_versor_versor_batch", (F2r, F2r, F2), 0.7),
-    ("cgaskin.generated.kernels", "versor_to_affine_batch", (F2r, F2), 0.4),
-    ("cgaskin.generated.kernels", "versor_residual_batch", (F2r, F2), 0.2),
-    ("cgaskin.generated.kernels", "reverse_versor_batch", (F2r, F2), 0.2),
-    ("cgaskin.generated.kernels", "reverse_versor", (F1r,), 0.2),
-    ("cgaskin.generated.kernels", "versor_log_batch", (F2r, F2), 0.5),
-    ("cgaskin.generated.kernels", "versor_log", (F1r,), 0.4),
-    ("cgaskin.generated.kernels", "versor_exp_batch", (F2r, F2), 0.4),
-    ("cgaskin.generated.kernels", "versor_exp", (F1r,), 0.2),
-    # welded topology, BVH, weights
-    ("cgaskin.surgery.topology", "_weld_positions", (U2,), 0.4),
-    ("cgaskin.surgery.topology", "_unique_pairs", (I1, I1), 0.7),
-    ("cgaskin.surgery.topology", "_corner_pairs", (I2, I1), 0.2),
-    ("cgaskin.surgery.topology", "incidence", (I2, i8), 0.3),
-    ("cgaskin.surgery.bvh", "_build", (F2, I2, i8, f8), 1.5),
-    ("cgaskin.surgery.new_vertices", "blend_weight_rows", (I2, F2, I2, F2), 0.6),
-    # cut
-    ("cgaskin.generated.kernels", "plane_from_normal_distance", (F1, f8), 0.1),
-    ("cgaskin.generated.kernels", "point_plane_distance_batch", (F2ar, F2, F2), 0.3),
-    ("cgaskin.surgery.cut.split", "_classify", (F1, F2, I1, f8), 0.4),
-    ("cgaskin.surgery.cut.split", "_split", (F1, F2, I2, I2, I1, I1, S1, I2, I2), 2.1),
-    ("cgaskin.surgery.new_vertices", "_place_in_rest", (F2, F2, I2, F2, F2), 1.2),
-    ("cgaskin.surgery.cut.assemble", "_lerp_rows", (F2, I1, I1, F1, b1), 0.3),
-    ("cgaskin.surgery.cut.assemble", "_assemble", (F2, I1, I1, F2), 0.3),
-    ("cgaskin.surgery.cut.assemble", "_assemble", (I2, I1, I1, I2), 0.2),
-    ("cgaskin.surgery.cut.cap", "_ear_clip", (F2, I1), 0.5),
-    # tear
-    ("cgaskin.surgery.tear.locate", "_ends", (F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1,
-                               I1, I1, f8), 6.0),
-    ("cgaskin.surgery.tear.walk", "_walk", (F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), 2.1),
-    ("cgaskin.surgery.tear.retriangulate", "_retriangulate", (I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), 4.4),
-    ("cgaskin.surgery.tear.slit", "_torn_faces", (I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), 1.0),
-    ("cgaskin.surgery.tear.slit", "_open_slit", (I2, I2, I1, F2, F2, F1, I1), 2.9),
-    ("cgaskin.surgery.tear.vertex_data", "_vertex_data", (F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), 3.4),
-    ("cgaskin.surgery.new_vertices", "_rows", (F2, i8, I2, F2, I1, b1), 0.3),
-]
+#: every kernel the Python side calls, with the argument types of the runtime's own calls: the
+#: ``Signature`` records that ``cgaskin._shared.jit`` collects where each kernel is defined (importing
+#: ``cgaskin`` imports every module that defines one)
+KERNELS = SIGNATURES
 
 
 def _dispatcher(index: int):

@@ -21,10 +21,10 @@ from __future__ import annotations
 import weakref
 
 import numpy as np
-from numba import njit
 
 from .._shared.checks import float_array, index_array
 from ..errors import InvalidInputError
+from .._shared.jit import helper, kernel, F2, I2, f8, i8
 
 __all__ = ["TriangleBVH", "triangle_bvh", "LEAF_SIZE"]
 
@@ -36,7 +36,7 @@ BOX_PADDING = 1e-9
 
 
 # ---- build --------------------------------------------------------------------------------------
-@njit(cache=True, nogil=True)
+@kernel((F2, I2, i8, f8), cost=1.5)
 def _build(positions, faces, leaf_size, padding):
     """Build the hierarchy.
 
@@ -148,7 +148,7 @@ def _build(positions, faces, leaf_size, padding):
 
 
 # ---- queries ------------------------------------------------------------------------------------
-@njit(cache=True, nogil=True, no_cpython_wrapper=True)
+@helper
 def _segment_box(lo, hi, a, d, t_max):
     """Whether a + t d, t in [0, t_max], meets the box [lo, hi]; returns (hit, t_entry)."""
     t0, t1 = 0.0, t_max
@@ -169,7 +169,7 @@ def _segment_box(lo, hi, a, d, t_max):
     return True, t0
 
 
-@njit(cache=True, nogil=True, no_cpython_wrapper=True)
+@helper
 def _watertight(tri, i, a, kx, ky, kz, sx, sy, sz):
     """Woop–Benthin–Wald test of the segment a + t d (sheared frame kx, ky, kz, sx, sy, sz) against
     triangle ``i`` of ``tri``; two-sided. Returns t (may lie outside [0, 1]) or NaN for a miss."""
@@ -196,7 +196,7 @@ def _watertight(tri, i, a, kx, ky, kz, sx, sy, sz):
     return (u * sz * az + v * sz * bz + w * sz * cz) / det
 
 
-@njit(cache=True, nogil=True, no_cpython_wrapper=True)
+@helper
 def _shear(d):
     """The watertight test's per-segment constants: the dominant axis kz and the shear."""
     kz = 0
@@ -211,7 +211,7 @@ def _shear(d):
     return kx, ky, kz, d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]
 
 
-@njit(cache=True, nogil=True)
+@kernel()
 def _first_hit(node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri, a, b):
     """Smallest t in [0, 1] where segment a -> b meets a triangle; returns (face, t), face -1 if none."""
     d = b - a
@@ -256,7 +256,7 @@ def _first_hit(node_lo, node_hi, node_left, node_right, node_start, node_count, 
     return order[best_i], best_t
 
 
-@njit(cache=True, nogil=True)
+@kernel()
 def _all_hits(node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri, a, b):
     """Every crossing of segment a -> b with a triangle: (faces (k,), t (k,)), unsorted."""
     d = b - a

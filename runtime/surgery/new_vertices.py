@@ -3,13 +3,13 @@
 import math
 
 import numpy as np
-from numba import njit
 
 from ..algebra.vec3 import _copy_row
 from ..generated.kernels import affine_point
+from .._shared.jit import helper, kernel, F2, I1, I2, b1, i8
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((I2, F2, I2, F2), cost=0.6)
 def blend_weight_rows(src, coef, joints, weights):
     """Weights of interpolated vertices: Σ_r coef[i, r] · (row src[i, r]) over the union of the rows'
     bones, the 4 largest kept and renormalised, sorted by decreasing weight; unused slots bone 0 with
@@ -58,7 +58,7 @@ def blend_weight_rows(src, coef, joints, weights):
     return out_j, out_w
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _blended(joints, weights, affines, i):
     """(12,) the blended row-major 3x4 map Σ_k w_k A[joints[i, k]] of vertex i."""
     out = np.zeros(12)
@@ -71,7 +71,7 @@ def _blended(joints, weights, affines, i):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _solve_linear(m, r):
     """x with L x = r for the linear part L of a row-major 3x4 map ``m`` (Cramer's rule); NaN if L
     is singular."""
@@ -90,7 +90,7 @@ def _solve_linear(m, r):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _to_rest(target, guess, blend):
     """The rest position x whose blended map ``blend`` (12,) puts it at ``target`` (3,): solved
     relative to ``guess`` (the interpolated rest position, close to the answer) and refined once on
@@ -109,7 +109,7 @@ def _to_rest(target, guess, blend):
     return x, math.sqrt((target[0] - y[0]) ** 2 + (target[1] - y[1]) ** 2 + (target[2] - y[2]) ** 2)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, i8, I2, F2, I1, b1), cost=0.3)
 def _rows(out, n, src, coef, twin_src, unit):
     """An attribute extended to the torn mesh, in place: ``out`` (n + v + t, c) float64 holds the
     original rows in its first n; the new vertices' rows interpolate their sources (Σ_r coef[i, r] ·
@@ -133,7 +133,7 @@ def _rows(out, n, src, coef, twin_src, unit):
         _copy_row(out, n + v + i, out, twin_src[i])
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _solve3(m, r):
     """x with L x = r for the linear part L (3x3) of a row-major 3x4 map ``m`` (12,), by Cramer's rule;
     returns (x0, x1, x2, det)."""
@@ -153,7 +153,7 @@ def _solve3(m, r):
     return x0, x1, x2, det
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, F2, I2, F2, F2), cost=1.2)
 def _place_in_rest(target, guess, joints, weights, affines):
     """Rest positions x with Σ_k w_k A_k(x) = target for each new vertex (its own blended 3x4 map).
 

@@ -29,9 +29,9 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ..errors import InvalidInputError
+from .._shared.jit import helper, kernel, I1, I2, U2, i8
 
 __all__ = ["Topology", "topology", "rig_topology", "rig_cached", "clear_topology_cache", "directed_loops"]
 
@@ -43,7 +43,7 @@ _S33 = np.uint64(33)
 _ROT = np.uint64(0x9E3779B97F4A7C15)
 
 
-@njit(cache=True, nogil=True, no_cpython_wrapper=True)
+@helper
 def _mix(h):
     """The 64-bit finaliser of MurmurHash3: every input bit affects every output bit."""
     h ^= h >> _S33
@@ -54,7 +54,7 @@ def _mix(h):
     return h
 
 
-@njit(cache=True, nogil=True, no_cpython_wrapper=True)
+@helper
 def _table_size(n):
     size = 16
     while size < 2 * n:
@@ -62,7 +62,7 @@ def _table_size(n):
     return size
 
 
-@njit(cache=True, nogil=True)
+@kernel((U2,), cost=0.4)
 def _weld_positions(bits):
     """Welded ids of rows of ``bits`` (n, 3) uint64 (float64 bit patterns, -0.0 already made +0.0).
 
@@ -94,7 +94,7 @@ def _weld_positions(bits):
     return welded, representative[:count].copy()
 
 
-@njit(cache=True, nogil=True)
+@kernel((I1, I1), cost=0.7)
 def _unique_pairs(a, b):
     """Ids of the unordered pairs {a[i], b[i]} (non-negative int64).
 
@@ -156,7 +156,7 @@ def _unique_pairs(a, b):
     return ids, pairs[:count].copy()
 
 
-@njit(cache=True, nogil=True)
+@kernel((I2, i8), cost=0.3)
 def incidence(table, n):
     """CSR incidence lists item -> (face, corner) of a (m, 3) per-face table of items < n (the
     faces' vertices, or their edges): offsets (n + 1,), faces (3m,) in increasing order within each
@@ -180,7 +180,7 @@ def incidence(table, n):
     return offsets, faces, corners
 
 
-@njit(cache=True, nogil=True)
+@kernel((I2, I1), cost=0.2)
 def _corner_pairs(faces, vertex_map):
     """Endpoints (3m,) of every corner edge after mapping vertices through ``vertex_map``."""
     m = faces.shape[0]
@@ -193,7 +193,7 @@ def _corner_pairs(faces, vertex_map):
     return a, b
 
 
-@njit(cache=True, nogil=True)
+@kernel()
 def _find_pairs(pairs, a, b):
     """Row of ``pairs`` (u, 2), sorted within rows, holding each {a[i], b[i]}, or -1: one pass of
     ``_unique_pairs`` over the table and the queries together."""

@@ -51,6 +51,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ...generated.kernels import plane_from_normal_distance
+from ..._shared.jit import F1, f8, precompiled
 from ...animation.pose import check_pose
 from ...animation.rig import Rig
 from ...animation.skinning import skin_affine
@@ -63,6 +64,8 @@ from .split import _classify, _split
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
            "PLACEMENT_TOLERANCE"]
+
+precompiled(plane_from_normal_distance, (F1, f8), cost=0.1)
 
 #: |d| <= this times the bounding-box diagonal: the vertex is on the plane (in both halves)
 ON_PLANE_TOLERANCE = 1e-10

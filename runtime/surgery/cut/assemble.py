@@ -2,10 +2,10 @@
 import math
 
 import numpy as np
-from numba import njit
+from ..._shared.jit import kernel, F1, F2, I1, I2, b1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, I1, I1, F1, b1), cost=0.3)
 def _lerp_rows(values, lo, hi, t, unit):
     """Rows (k, c) of new vertices: (1 − t) values[lo] + t values[hi]; renormalised when ``unit``
     (normals), a zero result staying zero."""
@@ -25,7 +25,7 @@ def _lerp_rows(values, lo, hi, t, unit):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, I1, I1, F2), (I2, I1, I1, I2), cost=0.3)
 def _assemble(values, pos_src, neg_src, extra):
     """Both halves' rows of one per-vertex array: values[src] followed by ``extra`` (the new vertices)."""
     c = values.shape[1]

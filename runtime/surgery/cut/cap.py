@@ -1,20 +1,22 @@
 """Step 7 of a cut: planar caps over the loops the cut opened (ear clipping, holes bridged in)."""
 import numpy as np
-from numba import njit
 
 from ...animation.rig import Rig
 from ...generated.kernels import point_plane_distance_batch
 from ..topology import Topology, directed_loops, topology
 from .result import CAP_VERTEX
+from ..._shared.jit import F2, F2ar, I1, helper, kernel, precompiled
+
+precompiled(point_plane_distance_batch, (F2ar, F2, F2), cost=0.3)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _orient(ax, ay, bx, by, cx, cy):
     """Twice the signed area of triangle abc (> 0: counter-clockwise)."""
     return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _is_ear(xy, ids, nxt, p, i, q):
     """Whether corner i (between p and q) of the remaining polygon can be clipped: strictly convex, and
     no other remaining vertex inside or on the triangle (vertices that repeat one of its three, as
@@ -35,7 +37,7 @@ def _is_ear(xy, ids, nxt, p, i, q):
     return True
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, I1), cost=0.5)
 def _ear_clip(xy, ids):
     """Triangulate a counter-clockwise simple polygon (possibly weakly simple: holes bridged in, with
     repeated vertices) by ear clipping.

@@ -3,12 +3,12 @@ vertices on crossed edges."""
 import math
 
 import numpy as np
-from numba import njit
 
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
+from ..._shared.jit import helper, kernel, F1, F2, I1, I2, S1, f8
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F1, F2, I1, f8), cost=0.4)
 def _classify(plane, positions, representative, rel_tol):
     """Signed distance and side of every welded vertex.
 
@@ -35,14 +35,14 @@ def _classify(plane, positions, representative, rel_tol):
     return sign, tol, diag
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _put(out, row, a, b, c):
     out[row, 0] = a
     out[row, 1] = b
     out[row, 2] = c
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F1, F2, I2, I2, I1, I1, S1, I2, I2), cost=2.1)
 def _split(plane, positions, faces, wfaces, welded, representative, sign, face_vertex_edges,
            vertex_edges):
     """Classify faces, create the vertices on crossed edges, and write both halves' faces.

@@ -3,12 +3,12 @@ and the side of every welded vertex."""
 import math
 
 import numpy as np
-from numba import njit
 
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
 from ..bvh import _first_hit
 from .nodes import EDGE, FACE, VERTEX
 from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
+from ..._shared.jit import helper, kernel, F1, F2, I1, I2, f8
 
 
 # status codes of ``_ends``
@@ -19,7 +19,7 @@ OK, FROM_MISSES, TO_MISSES, NO_MOTION, NO_PLANE = 0, 1, 2, 3, 4
 MIN_SINE = 1e-6
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@helper
 def _classify(plane, welded_positions, tol, cls):
     """Side of every welded vertex: +1 / -1, or 0 within ``tol`` of the plane (signed distance up(x)·π
     through the generated kernel). Writes ``cls`` (w,) int8."""
@@ -28,7 +28,7 @@ def _classify(plane, welded_positions, tol, cls):
         cls[w] = 0 if abs(d) <= tol else (1 if d > 0.0 else -1)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _hit_node(face, hit, wfaces, wpos, tol):
     """(kind, id, point) of a scalpel hit: the nearest corner of the hit face when within ``tol``
     (VERTEX, welded id, its position), else (FACE, face, hit)."""
@@ -42,7 +42,7 @@ def _hit_node(face, hit, wfaces, wpos, tol):
     return FACE, face, hit.copy()
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plane, tol):
     """A point inside a face within ``tol`` of where the plane crosses one of the face's edges is that
     crossing (an EDGE node), so that a scalpel through an edge splits both faces on it instead of
@@ -60,7 +60,7 @@ def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plan
     return kind, ident, point
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _boundary_hit(a, b, t_max, boundary, wpos, tol):
     """The first boundary vertex within ``tol`` of segment a -> b before parameter ``t_max``:
     (welded vertex, t) or (-1, t_max). A slit opened wide ends in a wedge-shaped gap whose tip is the
@@ -78,7 +78,7 @@ def _boundary_hit(a, b, t_max, boundary, wpos, tol):
     return best, best_t
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1, I1, I1, f8), cost=6.0)
 def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positions, faces, wpos,
           wfaces, face_edges, edges, vf_offsets, vf_faces, boundary, tol):
     """Steps 2-3: where the blade meets the skin at both times, the tear plane, and the side of

@@ -3,14 +3,14 @@ create the new vertices (edge crossings and points inside faces)."""
 import math
 
 import numpy as np
-from numba import njit
 
 from ...generated.kernels import barycentric
 from .nodes import EDGE, FACE, FACE_CARRIER, VERTEX
 from ...algebra.vec3 import _distance
+from ..._shared.jit import helper, kernel, F2, I1, I2, i8
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _position(code, f, wfaces, wpos, path_float):
     """Position of a polygon element: corner k of face f (code -1-k) or path node ``code``."""
     if code < 0:
@@ -18,7 +18,7 @@ def _position(code, f, wfaces, wpos, path_float):
     return path_float[code, 1:4]
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
     """Triangulate a convex polygon (elements ``sub[:count]`` in the face's winding) whose ``flat``
     elements lie inside one of its sides (edge crossings that are not chord ends): a fan from a flat
@@ -43,7 +43,7 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
     return n_out
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
     """Split face ``f`` so that the path's pieces in it become edges.
 
@@ -142,7 +142,7 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
 ON_EDGE = 1e-9
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _insert_node(out, n_out, t, e, on_edge, k):
     """Insert element ``e`` into triangle row ``t`` of ``out[:n_out]``, keeping the winding: three
     triangles around it, or, when ``on_edge`` (e on the edge opposite corner k), two in ``t`` and two
@@ -169,7 +169,7 @@ def _insert_node(out, n_out, t, e, on_edge, k):
     return n_out + 2
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _add_unique(values, count, value):
     """Append ``value`` to ``values[:count]`` unless it is there (short lists); grows the array."""
     for q in range(count):
@@ -181,7 +181,7 @@ def _add_unique(values, count, value):
     return values, count + 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _segment_coordinates(a, b, c, p):
     """Coordinates (λa, λb, λc) of p on the longest side of a triangle of zero area (its nearest
     point there; all weight on a when the three corners coincide)."""
@@ -202,7 +202,7 @@ def _segment_coordinates(a, b, c, p):
     return coords[0], coords[1], coords[2]
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges, wpos, new_node, new_src,
                 new_coef, n_new):
     """The new vertex of path node ``code`` as face ``f`` uses it: found among the first ``n_new`` or
@@ -242,7 +242,7 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
     return n_new, n_new + 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), cost=4.4)
 def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_offsets, ef_faces, wpos,
                    n_vertices):
     """Split every face the path crosses (and every face on a crossed edge) and create the new vertices.

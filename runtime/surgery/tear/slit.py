@@ -1,13 +1,13 @@
 """Step 6 of a tear stroke: the torn face list, and the far side's own copies of the path vertices
 (the slit opens)."""
 import numpy as np
-from numba import njit
 
 from ...generated.kernels import point_plane_distance
 from .nodes import VERTEX
+from ..._shared.jit import helper, kernel, F1, F2, I1, I2, i8
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _find(parent, i):
     while parent[i] != i:
         parent[i] = parent[parent[i]]
@@ -15,7 +15,7 @@ def _find(parent, i):
     return i
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _linked(wf, fa, ka, fb, kb, before, after):
     """Whether faces fa and fb (node at corners ka, kb) share an edge from the node that is not a
     path edge (to the previous node ``before`` or the next ``after``; -1 when there is none)."""
@@ -28,7 +28,7 @@ def _linked(wf, fa, ka, fb, kb, before, after):
     return False
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _append_row(rows, count, a, b, c, d):
     """rows[count, :4] = (a, b, c, d) (columns beyond the array's width dropped), growing the
     array when full; returns (rows, count + 1)."""
@@ -38,7 +38,7 @@ def _append_row(rows, count, a, b, c, d):
     return rows, count + 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((I2, I2, I1, F2, F2, F1, I1), cost=2.9)
 def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
     """Give the faces on the far side of the path their own copies of the path's vertices.
 
@@ -206,7 +206,7 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
     return split, twins[:n_twin, :3].copy(), moved[:n_moved].copy(), side_a, side_b
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), cost=1.0)
 def _torn_faces(path_int, path_float, faces, welded, wfaces, affected, tris, new_node, vf_offsets, vf_faces,
                 n_welded):
     """The faces of the torn mesh, with what ``_open_slit`` needs.

@@ -1,13 +1,13 @@
 """Step 7 of a tear stroke: the vertex arrays of the torn mesh (new vertices, twins, labels,
 opening, rest placement in a pose)."""
 import numpy as np
-from numba import njit
 
 from ..new_vertices import _blended, _solve_linear, _to_rest, blend_weight_rows
 from ...algebra.vec3 import _copy_row, _set_row
+from ..._shared.jit import kernel, F1, F2, I1, I2, b1, f8, i8
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), cost=3.4)
 def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, new_node, new_src, new_coef, twins, moved, opening,
                  normal, affines, posed):
     """Step 7 and the vertex arrays of the torn mesh: originals, new vertices, twins.

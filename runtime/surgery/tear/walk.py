@@ -2,13 +2,13 @@
 import math
 
 import numpy as np
-from numba import njit
 
 from ...generated.kernels import segment_plane
 from .nodes import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER, VERTEX
+from ..._shared.jit import helper, kernel, F1, F2, I1, I2, S1, i8
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _elements(g, wfaces, face_edges, cls, kinds, ids):
     """Where the plane meets face ``g``'s boundary: its corners on the plane (VERTEX, welded id) and
     its edges whose ends lie on opposite sides (EDGE, edge id). Returns how many (<= 3)."""
@@ -25,7 +25,7 @@ def _elements(g, wfaces, face_edges, cls, kinds, ids):
     return count
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target):
     """Append a node of the search tree; its length is its parent's plus the step."""
     ni[n, 0], ni[n, 1], ni[n, 2], ni[n, 3], ni[n, 4] = kind, ident, parent, carrier_kind, carrier
@@ -36,7 +36,7 @@ def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carr
     return n + 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True)
+@helper
 def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges,
                   t_kind, t_id, vertex_used):
     """Append the node for a boundary element (a vertex on the plane, or the crossing of an edge,
@@ -55,7 +55,7 @@ def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier,
     return _push(ni, nf, target, n, EDGE, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel((F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), cost=2.1)
 def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces, cls, plane,
           s_kind, s_id, s_pos, t_kind, t_id, t_pos):
     """Follow the plane's section of the surface from the start node to the target node.

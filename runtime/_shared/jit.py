@@ -1,0 +1,72 @@
+"""The one jit wrapper of the runtime, and the record of what ``cgaskin.precompile`` compiles.
+
+Every compiled function is either a ``kernel`` (called from Python) or a ``helper`` (called only from
+other compiled functions), each with one fixed set of options:
+
+* ``cache=True``: machine code is cached beside the source, so only a fresh install compiles;
+* ``nogil=True``: callers may run kernels in threads;
+* ``error_model="numpy"``: division by zero gives inf/NaN like numpy (the kernels check for it)
+  instead of raising from compiled code;
+* helpers add ``no_cpython_wrapper=True``: numba builds no Python entry point for them, which
+  shortens a cold start by about a tenth.
+
+A kernel lists the argument types the runtime's own calls give it, where it is defined
+(``@kernel((F2, I1), cost=0.4)``); generated kernels that the runtime calls are recorded where they
+are called (``precompiled(K.some_batch, (F2r, F2), cost=0.3)``). ``SIGNATURES`` collects them as the
+modules are imported; ``cgaskin.precompile`` compiles the ones numba's cache lacks, on every core.
+``cost`` is the seconds one signature takes to compile cold on a 2-core machine, used only to share
+the work out evenly.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from numba import njit, types
+
+__all__ = ["kernel", "helper", "precompiled", "SIGNATURES", "Signature"]
+
+_OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+# argument types: C-contiguous arrays by dtype and rank ("r": read-only), and scalars
+F1, F2, F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+I1, I2 = types.int64[::1], types.int64[:, ::1]
+S1, U2 = types.int8[::1], types.uint64[:, ::1]
+B1 = types.boolean[::1]
+F1r = types.Array(types.float64, 1, "C", readonly=True)
+F2r = types.Array(types.float64, 2, "C", readonly=True)
+F2ar = types.Array(types.float64, 2, "A", readonly=True)       # np.broadcast_to of one row
+i8, f8, b1 = types.int64, types.float64, types.boolean
+
+
+class Signature(NamedTuple):
+    """One compiled variant that precompile makes: ``module.name`` for ``argtypes``."""
+
+    module: str
+    name: str
+    argtypes: tuple
+    cost: float
+
+
+#: every (kernel, argument types) that the runtime calls from Python, in import order
+SIGNATURES: list = []
+
+
+def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3):
+    """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it."""
+    for argtypes in signatures:
+        SIGNATURES.append(Signature(dispatcher.py_func.__module__, dispatcher.__name__, tuple(argtypes),
+                                    cost))
+    return dispatcher
+
+
+def kernel(*signatures: tuple, cost: float = 0.3):
+    """Compile a function that Python calls; ``signatures`` are the argument types of the runtime's
+    own calls (precompiled), ``cost`` the cold compile seconds of each."""
+    def wrap(function):
+        return precompiled(njit(**_OPTIONS)(function), *signatures, cost=cost)
+    return wrap
+
+
+def helper(function):
+    """Compile a function that only other compiled functions call (no Python entry point)."""
+    return njit(**_OPTIONS, no_cpython_wrapper=True)(function)
