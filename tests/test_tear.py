@@ -251,7 +251,7 @@ def run_random_stroke(name, rig, pose, data, opening=0.0):
         status, _, _, _, _, plane, _ = _ends(
             *surf.bvh._arrays, scalpel_from[0], scalpel_from[1], scalpel_to[0], scalpel_to[1],
             surf.positions, np.asarray(rig.faces), surf.welded_positions, topo.faces, topo.face_edges,
-            topo.edges, surf.vf_offsets, surf.vf_faces, surf.boundary, SNAP_TOLERANCE * surf.diagonal)
+            topo.edges, surf.vf_offsets, surf.vf_faces, surf.boundary, SNAP_TOLERANCE * surf.diagonal, 1e-6)
         assert section_separates(rig, plane, (scalpel_from, scalpel_to), pose) in (True, None)
         return None
     for before, after in zip(original, (rig.vertices, rig.faces, rig.joints, rig.weights)):

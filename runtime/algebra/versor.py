@@ -13,6 +13,7 @@ import numpy as np
 from .._shared.checks import float_array
 from .._shared.jit import F1r, F2, F2r, precompiled
 from ..errors import InvalidInputError
+from ..tolerances import tol
 from ..generated import kernels as K
 from ..generated.layout import LOG_BLADES, LOG_SIZE, VERSOR_BLADES, VERSOR_SIZE
 
@@ -37,7 +38,7 @@ precompiled(K.reverse_versor, (F1r,), cost=0.2)
 precompiled(K.versor_log, (F1r,), cost=0.4)
 precompiled(K.versor_exp, (F1r,), cost=0.2)
 
-VERSOR_TOLERANCE = 1e-6        # relative residual of V Ṽ beyond which an array is not a versor
+VERSOR_TOLERANCE = tol.versor        # relative residual of V Ṽ beyond which an array is not a versor
 
 
 def _rows(kernel_batch, n_out, *arrays):

@@ -17,6 +17,7 @@ from .._shared.checks import float_array
 from ..algebra.transforms import matrix_to_trs, trs_matrix
 from .clip import sample_clip
 from ..errors import InvalidInputError
+from ..tolerances import tol
 from ..generated.kernels import gp_versor_versor, versor_to_affine
 from .rig import Channel, Clip, Rig, Skeleton
 from .skinning import skin_affine
@@ -199,13 +200,13 @@ def clip_from_poses(name: str, times, poses, interpolation: str = "LINEAR") -> C
     local = np.stack([pose.matrices for pose in poses])                 # (k, j, 4, 4)
     rest = Pose.rest(skeleton).matrices
     size = np.maximum(1.0, np.abs(local).max(axis=(0, 2, 3)))
-    changed = np.abs(local - rest).max(axis=(0, 2, 3)) > 1e-12 * size
+    changed = np.abs(local - rest).max(axis=(0, 2, 3)) > tol.pose_change * size
     channels = []
     for node in np.flatnonzero(changed):
         trs = [matrix_to_trs(m) for m in local[:, node]]
         t, q, s = (np.array(column) for column in zip(*trs))
         rebuilt = trs_matrix(t, q, s)
-        bad = np.abs(rebuilt - local[:, node]).max(axis=(1, 2)) > 1e-9 * size[node]
+        bad = np.abs(rebuilt - local[:, node]).max(axis=(1, 2)) > tol.trs_rebuild * size[node]
         if bad.any():
             raise InvalidInputError(f"poses[{int(np.argmax(bad))}]: node {skeleton.names[node]!r} has a "
                                     f"sheared transform, which an animation channel cannot hold")
@@ -223,7 +224,7 @@ def _shear_nodes(skeleton: Skeleton) -> list:
     trs = trs_matrix(skeleton.rest_translations, skeleton.rest_rotations, skeleton.rest_scales)
     out = []
     for m, exact in zip(trs, skeleton.rest_matrices):
-        out.append(None if np.allclose(m, exact, rtol=0, atol=1e-12 * max(1.0, np.abs(exact).max())) else exact)
+        out.append(None if np.allclose(m, exact, rtol=0, atol=tol.trs_exact * max(1.0, np.abs(exact).max())) else exact)
     return out
 
 

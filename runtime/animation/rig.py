@@ -20,6 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..tolerances import tol
 
 INTERPOLATIONS = ("STEP", "LINEAR", "CUBICSPLINE")
 CHANNEL_PATHS = {"translation": 3, "rotation": 4, "scale": 3}
@@ -91,7 +92,7 @@ class Skeleton:
     def inverse_bind_rows(self) -> np.ndarray:
         """(b, 12) C-contiguous top 3x4 rows of the inverse bind matrices (checked affine once)."""
         ibm = np.asarray(self.inverse_bind, dtype=np.float64)
-        if not np.allclose(ibm[:, 3, :], [0, 0, 0, 1], atol=1e-6):
+        if not np.allclose(ibm[:, 3, :], [0, 0, 0, 1], atol=tol.affine_row):
             raise InvalidInputError("inverse bind matrices must be affine (last row 0 0 0 1)")
         return np.ascontiguousarray(ibm[:, :3, :].reshape(-1, 12))
 

@@ -19,16 +19,17 @@ import warnings
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..tolerances import tol
 
 MAX_INFLUENCES = 4
 #: Rows whose sum is off 1 by more than this are reported (a warning) before being renormalised.
 #: float32 files (every glTF) round each weight to ~6e-8 relative, so their rows sum to 1 only
 #: within ~2.4e-7: that much is storage noise, renormalised silently.
-WEIGHT_SUM_TOLERANCE = 1e-6
+WEIGHT_SUM_TOLERANCE = tol.weight_sum
 #: Rows within this of 1 are left bit for bit as they are. One float64 division by the row sum
 #: lands within ~8e-16 (4 roundings and 3 additions of 2^-53 each), so a second ``check_mesh`` never
 #: changes a row again: the function is idempotent, which save -> load round trips rely on.
-EXACT_SUM_TOLERANCE = 2e-15
+EXACT_SUM_TOLERANCE = tol.exact_weight_sum
 
 
 def _prefix(source: str) -> str:

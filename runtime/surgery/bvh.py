@@ -24,6 +24,7 @@ import numpy as np
 
 from .._shared.checks import float_array, index_array
 from ..errors import InvalidInputError
+from ..tolerances import tol
 from .._shared.jit import helper, kernel, F2, I2, f8, i8
 
 __all__ = ["TriangleBVH", "triangle_bvh", "LEAF_SIZE"]
@@ -32,7 +33,7 @@ __all__ = ["TriangleBVH", "triangle_bvh", "LEAF_SIZE"]
 LEAF_SIZE = 4
 #: boxes are padded by this fraction of the scene's extent, so that rounding in the slab test never
 #: culls a triangle that the triangle test (exact signs) would hit
-BOX_PADDING = 1e-9
+BOX_PADDING = tol.box_padding
 
 
 # ---- build --------------------------------------------------------------------------------------

@@ -57,6 +57,7 @@ from ...animation.rig import Rig
 from ...animation.skinning import skin_affine
 from ..new_vertices import _place_in_rest, blend_weight_rows
 from ..topology import rig_cached, rig_topology
+from ...tolerances import tol
 from .assemble import _split_arrays
 from .cap import _cap
 from .result import CAP_VERTEX, NEW_VERTEX, CutResult
@@ -67,11 +68,8 @@ __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLAN
 
 precompiled(plane_from_normal_distance, (F1, f8), cost=0.1)
 
-#: |d| <= this times the bounding-box diagonal: the vertex is on the plane (in both halves)
-ON_PLANE_TOLERANCE = 1e-10
-#: a posed cut's new vertex whose skinned rest position misses its posed target by more than this times
-#: the diagonal is reported (a warning): its blended transform is singular or nearly so
-PLACEMENT_TOLERANCE = 1e-9
+#: the tolerances a cut uses (``cgaskin.tolerances.tol``), under their former names
+ON_PLANE_TOLERANCE, PLACEMENT_TOLERANCE = tol.on_plane, tol.placement
 
 
 class PlaneMissesMeshWarning(UserWarning):
@@ -176,7 +174,7 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
         positions = skin_affine(vertices, joints, weights, affines)
     topo = rig_topology(rig)
 
-    sign, tol, diag = _classify(plane, positions, topo.representative, ON_PLANE_TOLERANCE)
+    sign, on_plane, diag = _classify(plane, positions, topo.representative, tol.on_plane)
     (pos_faces, neg_faces, pos_src, neg_src,
      new_lo, new_hi, new_t, new_point) = _split(plane, positions, np.ascontiguousarray(rig.faces, np.int64),
                                                 topo.faces, topo.welded, topo.representative, sign,
@@ -192,7 +190,7 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
         halves = (whole, empty) if on_positive else (empty, whole)
         sources = (everything, np.empty(0, np.int64)) if on_positive else (np.empty(0, np.int64), everything)
         return CutResult(halves[0], halves[1], sources, np.empty((0, 2), np.int64), np.empty(0),
-                         np.empty((0, 3)), (len(halves[0].vertices), len(halves[1].vertices)), plane, tol,
+                         np.empty((0, 3)), (len(halves[0].vertices), len(halves[1].vertices)), plane, on_plane,
                          0.0)
 
     new_joints, new_weights = blend_weight_rows(np.stack([new_lo, new_hi], axis=1),
@@ -204,10 +202,10 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
         guess = vertices[new_lo] * (1.0 - new_t)[:, None] + vertices[new_hi] * new_t[:, None]
         new_rest, residuals, singular = _place_in_rest(new_point, guess, new_joints, new_weights, affines)
         residual = float(residuals.max()) if len(residuals) else 0.0
-        if singular.any() or residual > PLACEMENT_TOLERANCE * diag:
+        if singular.any() or residual > tol.placement * diag:
             warnings.warn(f"{int(singular.sum())} new vertices have a singular blended transform in this "
-                          f"pose and {int((residuals > PLACEMENT_TOLERANCE * diag).sum())} miss the plane "
-                          f"by more than {PLACEMENT_TOLERANCE:g} of the diagonal (largest {residual:.3g}); "
+                          f"pose and {int((residuals > tol.placement * diag).sum())} miss the plane "
+                          f"by more than {tol.placement:g} of the diagonal (largest {residual:.3g}); "
                           f"they keep their interpolated rest positions", RuntimeWarning, stacklevel=3)
     arrays = _split_arrays(rig, vertices, joints, weights, pos_src, neg_src, new_lo, new_hi, new_t,
                            new_rest, new_joints, new_weights)
@@ -220,10 +218,10 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
         cut_positions = [np.concatenate([positions[pos_src], new_point]),
                          np.concatenate([positions[neg_src], new_point])]
         for h in range(2):
-            halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions[h], plane, tol, topo,
+            halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions[h], plane, on_plane, topo,
                                          outward=-1.0 if h == 0 else 1.0, affines=affines)
     return CutResult(halves[0], halves[1], tuple(sources), np.stack([new_lo, new_hi], axis=1), new_t,
-                     new_point, (len(pos_src), len(neg_src)), plane, tol, residual)
+                     new_point, (len(pos_src), len(neg_src)), plane, on_plane, residual)
 
 
 def cut(rig: Rig, normal, point, pose=None, cap: bool = False):

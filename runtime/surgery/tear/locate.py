@@ -15,8 +15,6 @@ from ..._shared.jit import helper, kernel, F1, F2, I1, I2, f8
 OK, FROM_MISSES, TO_MISSES, NO_MOTION, NO_PLANE = 0, 1, 2, 3, 4
 
 
-#: below this sine, three points are too close to one line to define the tear plane's normal
-MIN_SINE = 1e-6
 
 
 @helper
@@ -78,9 +76,9 @@ def _boundary_hit(a, b, t_max, boundary, wpos, tol):
     return best, best_t
 
 
-@kernel((F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1, I1, I1, f8), cost=6.0)
+@kernel((F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1, I1, I1, f8, f8), cost=6.0)
 def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positions, faces, wpos,
-          wfaces, face_edges, edges, vf_offsets, vf_faces, boundary, tol):
+          wfaces, face_edges, edges, vf_offsets, vf_faces, boundary, tol, min_sine):
     """Steps 2-3: where the blade meets the skin at both times, the tear plane, and the side of
     every welded vertex.
 
@@ -144,7 +142,7 @@ def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positio
                 q[k] = s0[k] + hint[k] * _norm(stroke)
         u, v = _sub(p, s0), _sub(q, s0)
         lu, lv = _norm(u), _norm(v)
-        if lu > tol and lv > tol and _norm(_cross(u, v)) > MIN_SINE * lu * lv:
+        if lu > tol and lv > tol and _norm(_cross(u, v)) > min_sine * lu * lv:
             r = plane_from_points(s0, p, q)
             plane[0], plane[1], plane[2], plane[3] = r[0], r[1], r[2], r[3]
             found = True

@@ -7,7 +7,7 @@ import numpy as np
 from ...generated.kernels import barycentric
 from .nodes import EDGE, FACE, FACE_CARRIER, VERTEX
 from ...algebra.vec3 import _distance
-from ..._shared.jit import helper, kernel, F2, I1, I2, i8
+from ..._shared.jit import helper, kernel, F2, I1, I2, i8, f8
 
 
 @helper
@@ -44,7 +44,7 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
 
 
 @helper
-def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
+def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out, on_edge):
     """Split face ``f`` so that the path's pieces in it become edges.
 
     The face's boundary becomes a polygon: its corners (a path node where the corner is one) with the
@@ -132,14 +132,8 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out):
             if score > best_score:
                 best, best_score = i, score
                 best_k = 0 if la == score else (1 if lb == score else 2)
-        n_out = _insert_node(out, n_out, best, e, best_score <= ON_EDGE, best_k)
+        n_out = _insert_node(out, n_out, best, e, best_score <= on_edge, best_k)
     return n_out
-
-
-#: a point whose smallest barycentric coordinate in a triangle is at most this lies on the edge
-#: opposite that corner (to rounding): splitting the triangle in three there would leave one of zero
-#: area, so the edge is split instead
-ON_EDGE = 1e-9
 
 
 @helper
@@ -242,9 +236,9 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
     return n_new, n_new + 1
 
 
-@kernel((I2, F2, I2, I2, I2, I2, I1, I1, F2, i8), cost=4.4)
+@kernel((I2, F2, I2, I2, I2, I2, I1, I1, F2, i8, f8), cost=4.4)
 def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_offsets, ef_faces, wpos,
-                   n_vertices):
+                   n_vertices, on_edge):
     """Split every face the path crosses (and every face on a crossed edge) and create the new vertices.
 
     returns
@@ -277,7 +271,7 @@ def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_of
     local = np.empty((16, 3), np.int64)
     for a in range(n_aff):
         f = affected[a]
-        n_local = _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, local)
+        n_local = _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, local, on_edge)
         for i in range(n_local):
             for c in range(3):
                 code = local[i, c]

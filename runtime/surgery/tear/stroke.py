@@ -73,6 +73,7 @@ from ...animation.rig import Rig
 from ..new_vertices import _rows
 from ..surface import TEAR_LABEL, _labels, _surface, tear_topology
 from ..topology import rig_cached
+from ...tolerances import tol
 from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, _ends
 from .nodes import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER
 from .retriangulate import _retriangulate
@@ -83,11 +84,8 @@ from .walk import _walk
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
            "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]
 
-#: relative to the surface's bounding-box diagonal: a vertex this close to the tear plane is on it
-#: (the path goes through it), and a scalpel hit this close to a vertex is that vertex
-SNAP_TOLERANCE = 1e-10
-#: relative to the diagonal: a posed tear warns when a new vertex, skinned, misses its path point by more
-PLACEMENT_TOLERANCE = 1e-9
+#: the tolerances a tear uses (``cgaskin.tolerances.tol``), under their former names
+SNAP_TOLERANCE, PLACEMENT_TOLERANCE = tol.snap, tol.placement
 
 
 class TearPlacementWarning(UserWarning):
@@ -216,13 +214,13 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
         raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {rig.n_faces} faces")
     topo = surface.topo
     wpos = surface.welded_positions
-    tol = SNAP_TOLERANCE * surface.diagonal
+    snap = tol.snap * surface.diagonal
     faces = np.asarray(rig.faces)
 
     # 2-3: where the blade meets the skin at both times, the tear plane, the sides of the vertices
     status, ends_int, ends_pos, hits, hit_faces, plane, cls = _ends(
         *bvh._arrays, a0, b0, a1, b1, surface.positions, faces, wpos, topo.faces, topo.face_edges,
-        topo.edges, surface.vf_offsets, surface.vf_faces, surface.boundary, tol)
+        topo.edges, surface.vf_offsets, surface.vf_faces, surface.boundary, snap, tol.min_sine)
     if status in (FROM_MISSES, TO_MISSES):
         name, (a, b) = ("scalpel_from", (a0, b0)) if status == FROM_MISSES else ("scalpel_to", (a1, b1))
         raise MissesMeshError(f"the scalpel {name} (handle {a.tolist()} -> tip {b.tolist()}) does not "
@@ -261,7 +259,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     # parallel: cgaskin.precompile)
     affected, tris, new_node, new_src, new_coef = _retriangulate(
         path_int, path_float, faces, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
-        topo.edge_face_faces, wpos, rig.n_vertices)
+        topo.edge_face_faces, wpos, rig.n_vertices, tol.on_edge)
     torn_faces, torn_w, node_w, new_positions, candidates = _torn_faces(
         path_int, path_float, faces, topo.welded, topo.faces, affected, tris, new_node, surface.vf_offsets,
         surface.vf_faces, len(wpos))
@@ -276,7 +274,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     vertices, joints, weights, labels = (_extended(values, added) for values in mesh[:4])
     residual = _vertex_data(vertices, joints, weights, labels, n, path_float, new_node, new_src, new_coef,
                             twins, moved, opening, plane[:3].copy(), affines, posed)
-    if not residual <= PLACEMENT_TOLERANCE * surface.diagonal:
+    if not residual <= tol.placement * surface.diagonal:
         warnings.warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
                       f"blended transform is singular or nearly so)", TearPlacementWarning, stacklevel=2)
     attributes = {}
