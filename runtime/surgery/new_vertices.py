@@ -1,12 +1,46 @@
-"""Blending skin weight rows: the weights of vertices created on edges (cut, tear) and inside faces
-(tear), kept in the layout every rig has: 4 influences, largest first, summing to 1."""
+"""New vertices on edges and inside faces: their weights, attributes and rest positions.
+
+Cut, tear (and every later operation that adds vertices) describe a new vertex the same way: the
+existing vertices it lies between and its coefficients there (``NewVertices``): (1 - t, t) for the
+point at parameter t of an edge, the barycentric coordinates for a point inside a face. From that
+one description come
+
+* its skin weights (``blend_weight_rows``): the sources' rows blended, the 4 largest kept and
+  renormalised, in the layout every rig has (4 influences, largest first, summing to 1);
+* its attributes (``interpolate_attribute``): interpolated, normals renormalised, application-specific
+  ("_"-prefixed) data copied from the dominant source, since it may not be interpolable (labels);
+* its rest position when it was made on a posed mesh (``place_in_rest``): the point x whose own
+  blended 3x4 map puts it on its posed target, solved relative to the interpolated rest position.
+"""
+from __future__ import annotations
+
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-from ..algebra.vec3 import _copy_row
 from ..generated.kernels import affine_point
-from .._shared.jit import helper, kernel, F2, I1, I2, b1, i8
+from .._shared.jit import helper, kernel, F2, I2, b1
+
+__all__ = ["NewVertices", "on_edges", "blend_weight_rows", "interpolate_attribute", "place_in_rest"]
+
+
+class NewVertices(NamedTuple):
+    """Where new vertices lie among existing ones.
+
+    src : (k, r) int64 the existing vertices each new vertex lies between (r = 2 on an edge, 3 in a
+        face)
+    coef : (k, r) float64 its coefficients there, summing to 1
+    """
+
+    src: np.ndarray
+    coef: np.ndarray
+
+
+def on_edges(lo, hi, t) -> NewVertices:
+    """New vertices at parameter ``t`` (k,) of the edges ``lo`` -> ``hi`` (k,): (1 - t) x_lo + t x_hi."""
+    t = np.asarray(t, dtype=np.float64)
+    return NewVertices(np.stack([lo, hi], axis=1).astype(np.int64), np.stack([1.0 - t, t], axis=1))
 
 
 @kernel((I2, F2, I2, F2), cost=0.6)
@@ -109,88 +143,56 @@ def _to_rest(target, guess, blend):
     return x, math.sqrt((target[0] - y[0]) ** 2 + (target[1] - y[1]) ** 2 + (target[2] - y[2]) ** 2)
 
 
-@kernel((F2, i8, I2, F2, I1, b1), cost=0.3)
-def _rows(out, n, src, coef, twin_src, unit):
-    """An attribute extended to the torn mesh, in place: ``out`` (n + v + t, c) float64 holds the
-    original rows in its first n; the new vertices' rows interpolate their sources (Σ_r coef[i, r] ·
-    out[src[i, r]], renormalised to unit length when ``unit``: normals), the twins' rows copy their
-    vertex's."""
-    c = out.shape[1]
-    v, t = src.shape[0], twin_src.shape[0]
-    for i in range(v):
+@kernel((F2, I2, F2, b1), cost=0.3)
+def _interpolate(values, src, coef, unit):
+    """(k, c) rows Σ_r coef[i, r] · values[src[i, r]]; renormalised to unit length when ``unit``
+    (normals), a zero row staying zero."""
+    k, c = src.shape[0], values.shape[1]
+    out = np.zeros((k, c))
+    for i in range(k):
+        length = 0.0
         for q in range(c):
-            out[n + i, q] = (coef[i, 0] * out[src[i, 0], q] + coef[i, 1] * out[src[i, 1], q]
-                             + coef[i, 2] * out[src[i, 2], q])
-        if unit:
-            length = 0.0
+            x = 0.0
+            for r in range(src.shape[1]):
+                x += coef[i, r] * values[src[i, r], q]
+            out[i, q] = x
+            length += x * x
+        if unit and length > 0.0:
+            inverse = 1.0 / math.sqrt(length)
             for q in range(c):
-                length += out[n + i, q] ** 2
-            if length > 0.0:
-                length = math.sqrt(length)
-                for q in range(c):
-                    out[n + i, q] /= length
-    for i in range(t):
-        _copy_row(out, n + v + i, out, twin_src[i])
+                out[i, q] *= inverse
+    return out
 
 
-@helper
-def _solve3(m, r):
-    """x with L x = r for the linear part L (3x3) of a row-major 3x4 map ``m`` (12,), by Cramer's rule;
-    returns (x0, x1, x2, det)."""
-    a, b, c = m[0], m[1], m[2]
-    d, e, f = m[4], m[5], m[6]
-    g, h, i = m[8], m[9], m[10]
-    c0 = e * i - f * h
-    c1 = f * g - d * i
-    c2 = d * h - e * g
-    det = a * c0 + b * c1 + c * c2
-    if det == 0.0:
-        return 0.0, 0.0, 0.0, 0.0
-    inv = 1.0 / det
-    x0 = (r[0] * c0 + r[1] * (c * h - b * i) + r[2] * (b * f - c * e)) * inv
-    x1 = (r[0] * c1 + r[1] * (a * i - c * g) + r[2] * (c * d - a * f)) * inv
-    x2 = (r[0] * c2 + r[1] * (b * g - a * h) + r[2] * (a * e - b * d)) * inv
-    return x0, x1, x2, det
+def interpolate_attribute(name: str, values, new: NewVertices) -> np.ndarray:
+    """The rows of attribute ``name`` for new vertices.
+
+    values : (n, ...) the attribute's rows for the existing vertices
+    returns (k, ...) of ``values``' dtype: interpolated; "NORMAL" (n, 3) renormalised; an
+        application-specific attribute ("_" prefix, e.g. the tear's labels) copied from the source
+        with the largest coefficient (the first one on a tie)
+    """
+    values = np.asarray(values)
+    if name.startswith("_"):
+        return values[new.src[np.arange(len(new.src)), np.argmax(new.coef, axis=1)]]
+    flat = np.ascontiguousarray(values.reshape(len(values), -1), dtype=np.float64)
+    rows = _interpolate(flat, new.src, new.coef, name == "NORMAL" and flat.shape[1] == 3)
+    return rows.reshape((len(rows),) + values.shape[1:]).astype(values.dtype, copy=False)
 
 
 @kernel((F2, F2, I2, F2, F2), cost=1.2)
-def _place_in_rest(target, guess, joints, weights, affines):
+def place_in_rest(targets, guesses, joints, weights, affines):
     """Rest positions x with Σ_k w_k A_k(x) = target for each new vertex (its own blended 3x4 map).
 
-    The solve is relative to ``guess`` (the interpolated rest position, close to the answer) and
-    repeated once on the residual, so the error is that of one affine map evaluation.
-
-    returns rest (k, 3), residual (k,) |B x − target|, singular (k,) bool (kept at the guess)
+    targets : (k, 3) posed positions ; guesses : (k, 3) interpolated rest positions
+    joints, weights : (k, 4) the new vertices' own ; affines : (B, 12) the pose's bone maps
+    returns rest (k, 3), residual (k,) |B x - target| (inf where B is singular: x stays the guess)
     """
-    k = target.shape[0]
+    k = targets.shape[0]
     rest = np.empty((k, 3))
     residual = np.empty(k)
-    singular = np.zeros(k, np.bool_)
-    blend = np.empty(12)
-    r = np.empty(3)
     for i in range(k):
-        blend[:] = 0.0
-        for s in range(joints.shape[1]):
-            w = weights[i, s]
-            if w != 0.0:
-                a = affines[joints[i, s]]
-                for c in range(12):
-                    blend[c] += w * a[c]
-        x = guess[i].copy()
-        for _ in range(2):
-            y = affine_point(blend, x)
-            r[0] = target[i, 0] - y[0]
-            r[1] = target[i, 1] - y[1]
-            r[2] = target[i, 2] - y[2]
-            d0, d1, d2, det = _solve3(blend, r)
-            if det == 0.0 or not (math.isfinite(d0) and math.isfinite(d1) and math.isfinite(d2)):
-                singular[i] = True
-                break
-            x[0] += d0
-            x[1] += d1
-            x[2] += d2
-        y = affine_point(blend, x)
-        residual[i] = math.sqrt((target[i, 0] - y[0]) ** 2 + (target[i, 1] - y[1]) ** 2
-                                + (target[i, 2] - y[2]) ** 2)
+        x, res = _to_rest(targets[i], guesses[i], _blended(joints, weights, affines, i))
         rest[i, 0], rest[i, 1], rest[i, 2] = x[0], x[1], x[2]
-    return rest, residual, singular
+        residual[i] = res
+    return rest, residual

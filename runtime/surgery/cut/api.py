@@ -55,7 +55,7 @@ from ..._shared.jit import F1, f8, precompiled
 from ...animation.pose import check_pose
 from ...animation.rig import Rig
 from ...animation.skinning import skin_affine
-from ..new_vertices import _place_in_rest, blend_weight_rows
+from ..new_vertices import blend_weight_rows, interpolate_attribute, on_edges, place_in_rest
 from ..topology import rig_cached, rig_topology
 from ...tolerances import tol
 from .assemble import _split_arrays
@@ -193,22 +193,24 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
                          np.empty((0, 3)), (len(halves[0].vertices), len(halves[1].vertices)), plane, on_plane,
                          0.0)
 
-    new_joints, new_weights = blend_weight_rows(np.stack([new_lo, new_hi], axis=1),
-                                                np.stack([1.0 - new_t, new_t], axis=1), joints, weights)
+    new = on_edges(new_lo, new_hi, new_t)
+    new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
     residual = 0.0
     if affines is None:
         new_rest = new_point
     else:
-        guess = vertices[new_lo] * (1.0 - new_t)[:, None] + vertices[new_hi] * new_t[:, None]
-        new_rest, residuals, singular = _place_in_rest(new_point, guess, new_joints, new_weights, affines)
+        guess = interpolate_attribute("POSITION", vertices, new)
+        new_rest, residuals = place_in_rest(new_point, guess, new_joints, new_weights, affines)
+        singular = ~np.isfinite(residuals)
         residual = float(residuals.max()) if len(residuals) else 0.0
-        if singular.any() or residual > tol.placement * diag:
+        if residual > tol.placement * diag:
+            missing = np.count_nonzero(residuals[~singular] > tol.placement * diag)
             warnings.warn(f"{int(singular.sum())} new vertices have a singular blended transform in this "
-                          f"pose and {int((residuals > tol.placement * diag).sum())} miss the plane "
-                          f"by more than {tol.placement:g} of the diagonal (largest {residual:.3g}); "
-                          f"they keep their interpolated rest positions", RuntimeWarning, stacklevel=3)
-    arrays = _split_arrays(rig, vertices, joints, weights, pos_src, neg_src, new_lo, new_hi, new_t,
-                           new_rest, new_joints, new_weights)
+                          f"pose and {missing} miss the plane by more than {tol.placement:g} of the "
+                          f"diagonal (largest {residual:.3g}); they keep their interpolated rest positions",
+                          RuntimeWarning, stacklevel=3)
+    arrays = _split_arrays(rig, vertices, joints, weights, pos_src, neg_src, new, new_rest, new_joints,
+                           new_weights)
     halves = [Rig(vertices=v, faces=f, joints=j, weights=w, skeleton=rig.skeleton, clips=list(rig.clips),
                   attributes=a, name=names[h])
               for h, ((v, j, w, a), f) in enumerate(zip(arrays, (pos_faces, neg_faces)))]

@@ -70,7 +70,7 @@ from ..._shared.checks import float_array
 from ..bvh import TriangleBVH
 from ...errors import CgaskinError, InvalidInputError, MissesMeshError
 from ...animation.rig import Rig
-from ..new_vertices import _rows
+from ..new_vertices import NewVertices, interpolate_attribute
 from ..surface import TEAR_LABEL, _labels, _surface, tear_topology
 from ..topology import rig_cached
 from ...tolerances import tol
@@ -278,9 +278,11 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
         warnings.warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
                       f"blended transform is singular or nearly so)", TearPlacementWarning, stacklevel=2)
     attributes = {}
+    new, first_twin = NewVertices(new_src, new_coef), n + len(new_node)
     for name, (values, tail) in mesh[4].items():
         rows = _extended(values, added)
-        _rows(rows, n, new_src, new_coef, twins[:, 0].copy(), name == "NORMAL")
+        rows[n:first_twin] = interpolate_attribute(name, values, new)
+        rows[first_twin:] = rows[twins[:, 0]]               # a twin has its vertex's data
         attributes[name] = rows.reshape((len(rows),) + tail)
     if split.any() or TEAR_LABEL in rig.attributes:
         attributes[TEAR_LABEL] = labels[:, None].astype(np.float64)
