@@ -2,8 +2,9 @@
 
 ``_GltfFile`` holds the pygltflib document and the GLB binary chunk, and gives typed, range-checked
 access to the JSON (``items``, ``index``, ``get``, ``count``, ``floats``), to buffers (GLB chunk,
-``data:`` URIs, files next to the .gltf) and to decoded accessors (every component type,
-``normalized``, ``byteStride``, matrix column padding, sparse, no bufferView). Every problem is a
+``data:`` URIs, files in the folder of the .gltf or below it: ``external_file`` refuses any URI
+that leads outside it) and to decoded accessors (every component type, ``normalized``,
+``byteStride``, matrix column padding, sparse, no bufferView). Every problem is a
 ``ModelFormatError`` naming the file; ``warn`` attributes warnings to the first caller outside
 cgaskin.
 """
@@ -12,6 +13,7 @@ from __future__ import annotations
 import base64
 import binascii
 import os
+import re
 import sys
 import urllib.parse
 import warnings
@@ -29,6 +31,9 @@ from ._gltf_constants import (COMPONENT_DTYPES, COMPONENT_NAMES, INTEGER_INDEX_T
 #: directories of cgaskin's modules: warnings point past them, at the user's call (this module's
 #: folder, rigs/, holds every module of the loader; validate's holds ``check_mesh``)
 _PACKAGE_DIRS = {os.path.dirname(__file__), os.path.dirname(validate.__file__)}
+
+#: a URI scheme (RFC 3986 section 3.1: ``file:``, ``http:``, also ``C:``): not a relative reference
+_URI_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")
 
 
 # --- file-level context ---------------------------------------------------------------------------
@@ -91,6 +96,39 @@ class _GltfFile:
             raise self.error(f"{what} holds non-finite values {array.tolist()}")
         return array
 
+    # -- external resources (glTF 2.0: a URI is a relative reference or a data: URI) --
+    def external_file(self, uri: str, what: str) -> Path:
+        """The file an external (not ``data:``) ``uri`` names, resolved, symlinks included.
+
+        Refuses, naming the URI and the rule, every URI that is not a relative reference (a
+        scheme such as ``file:`` or ``http:``, a network path ``//host/...``, an absolute path,
+        percent-encoded or not) and every one that resolves outside the folder of the .gltf
+        (``..``, a symlink in the folder pointing out of it). The folder is the one the model was
+        opened from, itself resolved. The caller reads the returned path, which holds no symlink.
+        """
+        rule = "external resources must lie in the model's folder or below it"
+        if _URI_SCHEME.match(uri) or uri.startswith("//"):
+            raise self.error(f"{what} refers to {uri!r}, which is not a relative URI: {rule} "
+                             f"and be referred to by relative URIs, or be embedded as data: URIs; "
+                             f"download or copy the file into the model's folder and refer to it "
+                             f"by its relative path")
+        relative = urllib.parse.unquote(uri)
+        if "\0" in relative:
+            raise self.error(f"{what} uri {uri!r} holds a NUL character: it names no file")
+        if os.path.isabs(relative):
+            raise self.error(f"{what} refers to the absolute path {uri!r}: {rule}; copy the "
+                             f"file into the model's folder and refer to it by its relative path")
+        try:
+            folder = self.path.parent.resolve()
+            file = (folder / relative).resolve()
+        except (OSError, RuntimeError) as exc:  # RuntimeError: a symlink loop (Python < 3.13)
+            raise self.error(f"{what} uri {uri!r} cannot be resolved ({exc}); {rule}") from None
+        if not file.is_relative_to(folder):
+            raise self.error(f"{what} refers to {uri!r}, which resolves to {file}, outside the "
+                             f"model's folder {folder}: {rule}; copy the file into that folder and "
+                             f"refer to it by its relative path")
+        return file
+
     # -- buffers (spec 3.6.1) --
     def buffer(self, i: int) -> bytes:
         if i in self._buffers:
@@ -118,10 +156,7 @@ class _GltfFile:
                 raise self.error(f"buffer {i} has a corrupt base64 data: URI ({exc})") from None
             source = "its data: URI"
         else:
-            if "://" in uri:
-                raise self.error(f"buffer {i} refers to {uri!r}: only files next to the model and "
-                                 f"data: URIs are supported (download it first)")
-            file = self.path.parent / urllib.parse.unquote(uri)
+            file = self.external_file(uri, f"buffer {i}")
             try:
                 data = file.read_bytes()
             except FileNotFoundError:
