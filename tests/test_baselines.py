@@ -5,7 +5,7 @@ import pytest
 from cgaskin import baselines as B
 from cgaskin.errors import InvalidInputError
 
-import gltf_reference as R
+from tests.helpers import gltf_reference as R
 
 
 def _axis_angle(axis, angle):

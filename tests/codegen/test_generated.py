@@ -9,7 +9,7 @@ import pytest
 
 from cgaskin.codegen import build
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_generated_is_fresh():

@@ -11,7 +11,7 @@ from cgaskin import baselines as B
 from cgaskin.errors import ModelFormatError, NoSkinError
 from cgaskin.rigs import assimp as A
 
-import gltf_reference as R
+from tests.helpers import gltf_reference as R
 
 # assimp-converted files carry weight rows that do not sum to 1: the loader repairs them with a warning
 # (checked once below, silenced elsewhere).

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, strategies as st
 
-import strategies as S
+from tests.helpers import strategies as S
 from cgaskin import versor as V
 from cgaskin.errors import CgaskinError, InvalidInputError
-from tolerances import TOL, rel_err
+from tests.helpers.tolerances import TOL, rel_err
 
 
 def same_map(a, b, scale=None) -> float:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from hypothesis import strategies as st
 
-from tolerances import TOL
+from .tolerances import TOL
 
 TAU = 2.0 * math.pi
 SPECIAL_ANGLES = (0.0, math.pi, -math.pi, TAU, -TAU, 0.5 * math.pi, -0.5 * math.pi, 1e-9, -1e-9,

@@ -6,7 +6,7 @@ import cgaskin
 from cgaskin import versor
 from cgaskin.errors import InvalidInputError
 
-from gltf_reference import reference_skin
+from tests.helpers.gltf_reference import reference_skin
 
 GLTF_MODELS = ["Fox.glb", "simple_skin.gltf", "Arm5.glb", "3Cylinder4bones.glb", "PlaneWith3Bones.glb",
                "quad_skin.glb"]

@@ -10,7 +10,7 @@ from cgaskin.app.cli import main
 
 def read_mesh(path):
     """(positions, faces) of the single mesh of a file written by ``save_mesh``."""
-    from gltf_reference import _File
+    from tests.helpers.gltf_reference import _File
     f = _File(path)
     prim = f.gltf.meshes[0].primitives[0]
     return f.accessor(prim.attributes.POSITION), f.accessor(prim.indices).reshape(-1, 3), f, prim
@@ -161,7 +161,7 @@ def test_readme_example_runs(models_dir, tmp_path, monkeypatch):
     """The README's "Use it" block, as written (the model read from the models folder)."""
     import re
     from pathlib import Path
-    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     code = re.search(r"## Use it\n\n```python\n(.*?)```", readme, re.S).group(1)
     assert 'cgaskin.load("Fox.glb")' in code
     monkeypatch.chdir(tmp_path)

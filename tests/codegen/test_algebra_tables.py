@@ -25,7 +25,7 @@ from sympy.polys.rings import ring
 from cgaskin.codegen import algebra
 from cgaskin.codegen.symbolic import MV
 
-from tolerances import TOL
+from tests.helpers.tolerances import TOL
 
 KINDS = ("gp", "outer", "lcontract")
 MASKS = range(algebra.N_BLADES)

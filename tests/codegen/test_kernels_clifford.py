@@ -22,13 +22,13 @@ import pytest
 from clifford import g3c
 from hypothesis import assume, example, given, strategies as st
 
-import strategies as S
+from tests.helpers import strategies as S
 from cgaskin import versor as V
 from cgaskin.errors import InvalidInputError
 from cgaskin.generated import kernels as K
 from cgaskin.generated import skinning as SK
 from cgaskin.generated.layout import LOG_BLADES, MOTOR_BLADES, PLANE_BLADES, VERSOR_BLADES
-from tolerances import TOL, rel_err
+from tests.helpers.tolerances import TOL, rel_err
 
 # ==== clifford side: blades, conversions, independent constructions ========================================
 e1, e2, e3, einf, eo = g3c.e1, g3c.e2, g3c.e3, g3c.einf, g3c.eo

@@ -1,0 +1,1 @@
+"""The cgaskin test suite; its folders mirror the package's subpackages."""

@@ -1,0 +1,1 @@
+"""Tests of cgaskin.algebra: versors and transform helpers."""

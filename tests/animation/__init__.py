@@ -1,0 +1,1 @@
+"""Tests of cgaskin.animation: rig, clips, poses, skinning, mesh checks."""

@@ -1,0 +1,1 @@
+"""Tests of cgaskin.app: the command line and precompile."""

@@ -1,0 +1,1 @@
+"""Tests of cgaskin.codegen and the kernels it emits into cgaskin.generated."""

@@ -1,0 +1,1 @@
+"""Helpers shared by the tests: hypothesis strategies, tolerances, the independent glTF oracle."""

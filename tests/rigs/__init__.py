@@ -1,0 +1,1 @@
+"""Tests of cgaskin.rigs: glTF and assimp loading, export, the procedural arm."""

@@ -1,0 +1,1 @@
+"""Tests of cgaskin.surgery: topology, BVH, cut and tear."""
