@@ -14,23 +14,17 @@ import base64
 import binascii
 import os
 import re
-import sys
 import urllib.parse
-import warnings
 from pathlib import Path
 
 import numpy as np
 import pygltflib
 
 from ..errors import ModelFormatError
-from ..animation import validate
+from .._shared.warn import warn
 from ._gltf_constants import (COMPONENT_DTYPES, COMPONENT_NAMES, INTEGER_INDEX_TYPES,
                               MAX_BUFFERLESS_COMPONENTS, NORMALIZED_DIVISORS, TYPE_SHAPES)
 
-
-#: directories of cgaskin's modules: warnings point past them, at the user's call (this module's
-#: folder, rigs/, holds every module of the loader; validate's holds ``check_mesh``)
-_PACKAGE_DIRS = {os.path.dirname(__file__), os.path.dirname(validate.__file__)}
 
 #: a URI scheme (RFC 3986 section 3.1: ``file:``, ``http:``, also ``C:``): not a relative reference
 _URI_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")
@@ -54,10 +48,7 @@ class _GltfFile:
 
     def warn(self, message: str, prefix: bool = True) -> None:
         """Warn, attributing the warning to the first caller outside cgaskin."""
-        level, frame = 1, sys._getframe(0)
-        while frame is not None and os.path.dirname(frame.f_code.co_filename) in _PACKAGE_DIRS:
-            frame, level = frame.f_back, level + 1
-        warnings.warn(f"{self.path.name}: {message}" if prefix else message, UserWarning, stacklevel=level)
+        warn(f"{self.path.name}: {message}" if prefix else message)
 
     # -- typed access to the JSON (pygltflib does not check types) --
     def items(self, name: str) -> list:

@@ -35,6 +35,7 @@ from dataclasses import replace
 
 from ..errors import ModelFormatError
 from ..animation.rig import Rig
+from .._shared.warn import warn
 
 __all__ = ["load_assimp", "assimp_executable", "DEFAULT_TIMEOUT_S"]
 
@@ -113,6 +114,6 @@ def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | N
             message = message.replace(str(out), where) if str(out) in message else message.replace(out.name, where)
             raise type(exc)(message) from exc
         for w in caught:
-            warnings.warn(str(w.message).replace(str(out), str(src)).replace(out.name, src.name),
-                          w.category, stacklevel=2)
+            warn(str(w.message).replace(str(out), str(src)).replace(out.name, src.name),
+                 w.category)
     return replace(rig, name=src.stem)

@@ -22,7 +22,6 @@ rounding residuals, with w == (WEIGHTS_0 + LO) + LO2 exactly (24 + 24 + 24 bits 
 from __future__ import annotations
 
 import base64
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +32,7 @@ from ..animation.rig import CHANNEL_PATHS, INTERPOLATIONS, Rig
 from ..animation.validate import check_mesh
 from ..animation.validate import EXACT_SUM_TOLERANCE
 from .gltf import WEIGHT_RESIDUALS, trs_to_matrix
+from .._shared.warn import warn
 
 __all__ = ["save_gltf", "save_mesh"]
 
@@ -261,9 +261,8 @@ def _skeleton_nodes(rig: Rig, animated: set) -> list:
         # TRS node reloads bit-identical and anything else (a matrix node) keeps its matrix
         if np.array_equal(matrix, trs_to_matrix(t, q, s)) or i in animated:
             if i in animated and not np.allclose(matrix, trs_to_matrix(t, q, s), rtol=0, atol=1e-9):
-                warnings.warn(f"{rig.name}: node {sk.names[i]!r} is animated, so glTF requires TRS, "
-                              f"but its rest matrix is not a TRS (shear?); wrote the TRS", UserWarning,
-                              stacklevel=3)
+                warn(f"{rig.name}: node {sk.names[i]!r} is animated, so glTF requires TRS, "
+                     f"but its rest matrix is not a TRS (shear?); wrote the TRS", UserWarning)
             if not np.array_equal(t, [0, 0, 0]):
                 node.translation = [float(x) for x in t]
             if not np.array_equal(q, [0, 0, 0, 1]):
@@ -309,8 +308,8 @@ def _animations(rig: Rig, out: _BinaryBuilder):
                 target=pygltflib.AnimationChannelTarget(node=int(ch.node), path=ch.path)))
             animated.add(int(ch.node))
         if not channels:
-            warnings.warn(f"{rig.name}: clip {clip.name!r} has no channels; glTF animations need at "
-                          f"least one, so it is not written", UserWarning, stacklevel=3)
+            warn(f"{rig.name}: clip {clip.name!r} has no channels; glTF animations need at "
+                 f"least one, so it is not written", UserWarning)
             continue
         animations.append(pygltflib.Animation(name=clip.name, samplers=samplers, channels=channels))
     return animations, animated

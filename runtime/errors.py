@@ -27,3 +27,8 @@ class MissesMeshError(CgaskinError, ValueError):
 
 class StaleGeneratedError(CgaskinError):
     """``generated/`` does not match what ``codegen/`` emits now."""
+
+
+class PlacementWarning(RuntimeWarning):
+    """A new vertex made on a posed mesh (a posed cut or tear) could not be placed exactly on its
+    posed target: its blended transform is singular or nearly so."""

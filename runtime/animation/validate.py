@@ -14,12 +14,12 @@ silently, real defects with a warning. Everything else that is wrong is refused 
 """
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
 from ..errors import InvalidInputError
 from ..tolerances import tol
+from .._shared.warn import warn
 
 MAX_INFLUENCES = 4
 #: Rows whose sum is off 1 by more than this are reported (a warning) before being renormalised.
@@ -187,10 +187,8 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
         weights[rows[:, None], drop] = 0.0
         joints[rows[:, None], drop] = 0
         used[rows[:, None], drop] = False
-        warnings.warn(
-            f"{pre}{len(rows)} vertices have more than {MAX_INFLUENCES} bone influences (up to "
-            f"{int(counts.max())}); kept the {MAX_INFLUENCES} largest weights of each and renormalised",
-            UserWarning, stacklevel=2)
+        warn(f"{pre}{len(rows)} vertices have more than {MAX_INFLUENCES} bone influences (up to "
+             f"{int(counts.max())}); kept the {MAX_INFLUENCES} largest weights of each and renormalised")
 
     # --- compact the used slots to the front, keeping their order, then pad/trim to 4 ----------
     order = np.argsort(~used, axis=1, kind="stable")
@@ -214,8 +212,6 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
         warned = deviation[~over] > WEIGHT_SUM_TOLERANCE
         if warned.any():
             worst = int(np.flatnonzero(~over)[np.argmax(np.where(warned, deviation[~over], -1.0))])
-            warnings.warn(
-                f"{pre}{int(warned.sum())} vertices have weights that do not sum to 1 (max deviation "
-                f"{deviation[worst]:.3g} at vertex {worst}); renormalised them",
-                UserWarning, stacklevel=2)
+            warn(f"{pre}{int(warned.sum())} vertices have weights that do not sum to 1 (max deviation "
+                 f"{deviation[worst]:.3g} at vertex {worst}); renormalised them")
     return vertices, faces, joints, weights

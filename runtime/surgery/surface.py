@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
+from ..animation.rig import Rig
 from ..errors import InvalidInputError
 from .bvh import TriangleBVH
 from .topology import Topology, incidence, rig_cached, rig_topology, topology
@@ -70,25 +72,71 @@ class _Surface:
     affines: np.ndarray | None
 
 
-def _mesh_checks(rig):
-    """Shapes and values the tear relies on, checked once per rig."""
-    n = len(rig.vertices)
+class MeshArrays(NamedTuple):
+    """A rig's mesh as the surgery kernels take it: C-contiguous, float64/int64, 4 influences.
+
+    vertices : (n, 3) float64 ; faces : (m, 3) int64 ; joints : (n, 4) int64 ; weights : (n, 4) float64
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+
+
+def _checked_mesh(rig) -> MeshArrays:
     vertices = np.asarray(rig.vertices)
     faces = np.asarray(rig.faces)
-    if vertices.ndim != 2 or vertices.shape[1] != 3 or not np.isfinite(vertices).all():
-        raise InvalidInputError(f"rig.vertices must be a finite (n, 3) array, got shape {vertices.shape}")
-    if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0 or faces.dtype.kind not in "iu":
-        raise InvalidInputError(f"rig.faces must be a non-empty (m, 3) integer array, got {faces.shape}")
-    joints, weights = np.asarray(rig.joints), np.asarray(rig.weights)
-    if joints.shape != (n, 4) or weights.shape != (n, 4) or joints.dtype.kind not in "iu":
-        raise InvalidInputError(f"rig.joints and rig.weights must have shape ({n}, 4), got "
-                                f"{joints.shape} and {weights.shape}")
+    joints = np.asarray(rig.joints)
+    weights = np.asarray(rig.weights)
+    n = len(vertices)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or vertices.dtype.kind not in "fiu":
+        raise InvalidInputError(f"rig.vertices must be a real (n, 3) array, got shape {vertices.shape} "
+                                f"{vertices.dtype}")
+    if faces.ndim != 2 or faces.shape[1] != 3 or (faces.size and faces.dtype.kind not in "iu"):
+        raise InvalidInputError(f"rig.faces must be an (m, 3) integer array, got {faces.shape} {faces.dtype}")
+    if len(faces) == 0:
+        raise InvalidInputError("the rig has no faces: there is nothing to cut or tear")
+    if faces.min() < 0 or faces.max() >= n:
+        raise InvalidInputError(f"rig.faces must index the {n} vertices, got indices from {faces.min()} to "
+                                f"{faces.max()}")
+    if not np.isfinite(vertices).all():
+        raise InvalidInputError("rig.vertices hold non-finite values (NaN or inf)")
+    if joints.ndim != 2 or joints.shape != weights.shape or len(joints) != n or not 1 <= joints.shape[1] <= 4:
+        raise InvalidInputError(f"rig.joints {joints.shape} and rig.weights {weights.shape} must both "
+                                f"have shape ({n}, k) with k <= 4")
+    if joints.dtype.kind not in "iu":
+        raise InvalidInputError(f"rig.joints must hold integers, got {joints.dtype}")
     if not np.isfinite(weights).all() or (weights < 0).any():
         raise InvalidInputError("rig.weights must be finite and >= 0")
+    n_bones = rig.skeleton.n_bones
+    if joints.size and (joints.min() < 0 or joints.max() >= n_bones):
+        raise InvalidInputError(f"rig.joints must index the {n_bones} bones, got indices from "
+                                f"{joints.min()} to {joints.max()}")
     for name, values in rig.attributes.items():
         if len(np.asarray(values)) != n:
             raise InvalidInputError(f"attribute {name!r} has {len(values)} rows for {n} vertices")
-    return True
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    joints = np.ascontiguousarray(joints, dtype=np.int64)
+    weights = np.ascontiguousarray(weights, dtype=np.float64)
+    if joints.shape[1] < 4:                      # pad to 4 influences (zero weights change nothing)
+        pad = 4 - joints.shape[1]
+        joints = np.concatenate([joints, np.zeros((n, pad), np.int64)], axis=1)
+        weights = np.concatenate([weights, np.zeros((n, pad))], axis=1)
+    return MeshArrays(vertices, faces, joints, weights)
+
+
+def mesh_arrays(rig) -> MeshArrays:
+    """The rig's mesh checked once (cut and tear check their input the same way) and converted for
+    the kernels (no copy where the rig's arrays already are so); cached per rig.
+
+    Raises InvalidInputError naming what is wrong: not a Rig, shapes, dtypes, non-finite values,
+    negative weights, face or joint indices out of range, attribute row counts.
+    """
+    if not isinstance(rig, Rig):
+        raise InvalidInputError(f"rig must be a cgaskin.Rig, got {type(rig).__name__}")
+    return rig_cached(rig, "surgery.mesh", _checked_mesh)
 
 
 def _build_surface(rig, positions, affines) -> _Surface:
@@ -109,7 +157,7 @@ def _posed_cache(rig) -> dict:
 
 
 def _surface(rig, pose) -> _Surface:
-    rig_cached(rig, "tear.checks", _mesh_checks)
+    mesh_arrays(rig)
     if pose is None:
         return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, r.vertices, None))
     from ..animation.pose import check_pose, skin

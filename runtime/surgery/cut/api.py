@@ -45,23 +45,24 @@ is on the positive side, ``(empty, copy)`` when it is on the negative side.
 """
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
-from ...errors import InvalidInputError
+from ...errors import InvalidInputError, PlacementWarning
 from ...generated.kernels import plane_from_normal_distance
 from ..._shared.jit import F1, f8, precompiled
 from ...animation.pose import check_pose
 from ...animation.rig import Rig
 from ...animation.skinning import skin_affine
 from ..new_vertices import blend_weight_rows, interpolate_attribute, on_edges, place_in_rest
-from ..topology import rig_cached, rig_topology
+from ..surface import mesh_arrays
+from ..topology import rig_topology
 from ...tolerances import tol
 from .assemble import _split_arrays
 from .cap import _cap
 from .result import CAP_VERTEX, NEW_VERTEX, CutResult
 from .split import _classify, _split
+from ..._shared.warn import warn
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
            "PLACEMENT_TOLERANCE"]
@@ -87,51 +88,6 @@ def _vector(value, name) -> np.ndarray:
     if not np.isfinite(arr).all():
         raise InvalidInputError(f"{name} must be finite, got {arr.tolist()}")
     return arr
-
-
-def _mesh(rig):
-    """The rig's arrays as the kernels need them, checked once per rig (cached with its topology)."""
-    if not isinstance(rig, Rig):
-        raise InvalidInputError(f"rig must be a cgaskin.Rig, got {type(rig).__name__}")
-    return rig_cached(rig, "cut.mesh", _checked_mesh)
-
-
-def _checked_mesh(rig):
-    """(vertices (n, 3) float64, joints (n, 4) int64, weights (n, 4) float64), C-contiguous, checked;
-    no copy where the rig's arrays already are so."""
-    vertices = np.ascontiguousarray(rig.vertices, dtype=np.float64)
-    faces = np.asarray(rig.faces)
-    joints = np.asarray(rig.joints)
-    weights = np.asarray(rig.weights)
-    n = len(vertices)
-    if vertices.ndim != 2 or vertices.shape[1] != 3:
-        raise InvalidInputError(f"rig.vertices must have shape (n, 3), got {vertices.shape}")
-    if faces.ndim != 2 or faces.shape[1] != 3 or (faces.size and faces.dtype.kind not in "iu"):
-        raise InvalidInputError(f"rig.faces must be an (m, 3) integer array, got {faces.shape} {faces.dtype}")
-    if len(faces) == 0:
-        raise InvalidInputError("the rig has no faces: there is nothing to cut")
-    if not np.isfinite(vertices).all():
-        raise InvalidInputError("rig.vertices hold non-finite values (NaN or inf)")
-    if joints.ndim != 2 or joints.shape != weights.shape or len(joints) != n or not 1 <= joints.shape[1] <= 4:
-        raise InvalidInputError(f"rig.joints {joints.shape} and rig.weights {weights.shape} must both "
-                                f"have shape ({n}, 4)")
-    if joints.dtype.kind not in "iu":
-        raise InvalidInputError(f"rig.joints must hold integers, got {joints.dtype}")
-    weights = np.ascontiguousarray(weights, dtype=np.float64)
-    joints = np.ascontiguousarray(joints, dtype=np.int64)
-    if joints.shape[1] < 4:                      # pad to 4 influences (zero weights change nothing)
-        pad = 4 - joints.shape[1]
-        joints = np.concatenate([joints, np.zeros((n, pad), np.int64)], axis=1)
-        weights = np.concatenate([weights, np.zeros((n, pad))], axis=1)
-    if not np.isfinite(weights).all() or (weights < 0).any():
-        raise InvalidInputError("rig.weights must be finite and >= 0")
-    n_bones = rig.skeleton.n_bones
-    if joints.size and (joints.min() < 0 or joints.max() >= n_bones):
-        raise InvalidInputError(f"rig.joints must index the {n_bones} bones")
-    for name, values in rig.attributes.items():
-        if len(np.asarray(values)) != n:
-            raise InvalidInputError(f"attribute {name!r} has {len(values)} rows for {n} vertices")
-    return vertices, joints, weights
 
 
 def _plane(normal, point) -> np.ndarray:
@@ -162,7 +118,7 @@ def _copy(rig, name) -> Rig:
 def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutResult:
     """``cut`` with the bookkeeping (``CutResult``): which input vertex each output vertex comes from,
     the new vertices' edges and parameters, the plane and tolerances. Same arguments as ``cut``."""
-    vertices, joints, weights = _mesh(rig)
+    vertices, faces, joints, weights = mesh_arrays(rig)
     plane = _plane(normal, point)
     if not isinstance(cap, (bool, np.bool_)):
         raise InvalidInputError(f"cap must be True or False, got {cap!r}")
@@ -176,15 +132,15 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
 
     sign, on_plane, diag = _classify(plane, positions, topo.representative, tol.on_plane)
     (pos_faces, neg_faces, pos_src, neg_src,
-     new_lo, new_hi, new_t, new_point) = _split(plane, positions, np.ascontiguousarray(rig.faces, np.int64),
+     new_lo, new_hi, new_t, new_point) = _split(plane, positions, faces,
                                                 topo.faces, topo.welded, topo.representative, sign,
                                                 topo.face_vertex_edges, topo.vertex_edges)
     names = (f"{rig.name}_positive", f"{rig.name}_negative")
     if len(pos_faces) == 0 or len(neg_faces) == 0:
         on_positive = len(pos_faces) > 0
-        warnings.warn(f"the cutting plane does not cross the mesh of {rig.name!r}: it lies entirely on "
-                      f"the {'positive' if on_positive else 'negative'} side; the other half is empty",
-                      PlaneMissesMeshWarning, stacklevel=3)
+        warn(f"the cutting plane does not cross the mesh of {rig.name!r}: it lies entirely on "
+             f"the {'positive' if on_positive else 'negative'} side; the other half is empty",
+             PlaneMissesMeshWarning)
         whole, empty = _copy(rig, names[1 - on_positive]), _empty_like(rig, names[on_positive])
         everything = np.arange(len(vertices), dtype=np.int64)
         halves = (whole, empty) if on_positive else (empty, whole)
@@ -205,10 +161,10 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
         residual = float(residuals.max()) if len(residuals) else 0.0
         if residual > tol.placement * diag:
             missing = np.count_nonzero(residuals[~singular] > tol.placement * diag)
-            warnings.warn(f"{int(singular.sum())} new vertices have a singular blended transform in this "
-                          f"pose and {missing} miss the plane by more than {tol.placement:g} of the "
-                          f"diagonal (largest {residual:.3g}); they keep their interpolated rest positions",
-                          RuntimeWarning, stacklevel=3)
+            warn(f"{int(singular.sum())} new vertices have a singular blended transform in this "
+                 f"pose and {missing} miss the plane by more than {tol.placement:g} of the "
+                 f"diagonal (largest {residual:.3g}); they keep their interpolated rest positions",
+                 PlacementWarning)
     arrays = _split_arrays(rig, vertices, joints, weights, pos_src, neg_src, new, new_rest, new_joints,
                            new_weights)
     halves = [Rig(vertices=v, faces=f, joints=j, weights=w, skeleton=rig.skeleton, clips=list(rig.clips),

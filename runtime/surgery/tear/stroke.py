@@ -61,17 +61,16 @@ end of the face array).
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..._shared.checks import float_array
 from ..bvh import TriangleBVH
-from ...errors import CgaskinError, InvalidInputError, MissesMeshError
+from ...errors import CgaskinError, InvalidInputError, MissesMeshError, PlacementWarning
 from ...animation.rig import Rig
 from ..new_vertices import NewVertices, interpolate_attribute
-from ..surface import TEAR_LABEL, _labels, _surface, tear_topology
+from ..surface import TEAR_LABEL, _labels, _surface, mesh_arrays, tear_topology
 from ..topology import rig_cached
 from ...tolerances import tol
 from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, _ends
@@ -80,6 +79,7 @@ from .retriangulate import _retriangulate
 from .slit import _open_slit, _torn_faces
 from .vertex_data import _vertex_data
 from .walk import _walk
+from ..._shared.warn import warn
 
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
            "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]
@@ -88,9 +88,8 @@ __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementW
 SNAP_TOLERANCE, PLACEMENT_TOLERANCE = tol.snap, tol.placement
 
 
-class TearPlacementWarning(UserWarning):
-    """A posed tear's new vertex could not be placed exactly on the posed path (its blended
-    transform is singular or nearly so)."""
+#: a posed tear's new vertex could not be placed exactly on the posed path (its former name)
+TearPlacementWarning = PlacementWarning
 
 
 class TearPathError(CgaskinError, ValueError):
@@ -215,7 +214,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     topo = surface.topo
     wpos = surface.welded_positions
     snap = tol.snap * surface.diagonal
-    faces = np.asarray(rig.faces)
+    faces = mesh_arrays(rig).faces
 
     # 2-3: where the blade meets the skin at both times, the tear plane, the sides of the vertices
     status, ends_int, ends_pos, hits, hit_faces, plane, cls = _ends(
@@ -275,8 +274,8 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     residual = _vertex_data(vertices, joints, weights, labels, n, path_float, new_node, new_src, new_coef,
                             twins, moved, opening, plane[:3].copy(), affines, posed)
     if not residual <= tol.placement * surface.diagonal:
-        warnings.warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
-                      f"blended transform is singular or nearly so)", TearPlacementWarning, stacklevel=2)
+        warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
+             f"blended transform is singular or nearly so)", PlacementWarning)
     attributes = {}
     new, first_twin = NewVertices(new_src, new_coef), n + len(new_node)
     for name, (values, tail) in mesh[4].items():
@@ -307,9 +306,8 @@ def _arrays(rig):
         if name != TEAR_LABEL:
             values = np.asarray(values, dtype=np.float64)
             attributes[name] = (np.ascontiguousarray(values.reshape(len(values), -1)), values.shape[1:])
-    return (np.ascontiguousarray(rig.vertices, dtype=np.float64),
-            np.ascontiguousarray(rig.joints, dtype=np.int64),
-            np.ascontiguousarray(rig.weights, dtype=np.float64), _labels(rig), attributes)
+    mesh = mesh_arrays(rig)
+    return mesh.vertices, mesh.joints, mesh.weights, _labels(rig), attributes
 
 
 def tear(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 0.0,
