@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..animation.rig import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
+from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
 from ._gltf_constants import COMPONENT_NAMES
 from ._gltf_document import _GltfFile
 

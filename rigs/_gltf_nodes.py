@@ -11,7 +11,7 @@ import heapq
 import numpy as np
 
 from ..algebra.transforms import matrix_to_trs, trs_matrix
-from ..animation.rig import Skeleton
+from ..animation.skeleton import Skeleton
 from ._gltf_constants import AFFINE_TOLERANCE, COMPONENT_NAMES, QUAT_UNIT_TOLERANCE
 from ._gltf_document import _GltfFile
 

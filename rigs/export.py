@@ -28,7 +28,8 @@ import numpy as np
 import pygltflib
 
 from ..errors import InvalidInputError
-from ..animation.rig import CHANNEL_PATHS, INTERPOLATIONS, Rig
+from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS
+from ..animation.rig import Rig
 from ..animation.validate import check_mesh
 from ..animation.validate import EXACT_SUM_TOLERANCE
 from .gltf import WEIGHT_RESIDUALS, trs_to_matrix

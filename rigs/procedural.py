@@ -11,7 +11,9 @@ import math
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..animation.rig import Channel, Clip, Rig, Skeleton
+from ..animation.clip import Channel, Clip
+from ..animation.rig import Rig
+from ..animation.skeleton import Skeleton
 
 __all__ = ["capsule_arm"]
 

@@ -7,8 +7,8 @@ import sys as _sys
 from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError,
                      NoSkinError)
 from .animation.rig import Channel, Clip, Rig, Skeleton
-from .animation.skinning import skin_affine, skin_vertices
-from .animation.pose import Pose, clip_from_poses, skin, skin_normals
+from .animation.pose import Pose, clip_from_poses
+from .animation.skinning import skin, skin_affine, skin_normals, skin_vertices
 from . import baselines
 from .algebra import versor
 _sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move

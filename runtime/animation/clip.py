@@ -1,4 +1,5 @@
-"""Sampling animation clips with glTF 2.0 semantics, rotations through versors.
+"""Animation clips (``Channel``, ``Clip``) and their sampling with glTF 2.0 semantics, rotations
+through versors.
 
 Translation and scale channels interpolate componentwise (STEP, LINEAR, CUBICSPLINE). Rotation
 channels interpolate as rotors: LINEAR is the geodesic (slerp) R0 exp(u log(R̃0 R1)) through the
@@ -8,11 +9,49 @@ the last key to the last value.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..algebra import versor
 from ..errors import InvalidInputError
-from .rig import Clip
+
+INTERPOLATIONS = ("STEP", "LINEAR", "CUBICSPLINE")
+
+
+CHANNEL_PATHS = {"translation": 3, "rotation": 4, "scale": 3}
+
+
+@dataclass(frozen=True)
+class Channel:
+    """One animated property of one node.
+
+    node : int, index into ``Skeleton.names``
+    path : "translation" | "rotation" | "scale"
+    interpolation : "STEP" | "LINEAR" | "CUBICSPLINE"
+    times : (k,) float64, strictly increasing seconds
+    values : (k, c) float64 for STEP/LINEAR, (k, 3, c) for CUBICSPLINE (in-tangent, value,
+        out-tangent), with c = 3 for translation/scale and 4 (x, y, z, w) for rotation
+    """
+
+    node: int
+    path: str
+    interpolation: str
+    times: np.ndarray
+    values: np.ndarray
+
+
+@dataclass(frozen=True)
+class Clip:
+    """A named animation: a set of channels. ``duration`` is the last key time."""
+
+    name: str
+    channels: tuple[Channel, ...]
+
+    @property
+    def duration(self) -> float:
+        return max((float(c.times[-1]) for c in self.channels), default=0.0)
+
 
 ROTATION_BLENDS = ("slerp", "linear")
 

@@ -15,99 +15,15 @@ Conventions (glTF 2.0 semantics, whatever the source format):
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from functools import cached_property
 
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..tolerances import tol
+from .clip import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
+from .pose import Pose
+from .skeleton import Skeleton
 
-INTERPOLATIONS = ("STEP", "LINEAR", "CUBICSPLINE")
-CHANNEL_PATHS = {"translation": 3, "rotation": 4, "scale": 3}
-
-
-@dataclass(frozen=True)
-class Channel:
-    """One animated property of one node.
-
-    node : int, index into ``Skeleton.names``
-    path : "translation" | "rotation" | "scale"
-    interpolation : "STEP" | "LINEAR" | "CUBICSPLINE"
-    times : (k,) float64, strictly increasing seconds
-    values : (k, c) float64 for STEP/LINEAR, (k, 3, c) for CUBICSPLINE (in-tangent, value,
-        out-tangent), with c = 3 for translation/scale and 4 (x, y, z, w) for rotation
-    """
-
-    node: int
-    path: str
-    interpolation: str
-    times: np.ndarray
-    values: np.ndarray
-
-
-@dataclass(frozen=True)
-class Clip:
-    """A named animation: a set of channels. ``duration`` is the last key time."""
-
-    name: str
-    channels: tuple[Channel, ...]
-
-    @property
-    def duration(self) -> float:
-        return max((float(c.times[-1]) for c in self.channels), default=0.0)
-
-
-@dataclass(frozen=True)
-class Skeleton:
-    """Node hierarchy and bones.
-
-    names : list[str], (j,) node names, unique
-    parents : (j,) int64, parent node index or -1 for roots; parents[i] < i
-    rest_translations : (j, 3) float64
-    rest_rotations : (j, 4) float64 unit quaternions (x, y, z, w)
-    rest_scales : (j, 3) float64
-    rest_matrices : (j, 4, 4) float64 exact local matrices (T @ R @ S for TRS nodes)
-    bone_nodes : (b,) int64 node index of each bone
-    inverse_bind : (b, 4, 4) float64 inverse bind matrix of each bone
-    """
-
-    names: list
-    parents: np.ndarray
-    rest_translations: np.ndarray
-    rest_rotations: np.ndarray
-    rest_scales: np.ndarray
-    rest_matrices: np.ndarray
-    bone_nodes: np.ndarray
-    inverse_bind: np.ndarray
-
-    @property
-    def n_nodes(self) -> int:
-        return len(self.names)
-
-    @property
-    def n_bones(self) -> int:
-        return len(self.bone_nodes)
-
-    @cached_property
-    def inverse_bind_rows(self) -> np.ndarray:
-        """(b, 12) C-contiguous top 3x4 rows of the inverse bind matrices (checked affine once)."""
-        ibm = np.asarray(self.inverse_bind, dtype=np.float64)
-        if not np.allclose(ibm[:, 3, :], [0, 0, 0, 1], atol=tol.affine_row):
-            raise InvalidInputError("inverse bind matrices must be affine (last row 0 0 0 1)")
-        return np.ascontiguousarray(ibm[:, :3, :].reshape(-1, 12))
-
-    def node_index(self, joint) -> int:
-        """Index of a node given by name or index; a clear error lists the valid names."""
-        if isinstance(joint, (int, np.integer)):
-            if not -self.n_nodes <= joint < self.n_nodes:
-                raise InvalidInputError(
-                    f"joint index {joint} out of range: the skeleton has {self.n_nodes} nodes")
-            return int(joint) % self.n_nodes
-        try:
-            return self.names.index(joint)
-        except ValueError:
-            raise InvalidInputError(
-                f"unknown joint {joint!r}; valid joints: {', '.join(map(repr, self.names))}") from None
+__all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATHS"]   # the data model in one import
 
 
 @dataclass(frozen=True)
@@ -155,19 +71,16 @@ class Rig:
 
     def rest_pose(self):
         """The rest (node) pose of the skeleton, as a ``Pose``."""
-        from .pose import Pose
         return Pose.rest(self.skeleton)
 
     def bind_pose(self):
         """The pose whose skinning returns ``vertices`` unchanged: every bone's global transform is
         the inverse of its inverse bind matrix (differs from the rest pose in some files)."""
-        from .pose import Pose
         return Pose.bind(self.skeleton)
 
     def pose(self, clip=0, time: float = 0.0, rotation_blend: str = "slerp"):
         """The pose of a clip (name or index) at ``time`` seconds, glTF sampler semantics; rotations
         interpolate as rotors (``"slerp"``: geodesic, as glTF; ``"linear"``: normalised blend)."""
-        from .pose import Pose
         return Pose.from_clip(self.skeleton, self.clips[self.clip_index(clip)], time, rotation_blend)
 
     def with_clips(self, *clips: Clip) -> "Rig":

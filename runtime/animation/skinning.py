@@ -15,6 +15,8 @@ from ..generated import kernels as K
 from ..generated.skinning import skin_blend, skin_blend_parallel
 from .._shared.jit import F2, I2, precompiled
 from ..algebra.versor import _versor_arg
+from .pose import Pose
+from .rig import Rig
 
 # numba's thread pool costs ~10 ms per parallel call on a 2-core machine; below this many vertices
 # the serial loop wins (benchmarks/bench_skinning.py measures the crossover).
@@ -100,3 +102,42 @@ def skin_vertices(rest, joints, weights, versors, parallel=None, out=None) -> np
     The caller's other arrays are not modified.
     """
     return skin_affine(rest, joints, weights, bone_affines(versors), parallel=parallel, out=out)
+
+
+def check_pose(rig: Rig, pose) -> Pose:
+    """``pose`` itself when it is a ``Pose`` of ``rig``'s skeleton (that object, or one with the same
+    nodes and bones, as a cut or torn rig shares with its original); ``InvalidInputError`` if not."""
+    if not isinstance(pose, Pose):
+        raise InvalidInputError(f"pose must be a cgaskin.Pose or None, got {type(pose).__name__}")
+    a, b = rig.skeleton, pose.skeleton
+    if b is not a and (b.n_nodes != a.n_nodes or list(b.names) != list(a.names)
+                       or not np.array_equal(b.bone_nodes, a.bone_nodes)):
+        raise InvalidInputError("the pose belongs to another skeleton (its nodes or bones differ from "
+                                "the rig's)")
+    return pose
+
+
+def skin(rig: Rig, pose: Pose | None = None, out=None) -> np.ndarray:
+    """Skinned positions (n, 3) float64 of ``rig`` in ``pose`` (default: the rest pose).
+
+    glTF semantics for every format: Σ_i w_i (G[joint_i] · IBM_i) v; the mesh node's own transform is
+    ignored."""
+    pose = rig.rest_pose() if pose is None else check_pose(rig, pose)
+    return skin_affine(rig.vertices, rig.joints, rig.weights, pose.bone_affines(), out=out)
+
+
+def skin_normals(rig: Rig, pose: Pose | None = None, normals=None) -> np.ndarray:
+    """Skinned unit normals (n, 3): the blended linear part's cofactor matrix (inverse transpose up
+    to a positive factor, so scale and non-uniform scale are corrected) applied, then normalised."""
+    pose = rig.rest_pose() if pose is None else check_pose(rig, pose)
+    normals = rig.attributes.get("NORMAL") if normals is None else normals
+    if normals is None:
+        raise InvalidInputError("the rig has no NORMAL attribute; pass normals (n, 3)")
+    normals = float_array(normals, "normals", 3, ndim=2)
+    affines = pose.bone_affines().reshape(-1, 3, 4)
+    lin = np.einsum("nk,nkij->nij", rig.weights, affines[rig.joints][..., :3])
+    cof = np.stack([np.cross(lin[:, 1], lin[:, 2]), np.cross(lin[:, 2], lin[:, 0]),
+                    np.cross(lin[:, 0], lin[:, 1])], axis=1)       # rows of det(M) M^-T
+    out = np.einsum("nij,nj->ni", cof, normals)
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return out / np.where(length > 0, length, 1.0)

@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..animation.rig import Rig
+from ..animation.skinning import check_pose, skin
 from ..errors import InvalidInputError
 from .bvh import TriangleBVH
 from .topology import Topology, incidence, rig_cached, rig_topology, topology
@@ -160,7 +161,6 @@ def _surface(rig, pose) -> _Surface:
     mesh_arrays(rig)
     if pose is None:
         return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, r.vertices, None))
-    from ..animation.pose import check_pose, skin
     check_pose(rig, pose)
     cache = _posed_cache(rig)
     entry = cache.get(id(pose))

@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 import cgaskin
 from cgaskin.surgery.bvh import TriangleBVH, triangle_bvh
 from cgaskin.errors import InvalidInputError, MissesMeshError
-from cgaskin.animation.pose import skin
+from cgaskin import skin
 from cgaskin.rigs.procedural import capsule_arm
 from cgaskin.surgery.tear.stroke import (SNAP_TOLERANCE, TEAR_LABEL, TearPathError, tear, tear_stroke,
                           tear_topology)

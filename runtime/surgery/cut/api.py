@@ -51,9 +51,8 @@ import numpy as np
 from ...errors import InvalidInputError, PlacementWarning
 from ...generated.kernels import plane_from_normal_distance
 from ..._shared.jit import F1, f8, precompiled
-from ...animation.pose import check_pose
 from ...animation.rig import Rig
-from ...animation.skinning import skin_affine
+from ...animation.skinning import check_pose, skin_affine
 from ..new_vertices import blend_weight_rows, interpolate_attribute, on_edges, place_in_rest
 from ..surface import mesh_arrays
 from ..topology import rig_topology

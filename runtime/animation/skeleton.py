@@ -1,0 +1,64 @@
+"""The skeleton: the node hierarchy with rest transforms, and the skin's bones (see ``rig.py`` for
+the conventions)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import InvalidInputError
+from ..tolerances import tol
+
+
+@dataclass(frozen=True)
+class Skeleton:
+    """Node hierarchy and bones.
+
+    names : list[str], (j,) node names, unique
+    parents : (j,) int64, parent node index or -1 for roots; parents[i] < i
+    rest_translations : (j, 3) float64
+    rest_rotations : (j, 4) float64 unit quaternions (x, y, z, w)
+    rest_scales : (j, 3) float64
+    rest_matrices : (j, 4, 4) float64 exact local matrices (T @ R @ S for TRS nodes)
+    bone_nodes : (b,) int64 node index of each bone
+    inverse_bind : (b, 4, 4) float64 inverse bind matrix of each bone
+    """
+
+    names: list
+    parents: np.ndarray
+    rest_translations: np.ndarray
+    rest_rotations: np.ndarray
+    rest_scales: np.ndarray
+    rest_matrices: np.ndarray
+    bone_nodes: np.ndarray
+    inverse_bind: np.ndarray
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.names)
+
+    @property
+    def n_bones(self) -> int:
+        return len(self.bone_nodes)
+
+    @cached_property
+    def inverse_bind_rows(self) -> np.ndarray:
+        """(b, 12) C-contiguous top 3x4 rows of the inverse bind matrices (checked affine once)."""
+        ibm = np.asarray(self.inverse_bind, dtype=np.float64)
+        if not np.allclose(ibm[:, 3, :], [0, 0, 0, 1], atol=tol.affine_row):
+            raise InvalidInputError("inverse bind matrices must be affine (last row 0 0 0 1)")
+        return np.ascontiguousarray(ibm[:, :3, :].reshape(-1, 12))
+
+    def node_index(self, joint) -> int:
+        """Index of a node given by name or index; a clear error lists the valid names."""
+        if isinstance(joint, (int, np.integer)):
+            if not -self.n_nodes <= joint < self.n_nodes:
+                raise InvalidInputError(
+                    f"joint index {joint} out of range: the skeleton has {self.n_nodes} nodes")
+            return int(joint) % self.n_nodes
+        try:
+            return self.names.index(joint)
+        except ValueError:
+            raise InvalidInputError(
+                f"unknown joint {joint!r}; valid joints: {', '.join(map(repr, self.names))}") from None
