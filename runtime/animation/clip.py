@@ -22,7 +22,7 @@ INTERPOLATIONS = ("STEP", "LINEAR", "CUBICSPLINE")
 CHANNEL_PATHS = {"translation": 3, "rotation": 4, "scale": 3}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Channel:
     """One animated property of one node.
 
@@ -41,7 +41,7 @@ class Channel:
     values: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Clip:
     """A named animation: a set of channels. ``duration`` is the last key time."""
 

@@ -26,7 +26,7 @@ from .._shared.jit import helper, kernel, B1, F2, F3, I1
 FRAMES = ("parent", "local")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Pose:
     """Local transforms of every node of ``skeleton``.
 

@@ -26,7 +26,7 @@ from .skeleton import Skeleton
 __all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATHS"]   # the data model in one import
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Rig:
     """A skinned triangle mesh.
 

@@ -11,7 +11,7 @@ from ..errors import InvalidInputError
 from ..tolerances import tol
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Skeleton:
     """Node hierarchy and bones.
 

@@ -12,7 +12,8 @@ from ..animation.rig import Rig
 from ..animation.skinning import check_pose, skin
 from ..errors import InvalidInputError
 from .bvh import TriangleBVH
-from .topology import Topology, incidence, rig_cached, rig_topology, topology
+from .._shared.cache import rig_cached
+from .topology import Topology, incidence, rig_topology, topology
 
 #: per-vertex attribute that tells slit copies apart from seam copies (see the module docstring)
 TEAR_LABEL = "_TEAR"
@@ -152,23 +153,22 @@ def _build_surface(rig, positions, affines) -> _Surface:
                     affines)
 
 
-# posed surfaces: id(pose) -> (weak reference to the pose, surface), per rig through rig_cached
-def _posed_cache(rig) -> dict:
-    return rig_cached(rig, "tear.posed", lambda _rig: {})
+#: posed surfaces kept per rig: a few poses per rig are plenty
+POSED_SURFACES = 8
 
 
 def _surface(rig, pose) -> _Surface:
+    """The surface of ``rig`` as stored (``pose`` None) or skinned in ``pose``; cached per rig and
+    pose (poses are compared by identity, and an entry goes with its pose)."""
     mesh_arrays(rig)
     if pose is None:
         return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, r.vertices, None))
     check_pose(rig, pose)
-    cache = _posed_cache(rig)
-    entry = cache.get(id(pose))
-    if entry is not None and entry[0]() is pose:
-        return entry[1]
-    surface = _build_surface(rig, skin(rig, pose), pose.bone_affines())
-    if len(cache) > 8:                 # a few poses per rig are plenty: drop the oldest
-        cache.pop(next(iter(cache)))
-    key = id(pose)
-    cache[key] = (weakref.ref(pose, lambda _r, c=cache, k=key: c.pop(k, None)), surface)
+    posed = rig_cached(rig, "tear.posed", lambda _rig: weakref.WeakKeyDictionary())
+    surface = posed.get(pose)
+    if surface is None:
+        surface = _build_surface(rig, skin(rig, pose), pose.bone_affines())
+        if len(posed) >= POSED_SURFACES:
+            posed.popitem()
+        posed[pose] = surface
     return surface

@@ -25,15 +25,16 @@ modified in place after a first call keeps its stale topology; see ``clear_topol
 """
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._shared import cache
+from .._shared.cache import rig_cached
 from ..errors import InvalidInputError
 from .._shared.jit import helper, kernel, I1, I2, U2, i8
 
-__all__ = ["Topology", "topology", "rig_topology", "rig_cached", "clear_topology_cache", "directed_loops"]
+__all__ = ["Topology", "topology", "rig_topology", "clear_topology_cache", "directed_loops"]
 
 
 # ---- welding: a hash table (open addressing, linear probing, >= 2x the keys so probes stay short) -----
@@ -374,48 +375,16 @@ def topology(vertices, faces) -> Topology:
                     edge_face_offsets=offsets, edge_face_faces=inc_faces, edge_face_corners=inc_corners)
 
 
-# ---- per-rig cache ------------------------------------------------------------------------------------
-# id(rig) -> (weak reference to the rig, its vertices and faces objects, {name: value}). The weak
-# reference tells a live entry from a recycled id; a finaliser drops the entry when the rig is collected.
-_CACHE: dict = {}
-
-
-def rig_cached(rig, name: str, build):
-    """``build(rig)``, computed once per rig and name and kept while the rig lives.
-
-    For data derived from a rig's mesh (its topology, checked arrays): rigs are frozen dataclasses, and
-    the cache also checks that ``rig.vertices`` and ``rig.faces`` are the same array objects, but it
-    cannot see in-place edits of the arrays (call ``clear_topology_cache`` after one).
-    """
-    key = id(rig)
-    entry = _CACHE.get(key)
-    if entry is not None:
-        ref, vertices, faces, values = entry
-        if ref() is rig and vertices is rig.vertices and faces is rig.faces:
-            if name not in values:
-                values[name] = build(rig)
-            return values[name]
-    value = build(rig)
-    try:
-        ref = weakref.ref(rig)
-    except TypeError:                     # not weak-referenceable: do not cache
-        return value
-    if entry is None or entry[0]() is not rig:
-        weakref.finalize(rig, _CACHE.pop, key, None)
-    _CACHE[key] = (ref, rig.vertices, rig.faces, {name: value})
-    return value
-
-
 def _build_topology(rig) -> Topology:
     return topology(rig.vertices, rig.faces)
 
 
 def rig_topology(rig) -> Topology:
     """The welded topology of ``rig``'s mesh (``topology(rig.vertices, rig.faces)``), built on first use
-    and cached while the rig lives (see ``rig_cached``)."""
+    and cached while the rig lives (``cgaskin._shared.cache.rig_cached``)."""
     return rig_cached(rig, "topology", _build_topology)
 
 
 def clear_topology_cache() -> None:
-    """Forget every cached topology (and everything else ``rig_cached`` holds)."""
-    _CACHE.clear()
+    """Forget every cached topology (and everything else cached per rig: ``cgaskin._shared.cache``)."""
+    cache.clear()

@@ -37,7 +37,7 @@ Steps (design.md section 4, "Cut (plane)"):
 Conventions and limits: vertices that no face uses are dropped. Attribute-split copies are assumed to
 skin alike (same joints and weights, as files store them): a posed cut classifies and places a welded
 vertex by its lowest-index copy. A rig is treated as immutable: its welded topology and checked arrays
-are cached per rig (``topology.rig_cached``), and its arrays are never written to.
+are cached per rig (``cgaskin._shared.cache``), and its arrays are never written to.
 
 A plane that misses the mesh (no face on one side) returns the whole rig (a copy) on the side it lies
 on and an empty rig on the other, with a ``PlaneMissesMeshWarning``: ``(copy, empty)`` when the mesh

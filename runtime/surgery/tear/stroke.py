@@ -71,7 +71,7 @@ from ...errors import CgaskinError, InvalidInputError, MissesMeshError, Placemen
 from ...animation.rig import Rig
 from ..new_vertices import NewVertices, interpolate_attribute
 from ..surface import TEAR_LABEL, _labels, _surface, mesh_arrays, tear_topology
-from ..topology import rig_cached
+from ..._shared.cache import rig_cached
 from ...tolerances import tol
 from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, _ends
 from .nodes import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER

@@ -1,0 +1,35 @@
+"""Values derived from a rig (its welded topology, checked arrays, BVH), kept while the rig lives.
+
+Rigs are frozen and compared by identity (``eq=False``), so they are weak dictionary keys: an entry
+goes with its rig. An entry also remembers the rig's ``vertices`` and ``faces`` objects and is
+rebuilt when either is another object; it cannot see in-place edits of the arrays (a rig's arrays
+are treated as immutable throughout cgaskin: call ``clear`` after editing one in place).
+"""
+from __future__ import annotations
+
+import weakref
+
+__all__ = ["rig_cached", "clear"]
+
+#: rig -> (its vertices object, its faces object, {name: value})
+_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def rig_cached(rig, name: str, build):
+    """``build(rig)``, computed once per rig and name and kept while the rig lives."""
+    entry = _CACHE.get(rig)
+    if entry is None or entry[0] is not rig.vertices or entry[1] is not rig.faces:
+        entry = (rig.vertices, rig.faces, {})
+        try:
+            _CACHE[rig] = entry
+        except TypeError:                 # not weak-referenceable: nothing is cached
+            return build(rig)
+    values = entry[2]
+    if name not in values:
+        values[name] = build(rig)
+    return values[name]
+
+
+def clear() -> None:
+    """Forget everything cached for every rig."""
+    _CACHE.clear()
