@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 from numba import njit, types
 
-__all__ = ["kernel", "helper", "precompiled", "SIGNATURES", "Signature"]
+__all__ = ["kernel", "helper", "precompiled", "record", "SIGNATURES", "Signature"]
 
 _OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -36,6 +36,14 @@ F1r = types.Array(types.float64, 1, "C", readonly=True)
 F2r = types.Array(types.float64, 2, "C", readonly=True)
 F2ar = types.Array(types.float64, 2, "A", readonly=True)       # np.broadcast_to of one row
 i8, f8, b1 = types.int64, types.float64, types.boolean
+
+
+def record(cls, *fields):
+    """The numba type of a NamedTuple ``cls`` of arrays with these field types (what
+    ``numba.typeof`` gives an instance), for kernels that take the data between steps by name."""
+    if len(set(fields)) == 1:
+        return types.NamedUniTuple(fields[0], len(fields), cls)
+    return types.NamedTuple(list(fields), cls)
 
 
 class Signature(NamedTuple):

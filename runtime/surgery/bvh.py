@@ -19,13 +19,14 @@ A ``TriangleBVH`` keeps the positions it was built from; build another one (or c
 from __future__ import annotations
 
 import weakref
+from typing import NamedTuple
 
 import numpy as np
 
 from .._shared.checks import float_array, index_array
 from ..errors import InvalidInputError
 from ..tolerances import tol
-from .._shared.jit import helper, kernel, F2, I2, f8, i8
+from .._shared.jit import F2, I1, I2, f8, helper, i8, kernel, record
 
 __all__ = ["TriangleBVH", "triangle_bvh", "LEAF_SIZE"]
 
@@ -36,15 +37,35 @@ LEAF_SIZE = 4
 BOX_PADDING = tol.box_padding
 
 
+class BVHArrays(NamedTuple):
+    """The hierarchy as the query kernels take it.
+
+    lo, hi : (N, 3) float64 padded node boxes ; left, right : (N,) int64 children (-1 for leaves)
+    start, count : (N,) int64 leaf ranges into the leaf order ; order : (m,) int64 face of each leaf
+    slot ; tri : (m, 9) float64 triangle corners in leaf order
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    start: np.ndarray
+    count: np.ndarray
+    order: np.ndarray
+    tri: np.ndarray
+
+
+#: the numba type of ``BVHArrays`` (for precompile signatures)
+BVH_ARRAYS = record(BVHArrays, F2, F2, I1, I1, I1, I1, I1, F2)
+
+
 # ---- build --------------------------------------------------------------------------------------
 @kernel((F2, I2, i8, f8), cost=1.5)
 def _build(positions, faces, leaf_size, padding):
     """Build the hierarchy.
 
     positions : (n, 3) float64 ; faces : (m, 3) int64, m >= 1
-    returns node_lo, node_hi (N, 3) float64 padded boxes; node_left, node_right (N,) int64 children
-    (-1 for leaves); node_start, node_count (N,) int64 leaf ranges into the leaf order; order (m,)
-    int64 face index of each leaf slot; tri (m, 9) float64 corners in leaf order.
+    returns the fields of ``BVHArrays``
     """
     m = faces.shape[0]
     centroid = np.empty((m, 3))
@@ -213,8 +234,10 @@ def _shear(d):
 
 
 @kernel()
-def _first_hit(node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri, a, b):
-    """Smallest t in [0, 1] where segment a -> b meets a triangle; returns (face, t), face -1 if none."""
+def _first_hit(bvh, a, b):
+    """Smallest t in [0, 1] where segment a -> b meets a triangle of ``bvh`` (BVHArrays); returns
+    (face, t), face -1 if none."""
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = bvh
     d = b - a
     kx, ky, kz, sx, sy, sz = _shear(d)
     best_t = np.inf
@@ -258,8 +281,10 @@ def _first_hit(node_lo, node_hi, node_left, node_right, node_start, node_count, 
 
 
 @kernel()
-def _all_hits(node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri, a, b):
-    """Every crossing of segment a -> b with a triangle: (faces (k,), t (k,)), unsorted."""
+def _all_hits(bvh, a, b):
+    """Every crossing of segment a -> b with a triangle of ``bvh`` (BVHArrays): (faces (k,), t (k,)),
+    unsorted."""
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = bvh
     d = b - a
     kx, ky, kz, sx, sy, sz = _shear(d)
     faces = np.empty(16, np.int64)
@@ -315,28 +340,22 @@ class TriangleBVH:
         faces = np.ascontiguousarray(index_array(faces, "faces", len(positions)), dtype=np.int64)
         if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
             raise InvalidInputError(f"faces must have shape (m, 3) with m >= 1, got {faces.shape}")
-        (self._lo, self._hi, self._left, self._right, self._start, self._count, self._order,
-         self._tri) = _build(positions, faces, LEAF_SIZE, BOX_PADDING)
+        self._arrays = BVHArrays(*_build(positions, faces, LEAF_SIZE, BOX_PADDING))
 
         self._slot = np.empty(len(faces), np.int64)
-        self._slot[self._order] = np.arange(len(faces))
+        self._slot[self._arrays.order] = np.arange(len(faces))
 
     @property
     def n_nodes(self) -> int:
-        return len(self._lo)
+        return len(self._arrays.lo)
 
     @property
     def n_faces(self) -> int:
-        return len(self._order)
+        return len(self._arrays.order)
 
     def triangle(self, face: int) -> np.ndarray:
         """(3, 3) corners of ``face`` as the BVH holds them (rows: the face's corners in order)."""
-        return self._tri[self._slot[face]].reshape(3, 3).copy()
-
-    @property
-    def _arrays(self):
-        return (self._lo, self._hi, self._left, self._right, self._start, self._count, self._order,
-                self._tri)
+        return self._arrays.tri[self._slot[face]].reshape(3, 3).copy()
 
     @staticmethod
     def _segment(a, b):
@@ -353,13 +372,13 @@ class TriangleBVH:
         point a + t (b - a); (-1, nan) when the segment meets no triangle.
         """
         a, b = self._segment(a, b)
-        face, t = _first_hit(*self._arrays, a, b)
+        face, t = _first_hit(self._arrays, a, b)
         return int(face), float(t)
 
     def all_hits(self, a, b) -> tuple[np.ndarray, np.ndarray]:
         """Every crossing of segment a -> b: (faces (k,) int64, t (k,) float64), sorted by t."""
         a, b = self._segment(a, b)
-        faces, ts = _all_hits(*self._arrays, a, b)
+        faces, ts = _all_hits(self._arrays, a, b)
         order = np.argsort(ts, kind="stable")
         return faces[order], ts[order]
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..animation.rig import Rig
 from ..animation.skinning import check_pose, skin
+from .._shared.jit import F2, I1, I2, record
 from ..errors import InvalidInputError
 from .bvh import TriangleBVH
 from .._shared.cache import rig_cached
@@ -49,14 +50,36 @@ def tear_topology(rig) -> Topology:
     return rig_cached(rig, "tear.topology", _build_tear_topology)
 
 
+class WeldedMesh(NamedTuple):
+    """The welded surface as the tear's kernels take it.
+
+    positions : (w, 3) float64 welded vertices (their representatives' positions)
+    faces : (m, 3) int64 welded corners of each face ; face_edges : (m, 3) int64 edge k of face f
+    runs from corner k to corner k + 1 ; edges : (e, 2) int64 welded ends of each edge
+    ef_offsets, ef_faces : CSR edge -> faces ; vf_offsets, vf_faces : CSR welded vertex -> faces
+    """
+
+    positions: np.ndarray
+    faces: np.ndarray
+    face_edges: np.ndarray
+    edges: np.ndarray
+    ef_offsets: np.ndarray
+    ef_faces: np.ndarray
+    vf_offsets: np.ndarray
+    vf_faces: np.ndarray
+
+
+#: the numba type of ``WeldedMesh`` (for precompile signatures)
+WELDED_MESH = record(WeldedMesh, F2, I2, I2, I2, I1, I1, I1, I1)
+
+
 @dataclass(frozen=True, eq=False)
 class _Surface:
     """What one stroke needs of a rig in one pose (rest when posed is None).
 
     positions : (n, 3) float64 surface positions of every vertex (skinned when posed)
-    welded_positions : (w, 3) float64, positions of the welded vertices (their representatives)
     topo : Topology (label-aware, ``tear_topology``)
-    vf_offsets, vf_faces : CSR welded vertex -> faces
+    welded : WeldedMesh
     bvh : TriangleBVH over ``positions``
     boundary : (b,) int64 welded vertices on a boundary edge (borders, earlier slits)
     diagonal : float, bounding-box diagonal of ``positions``
@@ -64,10 +87,8 @@ class _Surface:
     """
 
     positions: np.ndarray
-    welded_positions: np.ndarray
     topo: Topology
-    vf_offsets: np.ndarray
-    vf_faces: np.ndarray
+    welded: WeldedMesh
     bvh: TriangleBVH
     boundary: np.ndarray
     diagonal: float
@@ -146,11 +167,12 @@ def _build_surface(rig, positions, affines) -> _Surface:
     positions = np.ascontiguousarray(positions, dtype=np.float64)
     welded_positions = np.ascontiguousarray(positions[topo.representative])
     vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
+    welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
+                        topo.edge_face_faces, vf_offsets, vf_faces)
     bvh = TriangleBVH(positions, rig.faces)
     boundary = np.unique(topo.edges[topo.boundary_edges])
     diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0)))
-    return _Surface(positions, welded_positions, topo, vf_offsets, vf_faces, bvh, boundary, diagonal,
-                    affines)
+    return _Surface(positions, topo, welded, bvh, boundary, diagonal, affines)
 
 
 #: posed surfaces kept per rig: a few poses per rig are plenty

@@ -60,7 +60,7 @@ from ...tolerances import tol
 from .assemble import _split_arrays
 from .cap import _cap
 from .result import CAP_VERTEX, NEW_VERTEX, CutResult
-from .split import _classify, _split
+from .split import Split, _classify, _split
 from ..._shared.warn import warn
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
@@ -130,55 +130,64 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
     topo = rig_topology(rig)
 
     sign, on_plane, diag = _classify(plane, positions, topo.representative, tol.on_plane)
-    (pos_faces, neg_faces, pos_src, neg_src,
-     new_lo, new_hi, new_t, new_point) = _split(plane, positions, faces,
-                                                topo.faces, topo.welded, topo.representative, sign,
-                                                topo.face_vertex_edges, topo.vertex_edges)
-    names = (f"{rig.name}_positive", f"{rig.name}_negative")
-    if len(pos_faces) == 0 or len(neg_faces) == 0:
-        on_positive = len(pos_faces) > 0
-        warn(f"the cutting plane does not cross the mesh of {rig.name!r}: it lies entirely on "
-             f"the {'positive' if on_positive else 'negative'} side; the other half is empty",
-             PlaneMissesMeshWarning)
-        whole, empty = _copy(rig, names[1 - on_positive]), _empty_like(rig, names[on_positive])
-        everything = np.arange(len(vertices), dtype=np.int64)
-        halves = (whole, empty) if on_positive else (empty, whole)
-        sources = (everything, np.empty(0, np.int64)) if on_positive else (np.empty(0, np.int64), everything)
-        return CutResult(halves[0], halves[1], sources, np.empty((0, 2), np.int64), np.empty(0),
-                         np.empty((0, 3)), (len(halves[0].vertices), len(halves[1].vertices)), plane, on_plane,
-                         0.0)
+    split = Split(*_split(plane, positions, faces, topo.faces, topo.welded, topo.representative, sign,
+                          topo.face_vertex_edges, topo.vertex_edges))
+    if len(split.pos_faces) == 0 or len(split.neg_faces) == 0:
+        return _missed(rig, len(split.pos_faces) > 0, plane, on_plane)
 
-    new = on_edges(new_lo, new_hi, new_t)
+    new = on_edges(split.new_lo, split.new_hi, split.new_t)
     new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
-    residual = 0.0
-    if affines is None:
-        new_rest = new_point
-    else:
-        guess = interpolate_attribute("POSITION", vertices, new)
-        new_rest, residuals = place_in_rest(new_point, guess, new_joints, new_weights, affines)
-        singular = ~np.isfinite(residuals)
-        residual = float(residuals.max()) if len(residuals) else 0.0
-        if residual > tol.placement * diag:
-            missing = np.count_nonzero(residuals[~singular] > tol.placement * diag)
-            warn(f"{int(singular.sum())} new vertices have a singular blended transform in this "
-                 f"pose and {missing} miss the plane by more than {tol.placement:g} of the "
-                 f"diagonal (largest {residual:.3g}); they keep their interpolated rest positions",
-                 PlacementWarning)
-    arrays = _split_arrays(rig, vertices, joints, weights, pos_src, neg_src, new, new_rest, new_joints,
-                           new_weights)
+    new_rest, residual = split.new_point, 0.0
+    if affines is not None:
+        new_rest, residual = _placed(vertices, new, split.new_point, new_joints, new_weights, affines, diag)
+    arrays = _split_arrays(rig, vertices, joints, weights, split.pos_src, split.neg_src, new, new_rest,
+                           new_joints, new_weights)
+    names = (f"{rig.name}_positive", f"{rig.name}_negative")
     halves = [Rig(vertices=v, faces=f, joints=j, weights=w, skeleton=rig.skeleton, clips=list(rig.clips),
                   attributes=a, name=names[h])
-              for h, ((v, j, w, a), f) in enumerate(zip(arrays, (pos_faces, neg_faces)))]
-    new_src = np.full(len(new_lo), NEW_VERTEX, np.int64)
-    sources = [np.concatenate([pos_src, new_src]), np.concatenate([neg_src, new_src])]
+              for h, ((v, j, w, a), f) in enumerate(zip(arrays, (split.pos_faces, split.neg_faces)))]
+    new_sources = np.full(len(split.new_lo), NEW_VERTEX, np.int64)
+    sources = [np.concatenate([split.pos_src, new_sources]), np.concatenate([split.neg_src, new_sources])]
     if cap:
-        cut_positions = [np.concatenate([positions[pos_src], new_point]),
-                         np.concatenate([positions[neg_src], new_point])]
-        for h in range(2):
-            halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions[h], plane, on_plane, topo,
+        for h, kept in enumerate((split.pos_src, split.neg_src)):
+            cut_positions = np.concatenate([positions[kept], split.new_point])
+            halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions, plane, on_plane, topo,
                                          outward=-1.0 if h == 0 else 1.0, affines=affines)
-    return CutResult(halves[0], halves[1], tuple(sources), np.stack([new_lo, new_hi], axis=1), new_t,
-                     new_point, (len(pos_src), len(neg_src)), plane, on_plane, residual)
+    return CutResult(halves[0], halves[1], tuple(sources), np.stack([split.new_lo, split.new_hi], axis=1),
+                     split.new_t, split.new_point, (len(split.pos_src), len(split.neg_src)), plane, on_plane,
+                     residual)
+
+
+def _placed(vertices, new, targets, new_joints, new_weights, affines, diag):
+    """Step 5: rest positions of the new vertices of a posed cut, and the largest placement residual
+    (a ``PlacementWarning`` when some new vertex misses the plane)."""
+    guess = interpolate_attribute("POSITION", vertices, new)
+    rest, residuals = place_in_rest(targets, guess, new_joints, new_weights, affines)
+    singular = ~np.isfinite(residuals)
+    residual = float(residuals.max()) if len(residuals) else 0.0
+    if residual > tol.placement * diag:
+        missing = np.count_nonzero(residuals[~singular] > tol.placement * diag)
+        warn(f"{int(singular.sum())} new vertices have a singular blended transform in this "
+             f"pose and {missing} miss the plane by more than {tol.placement:g} of the "
+             f"diagonal (largest {residual:.3g}); they keep their interpolated rest positions",
+             PlacementWarning)
+    return rest, residual
+
+
+def _missed(rig, on_positive: bool, plane, on_plane) -> CutResult:
+    """The plane misses the mesh: the whole rig (a copy) on its side, an empty rig on the other."""
+    warn(f"the cutting plane does not cross the mesh of {rig.name!r}: it lies entirely on "
+         f"the {'positive' if on_positive else 'negative'} side; the other half is empty",
+         PlaneMissesMeshWarning)
+    names = (f"{rig.name}_positive", f"{rig.name}_negative")
+    whole, empty = _copy(rig, names[1 - on_positive]), _empty_like(rig, names[on_positive])
+    everything = np.arange(rig.n_vertices, dtype=np.int64)
+    nothing = np.empty(0, np.int64)
+    halves = (whole, empty) if on_positive else (empty, whole)
+    sources = (everything, nothing) if on_positive else (nothing, everything)
+    return CutResult(halves[0], halves[1], sources, np.empty((0, 2), np.int64), np.empty(0),
+                     np.empty((0, 3)), (len(halves[0].vertices), len(halves[1].vertices)), plane, on_plane,
+                     0.0)
 
 
 def cut(rig: Rig, normal, point, pose=None, cap: bool = False):

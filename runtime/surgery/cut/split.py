@@ -1,10 +1,31 @@
 """Steps 2-4 of a cut: the side of every welded vertex, the faces of both halves, and the new
 vertices on crossed edges."""
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
+
+
+class Split(NamedTuple):
+    """The faces of both halves and the new vertices on crossed edges (``_split``).
+
+    pos_faces (mp, 3), neg_faces (mn, 3) int64 in output numbering: original vertex v -> its rank
+        among the half's originals, new vertex j -> the half's original count + j
+    pos_src (np,), neg_src (nn,) int64 the original vertices each half keeps, in order
+    new_lo, new_hi (k,) int64 the new vertices' edge ends (canonical: lower welded id first)
+    new_t (k,) float64 edge parameter from new_lo ; new_point (k, 3) float64 cut-space positions
+    """
+
+    pos_faces: np.ndarray
+    neg_faces: np.ndarray
+    pos_src: np.ndarray
+    neg_src: np.ndarray
+    new_lo: np.ndarray
+    new_hi: np.ndarray
+    new_t: np.ndarray
+    new_point: np.ndarray
 from ..._shared.jit import helper, kernel, F1, F2, I1, I2, S1, f8
 
 
@@ -50,9 +71,7 @@ def _split(plane, positions, faces, wfaces, welded, representative, sign, face_v
     Faces refer to output rows: original vertex v -> map[v] (its rank among the half's original
     vertices), new vertex j -> n_half_originals + j.
 
-    returns pos_faces (mp, 3), neg_faces (mn, 3), pos_src (np,), neg_src (nn,) original vertices kept,
-        new_lo, new_hi (k,) the new vertices' edge endpoints (canonical: lower welded id first),
-        new_t (k,) edge parameter from new_lo, new_point (k, 3) cut-space positions
+    returns the fields of ``Split``
     """
     n = positions.shape[0]
     m = faces.shape[0]

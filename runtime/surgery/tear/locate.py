@@ -5,8 +5,10 @@ import math
 import numpy as np
 
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
-from ..bvh import _first_hit
-from .nodes import EDGE, FACE, VERTEX
+from ..bvh import BVH_ARRAYS, _first_hit
+from ..surface import WELDED_MESH
+from ...tolerances import tol
+from .records import Ends, EDGE, FACE, VERTEX
 from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
 from ..._shared.jit import helper, kernel, F1, F2, I1, I2, f8
 
@@ -76,15 +78,17 @@ def _boundary_hit(a, b, t_max, boundary, wpos, tol):
     return best, best_t
 
 
-@kernel((F2, F2, I1, I1, I1, I1, I1, F2, F1, F1, F1, F1, F2, I2, F2, I2, I2, I2, I1, I1, I1, f8, f8), cost=6.0)
-def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positions, faces, wpos,
-          wfaces, face_edges, edges, vf_offsets, vf_faces, boundary, tol, min_sine):
+@kernel((BVH_ARRAYS, F1, F1, F1, F1, F2, I2, WELDED_MESH, I1, f8, f8), cost=6.0)
+def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
     """Steps 2-3: where the blade meets the skin at both times, the tear plane, and the side of
     every welded vertex.
 
-    returns status (OK or why not), ends_int (2, 2) (kind, id) of S_i and S_{i+1}, ends_pos (2, 3),
-    hits (2, 3) the raw scalpel hits, hit_faces (2,), plane (4,), cls (w,) int8
+    bvh : BVHArrays of ``positions`` ; faces : (m, 3) int64 ; mesh : WeldedMesh ; boundary : (b,)
+    int64 welded vertices on a boundary ; tol : absolute snap distance ; min_sine : relative
+    returns the fields of ``Ends``
     """
+    wpos, wfaces, face_edges, edges = mesh.positions, mesh.faces, mesh.face_edges, mesh.edges
+    vf_offsets, vf_faces = mesh.vf_offsets, mesh.vf_faces
     ends_int = np.zeros((2, 2), np.int64)
     ends_pos = np.zeros((2, 3))
     hits = np.zeros((2, 3))
@@ -93,7 +97,7 @@ def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positio
     cls = np.zeros(wpos.shape[0], np.int8)
     for i in range(2):
         a, b = (a0, b0) if i == 0 else (a1, b1)
-        face, t = _first_hit(lo, hi, left, right, start, count, order, tri, a, b)
+        face, t = _first_hit(bvh, a, b)
         w, t_w = _boundary_hit(a, b, t if face >= 0 else 1.0, boundary, wpos, tol)
         if w >= 0:
             for k in range(3):
@@ -162,3 +166,13 @@ def _ends(lo, hi, left, right, start, count, order, tri, a0, b0, a1, b1, positio
     if ends_int[0, 0] == ends_int[1, 0] and ends_int[0, 1] == ends_int[1, 1] and ends_int[0, 0] != FACE:
         return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
     return OK, ends_int, ends_pos, hits, hit_faces, plane, cls
+
+
+def locate(surface, faces, scalpel_from, scalpel_to, bvh=None) -> Ends:
+    """Steps 2-3 on ``surface`` (``surface._Surface``) of the mesh with ``faces`` (m, 3) int64, for
+    the blade (handle, tip) at t_i and t_{i+1}; ``bvh`` a TriangleBVH of the surface (its own by
+    default)."""
+    (a0, b0), (a1, b1) = np.asarray(scalpel_from, np.float64), np.asarray(scalpel_to, np.float64)
+    bvh = surface.bvh if bvh is None else bvh
+    return Ends(*_ends(bvh._arrays, a0, b0, a1, b1, surface.positions, faces, surface.welded,
+                       surface.boundary, tol.snap * surface.diagonal, tol.min_sine))

@@ -5,7 +5,8 @@ import math
 import numpy as np
 
 from ...generated.kernels import barycentric
-from .nodes import EDGE, FACE, FACE_CARRIER, VERTEX
+from ..surface import WELDED_MESH
+from .records import EDGE, FACE, FACE_CARRIER, VERTEX
 from ...algebra.vec3 import _distance
 from ..._shared.jit import helper, kernel, F2, I1, I2, i8, f8
 
@@ -236,18 +237,21 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
     return n_new, n_new + 1
 
 
-@kernel((I2, F2, I2, I2, I2, I2, I1, I1, F2, i8, f8), cost=4.4)
-def _retriangulate(path_int, path_float, faces, wfaces, face_edges, edges, ef_offsets, ef_faces, wpos,
-                   n_vertices, on_edge):
+@kernel((I2, F2, I2, WELDED_MESH, i8, f8), cost=4.4)
+def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     """Split every face the path crosses (and every face on a crossed edge) and create the new vertices.
 
-    returns
+    path_int, path_float : the fields of ``Path`` ; faces : (m, 3) int64 ; mesh : WeldedMesh
+    n_vertices : int, the torn mesh's new vertices count from it ; on_edge : tolerance (``tol.on_edge``)
+    returns the fields of ``Pieces``:
         affected (a,) int64 faces replaced by their pieces
         tris (q, 3) int64 the pieces, as vertex ids of the torn mesh (new vertices from ``n_vertices``)
         new_node (v,) int64 path node of each new vertex
         new_src (v, 3) int64, new_coef (v, 3) float64: each new vertex interpolates the data of the
             vertices new_src with coefficients new_coef (``_new_vertex``)
     """
+    wpos, wfaces, face_edges, edges = mesh.positions, mesh.faces, mesh.face_edges, mesh.edges
+    ef_offsets, ef_faces = mesh.ef_offsets, mesh.ef_faces
     k_nodes = path_int.shape[0]
     affected = np.empty(4 * k_nodes + 8, np.int64)
     n_aff = np.int64(0)

@@ -3,7 +3,8 @@
 import numpy as np
 
 from ...generated.kernels import point_plane_distance
-from .nodes import VERTEX
+from ..surface import WELDED_MESH
+from .records import VERTEX
 from ..._shared.jit import helper, kernel, F1, F2, I1, I2, i8
 
 
@@ -206,17 +207,16 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
     return split, twins[:n_twin, :3].copy(), moved[:n_moved].copy(), side_a, side_b
 
 
-@kernel((I2, F2, I2, I1, I2, I1, I2, I1, I1, I1, i8), cost=1.0)
-def _torn_faces(path_int, path_float, faces, welded, wfaces, affected, tris, new_node, vf_offsets, vf_faces,
-                n_welded):
+@kernel((I2, F2, I2, I1, WELDED_MESH, I1, I2, I1), cost=1.0)
+def _torn_faces(path_int, path_float, faces, welded, mesh, affected, tris, new_node):
     """The faces of the torn mesh, with what ``_open_slit`` needs.
 
-    affected, tris, new_node : from ``_retriangulate``
-    returns torn (m', 3) int64 (the kept faces in order, then the pieces), torn_w (m', 3) int64 their
-    welded corners (new vertex i is welded n_welded + its path node), node_w (k,) int64 the welded
-    vertex of each path node, new_positions (v, 3) float64, candidates (c,) int64 sorted rows of
-    ``torn`` that may touch a path node
+    path_int, path_float : the fields of ``Path`` ; faces : (m, 3) int64 ; welded : (n,) int64 welded
+    vertex of each vertex ; mesh : WeldedMesh ; affected, tris, new_node : from ``Pieces``
+    returns the fields of ``TornFaces``
     """
+    wfaces, vf_offsets, vf_faces = mesh.faces, mesh.vf_offsets, mesh.vf_faces
+    n_welded = mesh.positions.shape[0]
     n, m = welded.shape[0], faces.shape[0]
     index = np.zeros(m, np.int64)              # row of each kept face in the torn faces, -1 if removed
     for f in affected:

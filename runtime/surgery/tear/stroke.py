@@ -73,12 +73,12 @@ from ..new_vertices import NewVertices, interpolate_attribute
 from ..surface import TEAR_LABEL, _labels, _surface, mesh_arrays, tear_topology
 from ..._shared.cache import rig_cached
 from ...tolerances import tol
-from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, _ends
-from .nodes import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER
+from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, locate
+from .records import Path, Pieces, Slit, TornFaces, Ends
 from .retriangulate import _retriangulate
 from .slit import _open_slit, _torn_faces
 from .vertex_data import _vertex_data
-from .walk import _walk
+from .walk import walk
 from ..._shared.warn import warn
 
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
@@ -150,22 +150,6 @@ def _opening(value) -> float:
     return opening
 
 
-def _insert_midpoint(path_int, path_float, welded_positions, edges):
-    """A one-segment path gets its midpoint as a third node, so that the slit has a vertex to split
-    (with both ends kept single, a single edge could not open)."""
-    kind, carrier = path_int[1, 2], path_int[1, 3]
-    p0, p1 = path_float[0, 1:4], path_float[1, 1:4]
-    if kind == FACE_CARRIER:
-        mid_int = [FACE, carrier, FACE_CARRIER, carrier]
-        mid_float = [0.0, *(0.5 * (p0 + p1))]
-    else:                                      # along an edge in the plane: its midpoint
-        lo, hi = welded_positions[edges[carrier]]
-        mid_int = [EDGE, carrier, EDGE_CARRIER, carrier]
-        mid_float = [0.5, *(0.5 * (lo + hi))]
-    return (np.array([path_int[0], mid_int, path_int[1]], np.int64),
-            np.array([path_float[0], mid_float, path_float[1]]))
-
-
 def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 0.0,
                 bvh: TriangleBVH | None = None) -> TearResult:
     """One scalpel stroke, with its bookkeeping (``tear`` returns only the rig).
@@ -211,84 +195,74 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
         bvh = surface.bvh
     elif not isinstance(bvh, TriangleBVH) or bvh.n_faces != rig.n_faces:
         raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {rig.n_faces} faces")
-    topo = surface.topo
-    wpos = surface.welded_positions
-    snap = tol.snap * surface.diagonal
     faces = mesh_arrays(rig).faces
 
     # 2-3: where the blade meets the skin at both times, the tear plane, the sides of the vertices
-    status, ends_int, ends_pos, hits, hit_faces, plane, cls = _ends(
-        *bvh._arrays, a0, b0, a1, b1, surface.positions, faces, wpos, topo.faces, topo.face_edges,
-        topo.edges, surface.vf_offsets, surface.vf_faces, surface.boundary, snap, tol.min_sine)
-    if status in (FROM_MISSES, TO_MISSES):
-        name, (a, b) = ("scalpel_from", (a0, b0)) if status == FROM_MISSES else ("scalpel_to", (a1, b1))
+    ends = locate(surface, faces, (a0, b0), (a1, b1), bvh)
+    _check_ends(ends, surface, faces, bvh, (a0, b0), (a1, b1))
+    # 4: the path
+    path = walk(surface, ends)
+    if path is None:
+        s_pos, t_pos = ends.points
+        raise TearPathError(
+            f"the tear plane's section of the surface, followed from S_i = {s_pos.tolist()}, does "
+            f"not reach S_(i+1) = {t_pos.tolist()}: the two points lie on different pieces of the "
+            f"section, or a boundary of the mesh is in the way (use shorter strokes)")
+    # 5-6: re-triangulate, open the slit (separate kernels, so that a cold start compiles them in
+    # parallel: cgaskin.precompile)
+    pieces = Pieces(*_retriangulate(*path, faces, surface.welded, rig.n_vertices, tol.on_edge))
+    torn = TornFaces(*_torn_faces(*path, faces, surface.topo.welded, surface.welded, pieces.affected,
+                                  pieces.tris, pieces.new_node))
+    slit = Slit(*_open_slit(torn.faces, torn.welded, torn.node_welded, surface.positions, torn.new_positions,
+                            ends.plane, torn.candidates))
+    # 7: the vertex data
+    torn_rig = _torn_rig(rig, surface, path, pieces, torn.faces, slit, ends.plane, opening, pose is not None)
+    return TearResult(rig=torn_rig, plane=ends.plane, points=path.points[:, 1:4].copy(),
+                      kinds=path.nodes[:, 0].copy(), side_a=slit.side_a, side_b=slit.side_b, split=slit.split,
+                      hits=ends.hits)
+
+
+def _check_ends(ends: Ends, surface, faces, bvh, blade_from, blade_to) -> None:
+    """The errors of steps 2-3, named for the user."""
+    if ends.status in (FROM_MISSES, TO_MISSES):
+        name, (a, b) = ("scalpel_from", blade_from) if ends.status == FROM_MISSES else ("scalpel_to", blade_to)
         raise MissesMeshError(f"the scalpel {name} (handle {a.tolist()} -> tip {b.tolist()}) does not "
                               f"meet the surface")
     if bvh is not surface.bvh:
-        for f in hit_faces[hit_faces >= 0]:
+        for f in ends.hit_faces[ends.hit_faces >= 0]:
             if not np.array_equal(bvh.triangle(f), surface.positions[faces[f]]):
                 raise InvalidInputError("bvh was built from other positions than the surface being torn "
                                         "(the stored vertices, or the skinned positions in the given pose)")
-    if status == NO_MOTION:
+    if ends.status == NO_MOTION:
         raise InvalidInputError(f"the stroke does not move across the surface: the scalpel meets it at "
-                                f"the same point {ends_pos[0].tolist()} at both times (nothing to tear)")
-    if status == NO_PLANE:
+                                f"the same point {ends.points[0].tolist()} at both times (nothing to tear)")
+    if ends.status == NO_PLANE:
         raise InvalidInputError("cannot place a tear plane: the scalpel at both times and the surface "
                                 "normal are all aligned with the stroke from S_i to S_{i+1}")
-    (s_kind, s_id), (t_kind, t_id) = ends_int
-    s_pos, t_pos = ends_pos
 
-    # 4: the path
-    if s_kind == FACE and t_kind == FACE and s_id == t_id:
-        path_int = np.array([[FACE, s_id, NO_CARRIER, -1], [FACE, s_id, FACE_CARRIER, s_id]], np.int64)
-        path_float = np.array([[0.0, *s_pos], [0.0, *t_pos]])
-    else:
-        found, path_int, path_float = _walk(
-            wpos, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets, topo.edge_face_faces,
-            surface.vf_offsets, surface.vf_faces, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos)
-        if not found:
-            raise TearPathError(
-                f"the tear plane's section of the surface, followed from S_i = {s_pos.tolist()}, does "
-                f"not reach S_(i+1) = {t_pos.tolist()}: the two points lie on different pieces of the "
-                f"section, or a boundary of the mesh is in the way (use shorter strokes)")
-    if len(path_int) == 2:
-        path_int, path_float = _insert_midpoint(path_int, path_float, wpos, topo.edges)
 
-    # 5-6: re-triangulate, open the slit (separate kernels, so that a cold start compiles them in
-    # parallel: cgaskin.precompile)
-    affected, tris, new_node, new_src, new_coef = _retriangulate(
-        path_int, path_float, faces, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
-        topo.edge_face_faces, wpos, rig.n_vertices, tol.on_edge)
-    torn_faces, torn_w, node_w, new_positions, candidates = _torn_faces(
-        path_int, path_float, faces, topo.welded, topo.faces, affected, tris, new_node, surface.vf_offsets,
-        surface.vf_faces, len(wpos))
-    split, twins, moved, side_a, side_b = _open_slit(
-        torn_faces, torn_w, node_w, surface.positions, new_positions, plane, candidates)
-
-    # 7: the vertex data
+def _torn_rig(rig, surface, path: Path, pieces: Pieces, faces, slit: Slit, plane, opening, posed):
+    """Step 7: the torn rig's vertex arrays (originals, new vertices, twins), labels and attributes."""
     mesh = rig_cached(rig, "tear.arrays", _arrays)
-    posed = pose is not None
     affines = surface.affines if posed else np.zeros((1, 12))
-    n, added = rig.n_vertices, len(new_node) + len(twins)
+    n, n_new = rig.n_vertices, len(pieces.new_node)
+    added = n_new + len(slit.twins)
     vertices, joints, weights, labels = (_extended(values, added) for values in mesh[:4])
-    residual = _vertex_data(vertices, joints, weights, labels, n, path_float, new_node, new_src, new_coef,
-                            twins, moved, opening, plane[:3].copy(), affines, posed)
+    residual = _vertex_data(vertices, joints, weights, labels, n, path.points, pieces, slit, opening,
+                            plane[:3].copy(), affines, posed)
     if not residual <= tol.placement * surface.diagonal:
         warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
              f"blended transform is singular or nearly so)", PlacementWarning)
     attributes = {}
-    new, first_twin = NewVertices(new_src, new_coef), n + len(new_node)
+    new = NewVertices(pieces.new_src, pieces.new_coef)
     for name, (values, tail) in mesh[4].items():
         rows = _extended(values, added)
-        rows[n:first_twin] = interpolate_attribute(name, values, new)
-        rows[first_twin:] = rows[twins[:, 0]]               # a twin has its vertex's data
+        rows[n:n + n_new] = interpolate_attribute(name, values, new)
+        rows[n + n_new:] = rows[slit.twins[:, 0]]               # a twin has its vertex's data
         attributes[name] = rows.reshape((len(rows),) + tail)
-    if split.any() or TEAR_LABEL in rig.attributes:
+    if slit.split.any() or TEAR_LABEL in rig.attributes:
         attributes[TEAR_LABEL] = labels[:, None].astype(np.float64)
-
-    torn = rig.with_mesh(vertices, torn_faces, joints, weights, attributes)
-    return TearResult(rig=torn, plane=plane, points=path_float[:, 1:4].copy(), kinds=path_int[:, 0].copy(),
-                      side_a=side_a, side_b=side_b, split=split, hits=hits)
+    return rig.with_mesh(vertices, faces, joints, weights, attributes)
 
 
 def _extended(values, rows: int) -> np.ndarray:

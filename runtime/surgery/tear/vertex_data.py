@@ -3,13 +3,13 @@ opening, rest placement in a pose)."""
 import numpy as np
 
 from ..new_vertices import _blended, _solve_linear, _to_rest, blend_weight_rows
+from .records import PIECES, SLIT
 from ...algebra.vec3 import _copy_row, _set_row
 from ..._shared.jit import kernel, F1, F2, I1, I2, b1, f8, i8
 
 
-@kernel((F2, I2, F2, I1, i8, F2, I1, I2, F2, I2, I2, f8, F1, F2, b1), cost=3.4)
-def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, new_node, new_src, new_coef, twins, moved, opening,
-                 normal, affines, posed):
+@kernel((F2, I2, F2, I1, i8, F2, PIECES, SLIT, f8, F1, F2, b1), cost=3.4)
+def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, pieces, slit, opening, normal, affines, posed):
     """Step 7 and the vertex arrays of the torn mesh: originals, new vertices, twins.
 
     New vertices get interpolated weights (``_blend_weights``) and, at rest, their path point as
@@ -24,9 +24,11 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, new_node, new_src, n
     out_v (N, 3) float64, out_j (N, 4) int64, out_w (N, 4) float64, out_l (N,) int64 with N = n + v + t:
         the vertex arrays of the torn mesh, the originals in their first n rows (the caller copies
         them: numpy's copy beats a compiled loop); filled here
-    twins (t, 3), moved (s, 4): as ``_open_slit`` returns them
+    path_float : (k, 4) Path.points ; pieces : Pieces ; slit : Slit
     returns the largest placement residual |skinned new vertex - its posed path point| (0 at rest)
     """
+    new_node, new_src, new_coef = pieces.new_node, pieces.new_src, pieces.new_coef
+    twins, moved = slit.twins, slit.moved
     v, t = new_node.shape[0], twins.shape[0]
     new_joints, new_weights = blend_weight_rows(new_src, new_coef, out_j, out_w)
     top = 0

@@ -1,10 +1,13 @@
 """Step 4 of a tear stroke: the path along the tear plane's section of the surface."""
+from __future__ import annotations
+
 import math
 
 import numpy as np
 
 from ...generated.kernels import segment_plane
-from .nodes import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER, VERTEX
+from ..surface import WELDED_MESH
+from .records import Ends, Path, EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER, VERTEX
 from ..._shared.jit import helper, kernel, F1, F2, I1, I2, S1, i8
 
 
@@ -55,9 +58,8 @@ def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier,
     return _push(ni, nf, target, n, EDGE, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
 
 
-@kernel((F2, I2, I2, I2, I1, I1, I1, I1, S1, F1, i8, i8, F1, i8, i8, F1), cost=2.1)
-def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces, cls, plane,
-          s_kind, s_id, s_pos, t_kind, t_id, t_pos):
+@kernel((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1), cost=2.1)
+def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
     """Follow the plane's section of the surface from the start node to the target node.
 
     Nodes are (kind, id): VERTEX (welded vertex on the plane), EDGE (edge crossed by the plane, at
@@ -68,10 +70,11 @@ def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_
     Each face (and each in-plane edge) is crossed at most once, which bounds the search by the face
     count and keeps fronts from looping.
 
-    returns found (bool), path_int (k, 4) int64 rows (kind, id, carrier kind, carrier id) from start to
-    target, where the carrier is what the segment from the previous node runs through (a face, or an
-    edge lying in the plane); path_float (k, 4) float64 rows (edge parameter t from edges[id, 0], x, y, z)
+    mesh : WeldedMesh ; cls : (w,) int8 sides of the welded vertices ; plane : (4,)
+    returns found (bool), and the fields of ``Path`` from start to target
     """
+    wpos, wfaces, face_edges, edges = mesh.positions, mesh.faces, mesh.face_edges, mesh.edges
+    ef_offsets, ef_faces, vf_offsets, vf_faces = mesh.ef_offsets, mesh.ef_faces, mesh.vf_offsets, mesh.vf_faces
     m = wfaces.shape[0]
     cap = m + edges.shape[0] + 4
     ni = np.empty((cap, 5), np.int64)         # kind, id, parent, carrier kind, carrier
@@ -191,3 +194,37 @@ def _walk(wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_
             path_float[r, c] = nf[q, c]
         q = ni[q, 2]
     return True, path_int, path_float
+
+
+def walk(surface, ends: Ends) -> Path | None:
+    """Step 4 on ``surface`` (``surface._Surface``): the path from S_i to S_{i+1} along the section
+    (None when the section does not lead there); a one-segment path gets its midpoint."""
+    (s_kind, s_id), (t_kind, t_id) = ends.nodes
+    s_pos, t_pos = ends.points
+    if s_kind == FACE and t_kind == FACE and s_id == t_id:
+        path = Path(np.array([[FACE, s_id, NO_CARRIER, -1], [FACE, s_id, FACE_CARRIER, s_id]], np.int64),
+                    np.array([[0.0, *s_pos], [0.0, *t_pos]]))
+    else:
+        found, nodes, points = _walk(surface.welded, ends.sides, ends.plane, s_kind, s_id, s_pos, t_kind,
+                                     t_id, t_pos)
+        if not found:
+            return None
+        path = Path(nodes, points)
+    return _insert_midpoint(path, surface.welded) if len(path.nodes) == 2 else path
+
+
+def _insert_midpoint(path, mesh) -> Path:
+    """A one-segment path gets its midpoint as a third node, so that the slit has a vertex to split
+    (with both ends kept single, a single edge could not open)."""
+    path_int, path_float = path
+    kind, carrier = path_int[1, 2], path_int[1, 3]
+    p0, p1 = path_float[0, 1:4], path_float[1, 1:4]
+    if kind == FACE_CARRIER:
+        mid_int = [FACE, carrier, FACE_CARRIER, carrier]
+        mid_float = [0.0, *(0.5 * (p0 + p1))]
+    else:                                      # along an edge in the plane: its midpoint
+        lo, hi = mesh.positions[mesh.edges[carrier]]
+        mid_int = [EDGE, carrier, EDGE_CARRIER, carrier]
+        mid_float = [0.5, *(0.5 * (lo + hi))]
+    return Path(np.array([path_int[0], mid_int, path_int[1]], np.int64),
+                np.array([path_float[0], mid_float, path_float[1]]))
