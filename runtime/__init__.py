@@ -9,7 +9,6 @@ from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelForm
 from .animation.rig import Channel, Clip, Rig, Skeleton
 from .animation.pose import Pose, clip_from_poses
 from .animation.skinning import skin, skin_affine, skin_normals, skin_vertices
-from . import baselines
 from .algebra import versor
 _sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move
 from .animation.validate import check_mesh
@@ -38,3 +37,12 @@ def capsule_arm(*args, **kwargs):
     """The built-in procedural rig (a capsule arm with a joint chain and a "wave" clip)."""
     from .rigs.procedural import capsule_arm as _capsule_arm
     return _capsule_arm(*args, **kwargs)
+
+
+def __getattr__(name):
+    # the plain reference implementations (test oracles, benchmark baselines): production code never
+    # imports them, so they load on first use
+    if name == "baselines":
+        import importlib
+        return importlib.import_module(".baselines", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

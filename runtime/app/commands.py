@@ -24,7 +24,9 @@ def progress(iterable, total: int, label: str):
 
 
 def _demo(args) -> int:
-    from .. import capsule_arm, skin, save
+    from ..animation.skinning import skin
+    from ..rigs import save
+    from ..rigs.procedural import capsule_arm
     from .precompile import precompile
     from .render import render_strip
     precompile(verbose=True)              # on a fresh install: every kernel the demo needs, on every core
@@ -53,7 +55,9 @@ def _demo(args) -> int:
 
 def _demo_cut(rig, out: Path) -> list:
     """Cut the bent arm across the forearm (capped), then animate both halves again."""
-    from .. import cut, save, skin
+    from ..animation.skinning import skin
+    from ..rigs import save
+    from ..surgery.cut import cut
     from .render import render_strip
     bent = rig.rest_pose().rotate(rig.skeleton.names[1], [0, 0, 1], np.radians(50))
     joints = bent.global_matrices()[:, :3, 3]
@@ -77,7 +81,9 @@ def _demo_cut(rig, out: Path) -> list:
 
 def _demo_tear(rig, out: Path) -> list:
     """Two scalpel strokes along the top of the arm (one slit), opened, then animated again."""
-    from .. import save, skin, tear
+    from ..animation.skinning import skin
+    from ..rigs import save
+    from ..surgery.tear import tear
     from .render import render_strip
     # the blade stands vertically (handle above the skin, tip at the axis) and moves along x
     stroke = [([x, 0.05, 1.0], [x, 0.05, 0.0]) for x in (0.6, 1.2, 1.8)]
@@ -126,7 +132,8 @@ def _pose_of(rig, args, time=None):
 
 
 def _cut(args) -> int:
-    from .. import cut, load, save
+    from ..rigs import load, save
+    from ..surgery.cut import cut
     rig = load(args.model)
     halves = cut(rig, args.normal, args.point, pose=_pose_of(rig, args), cap=args.cap)
     for half, path in zip(halves, args.out):
@@ -139,7 +146,8 @@ def _cut(args) -> int:
 
 
 def _tear(args) -> int:
-    from .. import load, save, tear
+    from ..rigs import load, save
+    from ..surgery.tear import tear
     rig = load(args.model)
     pose = _pose_of(rig, args)
     torn = tear(rig, (args.from_[:3], args.from_[3:]), (args.to[:3], args.to[3:]), pose=pose,
@@ -151,7 +159,8 @@ def _tear(args) -> int:
 
 
 def _skin(args) -> int:
-    from .. import load, skin, skin_normals
+    from ..animation.skinning import skin, skin_normals
+    from ..rigs import load
     from ..rigs.export import save_mesh
     if args.frames > 1 and args.clip is None:
         raise InvalidInputError("--frames bakes a clip over time: name it with --clip")

@@ -1,0 +1,4 @@
+"""``python -m cgaskin``: the command line."""
+from .app.cli import main
+
+raise SystemExit(main())
