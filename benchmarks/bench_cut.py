@@ -24,8 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import cgaskin
-from cgaskin.surgery.cut.api import cut
-from cgaskin.rigs.procedural import capsule_arm
+from cgaskin import capsule_arm, cut
 from cgaskin.surgery.topology import topology
 
 from ._timing import median_seconds, print_table
