@@ -74,3 +74,11 @@ def rel_err(got, expected, scale=None) -> float:
     if scale is None:
         scale = float(np.max(np.abs(expected)))
     return float(np.max(np.abs(got - expected))) / max(scale, 1e-300)
+
+
+def matrix_scale(*ms) -> float:
+    """Max entry of |M1| |M2| ... : the natural scale of the rounding in a matrix product."""
+    prod = np.abs(ms[0])
+    for m in ms[1:]:
+        prod = prod @ np.abs(m)
+    return float(prod.max())

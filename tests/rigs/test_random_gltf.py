@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 import cgaskin
 
 from tests.helpers.gltf_reference import reference_skin
-from tests.rigs.test_gltf_loader import Gltf
+from tests.helpers.gltf_files import Gltf
 
 FINITE = dict(allow_nan=False, allow_infinity=False)
 

@@ -1,0 +1,71 @@
+"""The welded topology that cut and tear run on (cgaskin.surgery.topology).
+"""
+import numpy as np
+import pytest
+
+from cgaskin.errors import InvalidInputError
+from cgaskin.rigs.procedural import capsule_arm
+from cgaskin.surgery.topology import clear_topology_cache, rig_topology, topology
+
+from tests.helpers.cut_checks import model, orientation_defects
+
+
+def test_topology_welds_attribute_seams(models_dir):
+    fox = model(models_dir, "Fox.glb")
+    topo = topology(fox.vertices, fox.faces)
+    assert len(np.unique(fox.faces)) == 3 * len(fox.faces)          # fully unindexed
+    assert topo.n_welded == len(np.unique(fox.vertices, axis=0))
+    assert (topo.edge_face_counts == 2).all()                       # closed once welded
+    assert orientation_defects(topo) == 0
+    assert np.array_equal(fox.vertices[topo.representative[topo.welded]], fox.vertices)
+    arm = model(models_dir, "Arm5.glb")
+    topo = topology(arm.vertices, arm.faces)
+    assert len(topo.boundary_edges) == 37
+    assert len(topo.vertex_edges) > len(topo.edges)                 # seams: more vertex edges
+
+
+def test_topology_structure():
+    rig = capsule_arm()
+    topo = topology(rig.vertices, rig.faces)
+    m = len(rig.faces)
+    assert topo.n_edges == 3 * m // 2 and (topo.edge_face_counts == 2).all()
+    # incidence lists agree with face_edges
+    for e in range(0, topo.n_edges, 97):
+        faces = topo.edge_faces(e)
+        for f in faces:
+            assert e in topo.face_edges[f]
+    # edges are the welded corner pairs
+    f, k = topo.edge_face_faces, topo.edge_face_corners.astype(np.int64)
+    pairs = np.sort(np.stack([topo.faces[f, k], topo.faces[f, (k + 1) % 3]], axis=1), axis=1)
+    assert np.array_equal(pairs, topo.edges[np.repeat(np.arange(topo.n_edges), topo.edge_face_counts)])
+    assert np.array_equal(topo.find_edges(topo.edges[:, 1], topo.edges[:, 0]), np.arange(topo.n_edges))
+    assert topo.find_edges([0], [len(rig.vertices) - 1])[0] == -1
+    # -0.0 and 0.0 weld
+    v = np.array([[0.0, 0, 0], [-0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    t = topology(v, np.array([[0, 2, 4], [1, 4, 3]]))
+    assert t.welded[0] == t.welded[1] and t.n_welded == 4 and t.n_edges == 5
+    assert len(t.boundary_edges) == 4 and len(t.vertex_edges) == 6
+    assert t.boundary_loops() == [[0, 1, 3, 2]]          # welded ids of vertices 0, 2, 4, 3
+
+
+def test_topology_boundary_loops(models_dir):
+    plane = model(models_dir, "PlaneWith3Bones.glb")
+    loops = topology(plane.vertices, plane.faces).boundary_loops()
+    assert [len(loop) for loop in loops] == [16]
+
+
+def test_rig_topology_is_cached():
+    rig = capsule_arm()
+    first = rig_topology(rig)
+    assert rig_topology(rig) is first
+    clear_topology_cache()
+    assert rig_topology(rig) is not first
+
+
+def test_topology_rejects_bad_arrays():
+    with pytest.raises(InvalidInputError):
+        topology(np.zeros((3, 2)), np.zeros((1, 3), np.int64))
+    with pytest.raises(InvalidInputError):
+        topology(np.zeros((3, 3)), np.array([[0, 1, 3]]))
+    with pytest.raises(InvalidInputError):
+        topology(np.full((3, 3), np.nan), np.array([[0, 1, 2]]))
