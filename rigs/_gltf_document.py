@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pygltflib
 
-from ..errors import ModelFormatError
 from .._shared.warn import warn
+from ..errors import ModelFormatError
 from ._gltf_constants import (COMPONENT_DTYPES, COMPONENT_NAMES, INTEGER_INDEX_TYPES,
                               MAX_BUFFERLESS_COMPONENTS, NORMALIZED_DIVISORS, TYPE_SHAPES)
 

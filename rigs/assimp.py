@@ -33,9 +33,9 @@ import tempfile
 import warnings
 from dataclasses import replace
 
-from ..errors import ModelFormatError
-from ..animation.rig import Rig
 from .._shared.warn import warn
+from ..animation.rig import Rig
+from ..errors import ModelFormatError
 
 __all__ = ["load_assimp", "assimp_executable", "DEFAULT_TIMEOUT_S"]
 

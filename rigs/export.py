@@ -27,13 +27,12 @@ from pathlib import Path
 import numpy as np
 import pygltflib
 
-from ..errors import InvalidInputError
+from .._shared.warn import warn
 from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS
 from ..animation.rig import Rig
-from ..animation.validate import check_mesh
-from ..animation.validate import EXACT_SUM_TOLERANCE
+from ..animation.validate import EXACT_SUM_TOLERANCE, check_mesh
+from ..errors import InvalidInputError
 from .gltf import WEIGHT_RESIDUALS, trs_to_matrix
-from .._shared.warn import warn
 
 __all__ = ["save_gltf", "save_mesh"]
 

@@ -37,16 +37,14 @@ from pathlib import Path
 import numpy as np
 
 from ..algebra.transforms import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
-from ..errors import CgaskinError, InvalidInputError, ModelFormatError, NoSkinError
 from ..animation.rig import Rig
 from ..animation.validate import check_mesh
-# the constants are re-exported: they were public names of this module before its split
-from ._gltf_constants import (AFFINE_TOLERANCE, COMPONENT_DTYPES, COMPONENT_NAMES,  # noqa: F401
-                              GLB_BIN_CHUNK, GLB_JSON_CHUNK, GLB_MAGIC, INTEGER_INDEX_TYPES,
-                              MAX_BUFFERLESS_COMPONENTS, MODE_NAMES, NORMALIZED_DIVISORS,
-                              QUAT_UNIT_TOLERANCE, TYPE_SHAPES, UNSUPPORTED_EXTENSIONS,
-                              WEIGHT_RESIDUALS)
+from ..errors import CgaskinError, InvalidInputError, ModelFormatError, NoSkinError
 from ._gltf_clips import _read_clips
+from ._gltf_constants import (AFFINE_TOLERANCE, COMPONENT_DTYPES, COMPONENT_NAMES, GLB_BIN_CHUNK,
+                              GLB_JSON_CHUNK, GLB_MAGIC, INTEGER_INDEX_TYPES, MAX_BUFFERLESS_COMPONENTS,
+                              MODE_NAMES, NORMALIZED_DIVISORS, QUAT_UNIT_TOLERANCE, TYPE_SHAPES,
+                              UNSUPPORTED_EXTENSIONS, WEIGHT_RESIDUALS)
 from ._gltf_container import _read_document
 from ._gltf_document import _GltfFile
 from ._gltf_mesh import _merge_primitives, _read_primitive

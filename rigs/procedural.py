@@ -10,10 +10,10 @@ import math
 
 import numpy as np
 
-from ..errors import InvalidInputError
 from ..animation.clip import Channel, Clip
 from ..animation.rig import Rig
 from ..animation.skeleton import Skeleton
+from ..errors import InvalidInputError
 
 __all__ = ["capsule_arm"]
 

@@ -4,19 +4,20 @@ The runtime calls only the kernels in ``cgaskin.generated`` (emitted by ``cgaski
 """
 import sys as _sys
 
-from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError,
-                     NoSkinError)
-from .animation.rig import Channel, Clip, Rig, Skeleton
-from .animation.pose import Pose, clip_from_poses
-from .animation.skinning import skin, skin_affine, skin_normals, skin_vertices
+from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError, NoSkinError,
+                     PlacementWarning)
 from .algebra import versor
-_sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move
+from .animation.pose import Pose, clip_from_poses
+from .animation.rig import Channel, Clip, Rig, Skeleton
+from .animation.skinning import skin, skin_affine, skin_normals, skin_vertices
 from .animation.validate import check_mesh
-from .surgery.cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
-from .surgery.topology import Topology, rig_topology
 from .surgery.bvh import TriangleBVH
+from .surgery.cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
 from .surgery.tear import TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
+from .surgery.topology import Topology, rig_topology
 from .app.precompile import precompile
+
+_sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move
 
 __version__ = "0.1.0"
 

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InvalidInputError
 from .algebra.transforms import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
+from .errors import InvalidInputError
 
 __all__ = [
     "lbs_matrices", "dqs", "trs_matrix", "matrix_to_trs", "quat_to_matrix", "matrix_to_quat", "quat_multiply",

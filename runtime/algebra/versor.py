@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.checks import float_array
-from .._shared.jit import F1r, F2, F2r, precompiled
+from .._shared.jit import F2, F1r, F2r, precompiled
 from ..errors import InvalidInputError
-from ..tolerances import tol
 from ..generated import kernels as K
 from ..generated.layout import LOG_BLADES, LOG_SIZE, VERSOR_BLADES, VERSOR_SIZE
+from ..tolerances import tol
 
 __all__ = ["VERSOR_BLADES", "LOG_BLADES", "identity", "translator", "rotor", "rotor_from_quaternion",
            "dilator", "motor", "compose", "reverse", "inverse", "normalise", "apply", "to_matrix",

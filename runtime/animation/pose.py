@@ -12,16 +12,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..algebra import versor
 from .._shared.checks import float_array
+from .._shared.jit import B1, F2, F3, I1, helper, kernel
+from ..algebra import versor
 from ..algebra.transforms import matrix_to_trs, trs_matrix
-from .clip import sample_clip
 from ..errors import InvalidInputError
-from ..tolerances import tol
 from ..generated.kernels import gp_versor_versor, versor_to_affine
-from .clip import Channel, Clip
+from ..tolerances import tol
+from .clip import Channel, Clip, sample_clip
 from .skeleton import Skeleton
-from .._shared.jit import helper, kernel, B1, F2, F3, I1
 
 FRAMES = ("parent", "local")
 

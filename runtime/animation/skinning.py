@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.checks import float_array, index_array
+from .._shared.jit import F2, I2, precompiled
+from ..algebra.versor import _versor_arg
 from ..errors import InvalidInputError
 from ..generated import kernels as K
 from ..generated.skinning import skin_blend, skin_blend_parallel
-from .._shared.jit import F2, I2, precompiled
-from ..algebra.versor import _versor_arg
 from .pose import Pose
 from .rig import Rig
 

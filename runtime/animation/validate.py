@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._shared.warn import warn
 from ..errors import InvalidInputError
 from ..tolerances import tol
-from .._shared.warn import warn
 
 MAX_INFLUENCES = 4
 #: Rows whose sum is off 1 by more than this are reported (a warning) before being renormalised.

@@ -24,9 +24,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.checks import float_array, index_array
+from .._shared.jit import F2, I1, I2, f8, helper, i8, kernel, record
 from ..errors import InvalidInputError
 from ..tolerances import tol
-from .._shared.jit import F2, I1, I2, f8, helper, i8, kernel, record
 
 __all__ = ["TriangleBVH", "triangle_bvh", "LEAF_SIZE"]
 

@@ -19,8 +19,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.jit import F2, I2, b1, helper, kernel
 from ..generated.kernels import affine_point
-from .._shared.jit import helper, kernel, F2, I2, b1
 
 __all__ = ["NewVertices", "on_edges", "blend_weight_rows", "interpolate_attribute", "place_in_rest"]
 

@@ -8,12 +8,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.cache import rig_cached
+from .._shared.jit import F2, I1, I2, record
 from ..animation.rig import Rig
 from ..animation.skinning import check_pose, skin
-from .._shared.jit import F2, I1, I2, record
 from ..errors import InvalidInputError
 from .bvh import TriangleBVH
-from .._shared.cache import rig_cached
 from .topology import Topology, incidence, rig_topology, topology
 
 #: per-vertex attribute that tells slit copies apart from seam copies (see the module docstring)

@@ -31,8 +31,8 @@ import numpy as np
 
 from .._shared import cache
 from .._shared.cache import rig_cached
+from .._shared.jit import I1, I2, U2, helper, i8, kernel
 from ..errors import InvalidInputError
-from .._shared.jit import helper, kernel, I1, I2, U2, i8
 
 __all__ = ["Topology", "topology", "rig_topology", "clear_topology_cache", "directed_loops"]
 

@@ -48,20 +48,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import InvalidInputError, PlacementWarning
-from ...generated.kernels import plane_from_normal_distance
 from ..._shared.jit import F1, f8, precompiled
+from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
+from ...errors import InvalidInputError, PlacementWarning
+from ...generated.kernels import plane_from_normal_distance
+from ...tolerances import tol
 from ..new_vertices import blend_weight_rows, interpolate_attribute, on_edges, place_in_rest
 from ..surface import mesh_arrays
 from ..topology import rig_topology
-from ...tolerances import tol
 from .assemble import _split_arrays
 from .cap import _cap
 from .result import CAP_VERTEX, NEW_VERTEX, CutResult
 from .split import Split, _classify, _split
-from ..._shared.warn import warn
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
            "PLACEMENT_TOLERANCE"]

@@ -1,8 +1,8 @@
 """Step 6 of a cut: the per-vertex arrays of both halves (originals they keep, then the new vertices)."""
 import numpy as np
 
+from ..._shared.jit import F2, I1, I2, kernel
 from ..new_vertices import interpolate_attribute
-from ..._shared.jit import kernel, F2, I1, I2
 
 
 @kernel((F2, I1, I1, F2), (I2, I1, I1, I2), cost=0.3)

@@ -1,11 +1,11 @@
 """Step 7 of a cut: planar caps over the loops the cut opened (ear clipping, holes bridged in)."""
 import numpy as np
 
+from ..._shared.jit import F2, I1, F2ar, helper, kernel, precompiled
 from ...animation.rig import Rig
 from ...generated.kernels import point_plane_distance_batch
 from ..topology import Topology, directed_loops, topology
 from .result import CAP_VERTEX
-from ..._shared.jit import F2, F2ar, I1, helper, kernel, precompiled
 
 precompiled(point_plane_distance_batch, (F2ar, F2, F2), cost=0.3)
 

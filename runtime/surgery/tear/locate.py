@@ -4,13 +4,13 @@ import math
 
 import numpy as np
 
+from ..._shared.jit import F1, F2, I1, I2, f8, helper, kernel
+from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
+from ...tolerances import tol
 from ..bvh import BVH_ARRAYS, _first_hit
 from ..surface import WELDED_MESH
-from ...tolerances import tol
-from .records import Ends, EDGE, FACE, VERTEX
-from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
-from ..._shared.jit import helper, kernel, F1, F2, I1, I2, f8
+from .records import EDGE, FACE, VERTEX, Ends
 
 
 # status codes of ``_ends``

@@ -4,11 +4,11 @@ import math
 
 import numpy as np
 
+from ..._shared.jit import F2, I1, I2, f8, helper, i8, kernel
+from ...algebra.vec3 import _distance
 from ...generated.kernels import barycentric
 from ..surface import WELDED_MESH
 from .records import EDGE, FACE, FACE_CARRIER, VERTEX
-from ...algebra.vec3 import _distance
-from ..._shared.jit import helper, kernel, F2, I1, I2, i8, f8
 
 
 @helper

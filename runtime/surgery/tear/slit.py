@@ -2,10 +2,10 @@
 (the slit opens)."""
 import numpy as np
 
+from ..._shared.jit import F1, F2, I1, I2, helper, i8, kernel
 from ...generated.kernels import point_plane_distance
 from ..surface import WELDED_MESH
 from .records import VERTEX
-from ..._shared.jit import helper, kernel, F1, F2, I1, I2, i8
 
 
 @helper

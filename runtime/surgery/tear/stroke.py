@@ -65,21 +65,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._shared.cache import rig_cached
 from ..._shared.checks import float_array
-from ..bvh import TriangleBVH
-from ...errors import CgaskinError, InvalidInputError, MissesMeshError, PlacementWarning
+from ..._shared.warn import warn
 from ...animation.rig import Rig
+from ...errors import CgaskinError, InvalidInputError, MissesMeshError, PlacementWarning
+from ...tolerances import tol
+from ..bvh import TriangleBVH
 from ..new_vertices import NewVertices, interpolate_attribute
 from ..surface import TEAR_LABEL, _labels, _surface, mesh_arrays, tear_topology
-from ..._shared.cache import rig_cached
-from ...tolerances import tol
 from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, locate
-from .records import Path, Pieces, Slit, TornFaces, Ends
+from .records import Ends, Path, Pieces, Slit, TornFaces
 from .retriangulate import _retriangulate
 from .slit import _open_slit, _torn_faces
 from .vertex_data import _vertex_data
 from .walk import walk
-from ..._shared.warn import warn
 
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
            "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]

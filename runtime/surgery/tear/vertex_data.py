@@ -2,10 +2,10 @@
 opening, rest placement in a pose)."""
 import numpy as np
 
+from ..._shared.jit import F1, F2, I1, I2, b1, f8, i8, kernel
+from ...algebra.vec3 import _copy_row, _set_row
 from ..new_vertices import _blended, _solve_linear, _to_rest, blend_weight_rows
 from .records import PIECES, SLIT
-from ...algebra.vec3 import _copy_row, _set_row
-from ..._shared.jit import kernel, F1, F2, I1, I2, b1, f8, i8
 
 
 @kernel((F2, I2, F2, I1, i8, F2, PIECES, SLIT, f8, F1, F2, b1), cost=3.4)

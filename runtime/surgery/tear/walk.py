@@ -5,10 +5,10 @@ import math
 
 import numpy as np
 
+from ..._shared.jit import F1, F2, I1, I2, S1, helper, i8, kernel
 from ...generated.kernels import segment_plane
 from ..surface import WELDED_MESH
-from .records import Ends, Path, EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER, VERTEX
-from ..._shared.jit import helper, kernel, F1, F2, I1, I2, S1, i8
+from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER, VERTEX, Ends, Path
 
 
 @helper
