@@ -7,8 +7,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
+from cgaskin import check_mesh
 from cgaskin.errors import InvalidInputError
-from cgaskin.animation.validate import EXACT_SUM_TOLERANCE, WEIGHT_SUM_TOLERANCE, check_mesh
+from cgaskin.tolerances import tol
 
 
 def quad(joints=None, weights=None):
@@ -57,20 +58,20 @@ def test_weights_not_summing_to_one_are_renormalised_with_a_warning():
     v, f, j, _ = quad(weights=w)
     with pytest.warns(UserWarning, match=r"mesh.glb: 2 vertices have weights that do not sum to 1 \(max deviation 0.2 at vertex 2\)"):
         _, _, j2, w2 = check_mesh(v, f, j, w, n_bones=2, source="mesh.glb")
-    assert (np.abs(w2.sum(axis=1) - 1) <= EXACT_SUM_TOLERANCE).all()
+    assert (np.abs(w2.sum(axis=1) - 1) <= tol.exact_weight_sum).all()
     np.testing.assert_allclose(w2[0], [5 / 9, 4 / 9, 0, 0])
     assert np.array_equal(w2[1], w[1]) and np.array_equal(w2[3], w[3])  # rows within tolerance: untouched
 
 
 def test_float32_noise_is_renormalised_silently():
     """Rows off 1 by less than the tolerance (float32 storage) still end up summing to 1."""
-    w = np.array([[0.5, 0.5 - 0.9 * WEIGHT_SUM_TOLERANCE, 0, 0]] * 4)
+    w = np.array([[0.5, 0.5 - 0.9 * tol.weight_sum, 0, 0]] * 4)
     v, f, j, _ = quad(weights=w)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         _, _, _, w2 = check_mesh(v, f, j, w)
     np.testing.assert_allclose(w2, w / w.sum(axis=1, keepdims=True), rtol=1e-15)
-    assert (np.abs(w2.sum(axis=1) - 1) <= EXACT_SUM_TOLERANCE).all()
+    assert (np.abs(w2.sum(axis=1) - 1) <= tol.exact_weight_sum).all()
 
 
 def test_rows_summing_to_one_are_kept_bit_for_bit():
@@ -203,7 +204,7 @@ def test_property_per_bone_weights_are_kept_up_to_scale(data):
         _, _, j2, w2 = check_mesh(vertices, faces, joints, weights, n_bones=6)
     assert j2.shape == w2.shape == (5, 4)
     assert np.all(w2 >= 0) and np.all((w2 > 0).sum(axis=1) <= 4)
-    np.testing.assert_allclose(w2.sum(axis=1), 1.0, rtol=0, atol=EXACT_SUM_TOLERANCE)
+    np.testing.assert_allclose(w2.sum(axis=1), 1.0, rtol=0, atol=tol.exact_weight_sum)
     before, after = dense(joints, weights, 6), dense(j2, w2, 6)
     for row in range(5):
         kept = after[row] > 0

@@ -22,9 +22,8 @@ import pytest
 from hypothesis import strategies as st
 
 import cgaskin
+from cgaskin import Rig, Skeleton, capsule_arm
 from cgaskin.surgery.cut import CAP_VERTEX, NEW_VERTEX
-from cgaskin.animation.rig import Rig, Skeleton
-from cgaskin.rigs.procedural import capsule_arm
 from cgaskin.surgery.topology import topology
 
 MODELS = ["Arm5.glb", "3Cylinder4bones.glb", "Fox.glb"]

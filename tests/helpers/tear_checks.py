@@ -19,10 +19,8 @@ import numpy as np
 from hypothesis import assume, strategies as st
 
 import cgaskin
-from cgaskin.surgery.bvh import TriangleBVH
-from cgaskin import skin
-from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.surgery.tear.stroke import SNAP_TOLERANCE, TearPathError, tear_stroke, tear_topology
+from cgaskin import TearPathError, TriangleBVH, capsule_arm, skin, tear_stroke
+from cgaskin.surgery.tear import SNAP_TOLERANCE, tear_topology
 
 PLANE_TOL = 1e-9        # path vertices on the tear plane, relative to the diagonal
 AREA_TOL = 1e-9         # relative area change with opening 0
@@ -117,7 +115,7 @@ def boundary_edges(topo):
 
 def check_weights(rig, first_new):
     """Finite, >= 0, at most 4 per vertex; the rows the tear made sum to 1 (1e-12), the others as
-    the loader left them (``validate.WEIGHT_SUM_TOLERANCE``)."""
+    the loader left them (``cgaskin.tolerances.tol.weight_sum``)."""
     w = np.asarray(rig.weights)
     assert np.isfinite(w).all() and (w >= 0).all()
     assert (np.count_nonzero(w, axis=1) <= 4).all()

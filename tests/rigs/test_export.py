@@ -7,11 +7,10 @@ import pygltflib
 import pytest
 
 from cgaskin import rigs
+from cgaskin import Channel, Clip, Rig, Skeleton, check_mesh
 from cgaskin.errors import InvalidInputError, ModelFormatError
-from cgaskin.animation.rig import Channel, Clip, Rig, Skeleton
 from cgaskin.rigs.export import save_gltf
 from cgaskin.rigs.gltf import load_gltf, trs_to_matrix
-from cgaskin.animation.validate import check_mesh
 
 MODELS = ["Arm5.glb", "3Cylinder4bones.glb", "PlaneWith3Bones.glb", "Fox.glb", "simple_skin.gltf",
           "quad_skin.glb"]

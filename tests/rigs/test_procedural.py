@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
+from cgaskin import Rig, check_mesh
 from cgaskin.errors import InvalidInputError
-from cgaskin.animation.rig import Rig
 from cgaskin.rigs.procedural import capsule_arm
 from cgaskin import baselines as B
 
@@ -98,9 +98,8 @@ def test_weights_valid_and_smooth(kwargs):
 
 
 def test_validates_with_check_mesh(arm):
-    validate = pytest.importorskip("cgaskin.animation.validate")
-    v, f, j, w = validate.check_mesh(arm.vertices, arm.faces, arm.joints, arm.weights,
-                                     n_bones=arm.skeleton.n_bones, source="capsule_arm")
+    v, f, j, w = check_mesh(arm.vertices, arm.faces, arm.joints, arm.weights,
+                            n_bones=arm.skeleton.n_bones, source="capsule_arm")
     assert np.array_equal(v, arm.vertices) and np.array_equal(f, arm.faces)
     assert np.array_equal(j, arm.joints) and np.array_equal(w, arm.weights)
 

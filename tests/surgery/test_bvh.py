@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from cgaskin.surgery.bvh import TriangleBVH, triangle_bvh
+from cgaskin import TriangleBVH
 from cgaskin.errors import InvalidInputError
+from cgaskin.surgery.bvh import triangle_bvh
 
 from tests.helpers.tear_checks import get_rig
 

@@ -7,10 +7,8 @@ import numpy as np
 import pytest
 
 import cgaskin
-from cgaskin.surgery.cut import PlaneMissesMeshWarning, cut, cut_details
+from cgaskin import PlaneMissesMeshWarning, Rig, capsule_arm, cut, cut_details
 from cgaskin.errors import InvalidInputError
-from cgaskin.animation.rig import Rig
-from cgaskin.rigs.procedural import capsule_arm
 
 from tests.helpers.cut_checks import MODELS, chain_skeleton, check_cut, diagonal, model
 

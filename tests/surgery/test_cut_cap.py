@@ -5,10 +5,9 @@ import numpy as np
 import pytest
 
 import cgaskin
-from cgaskin.surgery.cut import CAP_VERTEX, cut_details
-from cgaskin.animation.rig import Rig
-from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.surgery.topology import rig_topology, topology
+from cgaskin import Rig, capsule_arm, cut_details, rig_topology
+from cgaskin.surgery.cut import CAP_VERTEX
+from cgaskin.surgery.topology import topology
 
 from tests.helpers.cut_checks import chain_skeleton, check_cut, model, volume
 

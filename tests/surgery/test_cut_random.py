@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 import cgaskin
-from cgaskin.surgery.cut import cut_details
+from cgaskin import cut_details
 
 from tests.helpers.cut_checks import (AREA, MODELS, check_cut, crossing, diagonal, model, normals,
                                       plane_points, random_closed_rig, random_pose, volume)

@@ -7,10 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cgaskin.surgery.bvh import TriangleBVH
+from cgaskin import TriangleBVH, capsule_arm, tear, tear_stroke
 from cgaskin.errors import InvalidInputError, MissesMeshError
-from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.surgery.tear.stroke import TEAR_LABEL, tear, tear_stroke, tear_topology
+from cgaskin.surgery.tear import TEAR_LABEL, tear_topology
 
 from tests.helpers.tear_checks import (areas, capsule_blades, check_stroke, diagonal, face_normal, get_rig,
                                        save_gltf)

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from cgaskin import capsule_arm, rig_topology
 from cgaskin.errors import InvalidInputError
-from cgaskin.rigs.procedural import capsule_arm
-from cgaskin.surgery.topology import clear_topology_cache, rig_topology, topology
+from cgaskin.surgery.topology import clear_topology_cache, topology
 
 from tests.helpers.cut_checks import model, orientation_defects
 
