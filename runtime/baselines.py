@@ -1,8 +1,12 @@
-"""Plain-numpy reference skinning, independent of the CGA kernels.
+"""Plain-numpy reference implementations, independent of the CGA kernels and of the runtime's own
+transform helpers.
 
-These functions are the oracles the tests compare the generated kernels against, and the baselines the
-benchmarks time. They use nothing of ``cgaskin`` but numpy, so that a bug in the algebra cannot hide in
-both sides of a comparison.
+These functions are the oracles the tests compare cgaskin against, and the baselines the benchmarks
+time. They use nothing of ``cgaskin`` but its error types, and no formula of its production code: the
+quaternion/matrix conversions here are the Rodrigues form and Bar-Itzhack's eigenvector method where
+``cgaskin.algebra.transforms`` writes out the matrix entries and uses Shepperd's method, and ``trs_matrix``
+multiplies T @ R @ S where the runtime fills the blocks. So a bug cannot hide in both sides of a
+comparison, and tests/algebra/test_transforms.py checks that the two implementations agree.
 
 Conventions:
 
@@ -14,12 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .algebra.transforms import matrix_to_quat, matrix_to_trs, quat_to_matrix, trs_matrix
 from .errors import InvalidInputError
 
 __all__ = [
-    "lbs_matrices", "dqs", "trs_matrix", "matrix_to_trs", "quat_to_matrix", "matrix_to_quat", "quat_multiply",
-    "global_matrices",
+    "lbs_matrices", "dqs", "trs_matrix", "quat_to_matrix", "matrix_to_quat", "quat_multiply", "global_matrices",
 ]
 
 
@@ -43,6 +45,86 @@ def quat_multiply(a, b):
         aw * bz + ax * by - ay * bx + az * bw,
         aw * bw - ax * bx - ay * by - az * bz,
     ], axis=-1)
+
+
+def _cross_matrix(v):
+    """(..., 3, 3) matrices [v]x with [v]x @ p = v x p, for v (..., 3)."""
+    x, y, z = np.moveaxis(v, -1, 0)
+    zero = np.zeros_like(x)
+    return np.stack([np.stack([zero, -z, y], axis=-1),
+                     np.stack([z, zero, -x], axis=-1),
+                     np.stack([-y, x, zero], axis=-1)], axis=-2)
+
+
+def quat_to_matrix(q):
+    """Rotation matrix of a quaternion, in the Rodrigues form ``R = I + 2 w [v]x + 2 [v]x²``.
+
+    For a unit quaternion (v, w) this is the rotation by 2 acos(w) about v (Euler-Rodrigues).
+
+    q : (..., 4) float64 (x, y, z, w); normalised here, so any non-zero quaternion is accepted
+    returns (..., 3, 3) float64
+    """
+    q = np.asarray(q, dtype=np.float64)
+    if q.shape[-1:] != (4,):
+        raise InvalidInputError(f"quat_to_matrix: expected (..., 4), got {q.shape}")
+    norm = np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
+    if np.any(norm == 0) or not np.all(np.isfinite(norm)):
+        raise InvalidInputError("quat_to_matrix: quaternions must be finite and non-zero")
+    unit = q / norm
+    k = _cross_matrix(unit[..., :3])
+    w = unit[..., 3, None, None]
+    return np.eye(3) + 2.0 * w * k + 2.0 * (k @ k)
+
+
+def matrix_to_quat(m):
+    """Unit quaternion of a rotation matrix, as the eigenvector of Bar-Itzhack's symmetric 4x4 matrix.
+
+    For R = R(q), the matrix K below has the eigenvalue 1 with eigenvector q = (x, y, z, w) and the
+    triple eigenvalue -1/3 (Bar-Itzhack 2000, "New method for extracting the quaternion from a
+    rotation matrix"): the gap of 4/3 keeps the eigenvector accurate for every angle, 180° included.
+
+    m : (..., 3, 3) or (..., 4, 4) float64; only the upper-left 3x3 block is read and it must be a
+        rotation (orthonormal, det +1)
+    returns (..., 4) float64 (x, y, z, w), unit length, sign chosen with w >= 0 (for exact 180°
+        rotations, w == 0 and the overall sign is the eigensolver's)
+    """
+    m = np.asarray(m, dtype=np.float64)
+    if m.ndim < 2 or m.shape[-2:] not in ((3, 3), (4, 4)):
+        raise InvalidInputError(f"matrix_to_quat: expected (..., 3, 3) or (..., 4, 4), got {m.shape}")
+    r = m[..., :3, :3]
+    if not np.all(np.isfinite(r)):
+        raise InvalidInputError("matrix_to_quat: matrices must be finite")
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = (np.moveaxis(r[..., i, :], -1, 0) for i in range(3))
+    k = np.stack([
+        np.stack([r00 - r11 - r22, r10 + r01, r20 + r02, r21 - r12], axis=-1),
+        np.stack([r10 + r01, r11 - r00 - r22, r21 + r12, r02 - r20], axis=-1),
+        np.stack([r20 + r02, r21 + r12, r22 - r00 - r11, r10 - r01], axis=-1),
+        np.stack([r21 - r12, r02 - r20, r10 - r01, r00 + r11 + r22], axis=-1),
+    ], axis=-2) / 3.0
+    _, vectors = np.linalg.eigh(k)                  # eigenvalues in ascending order
+    q = vectors[..., :, -1]
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., 3:4] < 0, -q, q)
+
+
+def trs_matrix(t, q, s):
+    """Affine matrix ``T @ R @ S`` (glTF node transform order), as the product of the three.
+
+    t : (..., 3) float64 translation
+    q : (..., 4) float64 rotation quaternion (x, y, z, w)
+    s : (..., 3) float64 per-axis scale
+    returns (..., 4, 4) float64, leading dimensions broadcast
+    """
+    t = np.asarray(t, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
+    s = np.asarray(s, dtype=np.float64)
+    lead = np.broadcast_shapes(t.shape[:-1], q.shape[:-1], s.shape[:-1])
+    translate, rotate, scale = (np.tile(np.eye(4), lead + (1, 1)) for _ in range(3))
+    translate[..., :3, 3] = t
+    rotate[..., :3, :3] = quat_to_matrix(q)
+    for axis in range(3):
+        scale[..., axis, axis] = s[..., axis]
+    return translate @ rotate @ scale
 
 
 def global_matrices(parents, local):
