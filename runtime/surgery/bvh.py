@@ -13,12 +13,11 @@ Segment–triangle test: the watertight test of Woop, Benthin and Wald (JCGT 2(1
 (either face orientation counts). A segment through an edge or a vertex shared by several triangles
 hits at least one of them, so a scalpel cannot slip between two faces.
 
-A ``TriangleBVH`` keeps the positions it was built from; build another one (or call
-``triangle_bvh``, which caches one per positions array) when the positions change.
+A ``TriangleBVH`` keeps the positions it was built from; build another one when the positions
+change (the tear keeps one per rig and pose: ``surgery/surface.py``).
 """
 from __future__ import annotations
 
-import weakref
 from typing import NamedTuple
 
 import numpy as np
@@ -28,7 +27,7 @@ from .._shared.jit import F2, I1, I2, f8, helper, i8, kernel, record
 from ..errors import InvalidInputError
 from ..tolerances import tol
 
-__all__ = ["TriangleBVH", "triangle_bvh", "LEAF_SIZE"]
+__all__ = ["TriangleBVH", "BVHArrays", "LEAF_SIZE"]
 
 #: at most this many triangles per leaf (4 balances box tests against triangle tests)
 LEAF_SIZE = 4
@@ -381,36 +380,3 @@ class TriangleBVH:
         faces, ts = _all_hits(self._arrays, a, b)
         order = np.argsort(ts, kind="stable")
         return faces[order], ts[order]
-
-
-# ---- cache ------------------------------------------------------------------------------------------
-# One BVH per (positions, faces) array pair, keyed on the arrays' identity: building it costs
-# milliseconds, a query microseconds, so callers that tear the same mesh repeatedly should not pay
-# the build each time. An entry disappears with either array. The arrays must not be modified in
-# place afterwards (a Rig's arrays are treated as immutable throughout cgaskin).
-_CACHE: dict = {}
-
-
-def _forget(key):
-    _CACHE.pop(key, None)
-
-
-def triangle_bvh(positions, faces) -> TriangleBVH:
-    """The ``TriangleBVH`` of ``positions`` and ``faces``, built once per pair of array objects.
-
-    positions : (n, 3) float64 ndarray ; faces : (m, 3) int ndarray
-    Other inputs (lists, other dtypes) are converted and not cached.
-    """
-    if not (isinstance(positions, np.ndarray) and isinstance(faces, np.ndarray)
-            and positions.dtype == np.float64):
-        return TriangleBVH(positions, faces)
-    key = (id(positions), id(faces))
-    entry = _CACHE.get(key)
-    if entry is not None:
-        pos_ref, face_ref, bvh = entry
-        if pos_ref() is positions and face_ref() is faces:
-            return bvh
-    bvh = TriangleBVH(positions, faces)
-    _CACHE[key] = (weakref.ref(positions, lambda _r, k=key: _forget(k)),
-                   weakref.ref(faces, lambda _r, k=key: _forget(k)), bvh)
-    return bvh

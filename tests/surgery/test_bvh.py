@@ -9,7 +9,6 @@ from hypothesis import given, settings, strategies as st
 
 from cgaskin import TriangleBVH
 from cgaskin.errors import InvalidInputError
-from cgaskin.surgery.bvh import triangle_bvh
 
 from tests.helpers.tear_checks import get_rig
 
@@ -72,14 +71,13 @@ def test_bvh_is_watertight_through_vertices_and_edges():
             assert face >= 0 and abs(t - 0.5) < 1e-12
 
 
-def test_bvh_cache_and_checks():
+def test_bvh_checks():
     rig = get_rig("capsule")
-    assert triangle_bvh(rig.vertices, rig.faces) is triangle_bvh(rig.vertices, rig.faces)
     with pytest.raises(InvalidInputError):
         TriangleBVH(rig.vertices, np.zeros((0, 3), int))
     with pytest.raises(InvalidInputError):
         TriangleBVH(rig.vertices[:, :2], rig.faces)
-    bvh = triangle_bvh(rig.vertices, rig.faces)
+    bvh = TriangleBVH(rig.vertices, rig.faces)
     with pytest.raises(InvalidInputError):
         bvh.first_hit([0, 0, 0], [0, 0, 0])
     np.testing.assert_array_equal(bvh.triangle(7), rig.vertices[rig.faces[7]])

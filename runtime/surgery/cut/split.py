@@ -172,7 +172,7 @@ def _split(plane, positions, faces, wfaces, welded, representative, sign, face_v
     # Faces of both halves, in output numbering.
     pos_faces = np.empty((m_pos, 3), np.int64)
     neg_faces = np.empty((m_neg, 3), np.int64)
-    ip = np.int64(0)           # np.int64, not a literal: see tear.py's note on literals
+    ip = np.int64(0)           # np.int64, not a literal: see tear/records.py's note on literals
     ineg = np.int64(0)
     for f in range(m):
         s = side[f]

@@ -10,8 +10,8 @@ blade at time t_i and ``scalpel_to = (a1, b1)`` at t_{i+1}. Steps (design.md sec
    UV/normal seams) and a BVH over its triangles are built once per rig (and pose) and cached.
 2. **Where the blade meets the skin.** S_i is the *first* crossing of segment a0 -> b0 with the
    surface going from the handle a0 towards the tip b0 (the skin the blade enters); S_{i+1} likewise
-   for a1 -> b1. The BVH query is two-sided and watertight (``cgaskin.bvh``). A hit within
-   ``SNAP_TOLERANCE`` of a mesh vertex is that vertex (this is what lets a stroke that starts where
+   for a1 -> b1. The BVH query is two-sided and watertight (``surgery/bvh.py``). A hit within
+   ``tol.snap`` of a mesh vertex is that vertex (this is what lets a stroke that starts where
    the previous one ended continue the same slit), and one within it of where the plane crosses an
    edge of the hit face is that crossing (no zero-area slivers when the blade meets an edge). A
    blade that passes within it of a boundary vertex before its first hit meets the surface there
