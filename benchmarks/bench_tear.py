@@ -94,7 +94,7 @@ def bench_model(name, rig, want, repeat):
     count, blades = find_stroke(rig, want)
     bvh = TriangleBVH(rig.vertices, rig.faces)
     a, b = blades[0][0].copy(), blades[0][1].copy()
-    query = median_seconds(lambda: _first_hit(bvh._arrays, a, b), repeat=repeat, min_time=0.01)
+    query = median_seconds(lambda: _first_hit(tuple(bvh._arrays), a, b), repeat=repeat, min_time=0.01)
     rows.append([f"{name}: scalpel query", query * 1e3, "-", "microseconds"])
 
     stroke = median_seconds(lambda: tear_stroke(rig, *blades), repeat=repeat)

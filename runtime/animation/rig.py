@@ -23,7 +23,8 @@ from .clip import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
 from .pose import Pose
 from .skeleton import Skeleton
 
-__all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATHS"]   # the data model in one import
+#: the whole data model in one import
+__all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATHS"]
 
 
 @dataclass(frozen=True, eq=False)

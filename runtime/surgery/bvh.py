@@ -55,7 +55,7 @@ class BVHArrays(NamedTuple):
 
 
 #: the numba type of ``BVHArrays`` (for precompile signatures)
-BVH_ARRAYS = record(BVHArrays, F2, F2, I1, I1, I1, I1, I1, F2)
+BVH_ARRAYS = record(F2, F2, I1, I1, I1, I1, I1, F2)
 
 
 # ---- build --------------------------------------------------------------------------------------
@@ -234,8 +234,8 @@ def _shear(d):
 
 @kernel()
 def _first_hit(bvh, a, b):
-    """Smallest t in [0, 1] where segment a -> b meets a triangle of ``bvh`` (BVHArrays); returns
-    (face, t), face -1 if none."""
+    """Smallest t in [0, 1] where segment a -> b meets a triangle of ``bvh`` (BVHArrays as a tuple);
+    returns (face, t), face -1 if none."""
     node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = bvh
     d = b - a
     kx, ky, kz, sx, sy, sz = _shear(d)
@@ -281,8 +281,8 @@ def _first_hit(bvh, a, b):
 
 @kernel()
 def _all_hits(bvh, a, b):
-    """Every crossing of segment a -> b with a triangle of ``bvh`` (BVHArrays): (faces (k,), t (k,)),
-    unsorted."""
+    """Every crossing of segment a -> b with a triangle of ``bvh`` (BVHArrays as a tuple):
+    (faces (k,), t (k,)), unsorted."""
     node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = bvh
     d = b - a
     kx, ky, kz, sx, sy, sz = _shear(d)
@@ -371,12 +371,12 @@ class TriangleBVH:
         point a + t (b - a); (-1, nan) when the segment meets no triangle.
         """
         a, b = self._segment(a, b)
-        face, t = _first_hit(self._arrays, a, b)
+        face, t = _first_hit(tuple(self._arrays), a, b)
         return int(face), float(t)
 
     def all_hits(self, a, b) -> tuple[np.ndarray, np.ndarray]:
         """Every crossing of segment a -> b: (faces (k,) int64, t (k,) float64), sorted by t."""
         a, b = self._segment(a, b)
-        faces, ts = _all_hits(self._arrays, a, b)
+        faces, ts = _all_hits(tuple(self._arrays), a, b)
         order = np.argsort(ts, kind="stable")
         return faces[order], ts[order]

@@ -19,10 +19,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._shared.jit import F2, I2, b1, helper, kernel
+from .._shared.jit import F2, I1, I2, helper, i8, kernel
 from ..generated.kernels import affine_point
 
-__all__ = ["NewVertices", "on_edges", "blend_weight_rows", "interpolate_attribute", "place_in_rest"]
+__all__ = ["NewVertices", "on_edges", "blend_weight_rows", "attribute_rule", "interpolate_attribute",
+           "interpolate_in_place", "place_in_rest"]
 
 
 class NewVertices(NamedTuple):
@@ -40,7 +41,7 @@ class NewVertices(NamedTuple):
 def on_edges(lo, hi, t) -> NewVertices:
     """New vertices at parameter ``t`` (k,) of the edges ``lo`` -> ``hi`` (k,): (1 - t) x_lo + t x_hi."""
     t = np.asarray(t, dtype=np.float64)
-    return NewVertices(np.stack([lo, hi], axis=1).astype(np.int64), np.stack([1.0 - t, t], axis=1))
+    return NewVertices(np.stack([lo, hi], axis=1).astype(np.int64, copy=False), np.stack([1.0 - t, t], axis=1))
 
 
 @kernel((I2, F2, I2, F2), cost=0.6)
@@ -143,40 +144,76 @@ def _to_rest(target, guess, blend):
     return x, math.sqrt((target[0] - y[0]) ** 2 + (target[1] - y[1]) ** 2 + (target[2] - y[2]) ** 2)
 
 
-@kernel((F2, I2, F2, b1), cost=0.3)
-def _interpolate(values, src, coef, unit):
-    """(k, c) rows Σ_r coef[i, r] · values[src[i, r]]; renormalised to unit length when ``unit``
-    (normals), a zero row staying zero."""
-    k, c = src.shape[0], values.shape[1]
-    out = np.zeros((k, c))
-    for i in range(k):
-        length = 0.0
+#: how an attribute's rows are made for new vertices (``attribute_rule``)
+LINEAR, UNIT, DOMINANT = np.int64(0), np.int64(1), np.int64(2)
+
+
+def attribute_rule(name: str, width: int):
+    """LINEAR for most attributes; UNIT (interpolated, renormalised) for "NORMAL" (n, 3); DOMINANT
+    (the row of the source with the largest coefficient, the first on a tie) for application-specific
+    attributes ("_" prefix, e.g. the tear's labels), which may not be interpolable."""
+    if name.startswith("_"):
+        return DOMINANT
+    return UNIT if name == "NORMAL" and width == 3 else LINEAR
+
+
+@helper
+def _combine(values, src, coef, i, rule, out, row):
+    """out[row] = the row of new vertex i made from ``values`` by ``rule``."""
+    c = values.shape[1]
+    if rule == DOMINANT:
+        best = 0
+        for r in range(1, src.shape[1]):
+            if coef[i, r] > coef[i, best]:
+                best = r
         for q in range(c):
-            x = 0.0
-            for r in range(src.shape[1]):
-                x += coef[i, r] * values[src[i, r], q]
-            out[i, q] = x
-            length += x * x
-        if unit and length > 0.0:
-            inverse = 1.0 / math.sqrt(length)
-            for q in range(c):
-                out[i, q] *= inverse
+            out[row, q] = values[src[i, best], q]
+        return
+    length = 0.0
+    for q in range(c):
+        x = 0.0
+        for r in range(src.shape[1]):
+            x += coef[i, r] * values[src[i, r], q]
+        out[row, q] = x
+        length += x * x
+    if rule == UNIT and length > 0.0:          # a zero normal stays zero
+        inverse = 1.0 / math.sqrt(length)
+        for q in range(c):
+            out[row, q] *= inverse
+
+
+@kernel((F2, I2, F2, i8), cost=0.3)
+def _interpolate(values, src, coef, rule):
+    """(k, c) rows of the new vertices ``src``, ``coef`` (k, r) made from ``values`` (n, c) by ``rule``."""
+    out = np.empty((src.shape[0], values.shape[1]))
+    for i in range(src.shape[0]):
+        _combine(values, src, coef, i, rule, out, i)
     return out
 
 
+@kernel((F2, i8, I2, F2, i8, I1), cost=0.3)
+def interpolate_in_place(rows, first, src, coef, rule, copies):
+    """Fill the rows of an array extended for new vertices, in place (no copy of the sources):
+    ``rows[first:first + k]`` (float64 (N, c)) with the new vertices' rows, made by ``rule`` from rows
+    below ``first``, then the t rows after them with copies of the rows ``copies`` (t,) (the tear's
+    twins)."""
+    k = src.shape[0]
+    for i in range(k):
+        _combine(rows, src, coef, i, rule, rows, first + i)
+    for i in range(copies.shape[0]):
+        for q in range(rows.shape[1]):
+            rows[first + k + i, q] = rows[copies[i], q]
+
+
 def interpolate_attribute(name: str, values, new: NewVertices) -> np.ndarray:
-    """The rows of attribute ``name`` for new vertices.
+    """The rows of attribute ``name`` for new vertices (``attribute_rule``).
 
     values : (n, ...) the attribute's rows for the existing vertices
-    returns (k, ...) of ``values``' dtype: interpolated; "NORMAL" (n, 3) renormalised; an
-        application-specific attribute ("_" prefix, e.g. the tear's labels) copied from the source
-        with the largest coefficient (the first one on a tie)
+    returns (k, ...) of ``values``' dtype
     """
     values = np.asarray(values)
-    if name.startswith("_"):
-        return values[new.src[np.arange(len(new.src)), np.argmax(new.coef, axis=1)]]
     flat = np.ascontiguousarray(values.reshape(len(values), -1), dtype=np.float64)
-    rows = _interpolate(flat, new.src, new.coef, name == "NORMAL" and flat.shape[1] == 3)
+    rows = _interpolate(flat, new.src, new.coef, attribute_rule(name, flat.shape[1]))
     return rows.reshape((len(rows),) + values.shape[1:]).astype(values.dtype, copy=False)
 
 

@@ -70,7 +70,7 @@ class WeldedMesh(NamedTuple):
 
 
 #: the numba type of ``WeldedMesh`` (for precompile signatures)
-WELDED_MESH = record(WeldedMesh, F2, I2, I2, I2, I1, I1, I1, I1)
+WELDED_MESH = record(F2, I2, I2, I2, I1, I1, I1, I1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +78,7 @@ class _Surface:
     """What one stroke needs of a rig in one pose (rest when posed is None).
 
     positions : (n, 3) float64 surface positions of every vertex (skinned when posed)
+    faces : (m, 3) int64 the rig's faces (``mesh_arrays``)
     topo : Topology (label-aware, ``tear_topology``)
     welded : WeldedMesh
     bvh : TriangleBVH over ``positions``
@@ -87,6 +88,7 @@ class _Surface:
     """
 
     positions: np.ndarray
+    faces: np.ndarray
     topo: Topology
     welded: WeldedMesh
     bvh: TriangleBVH
@@ -169,10 +171,11 @@ def _build_surface(rig, positions, affines) -> _Surface:
     vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
     welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
                         topo.edge_face_faces, vf_offsets, vf_faces)
-    bvh = TriangleBVH(positions, rig.faces)
+    faces = mesh_arrays(rig).faces
+    bvh = TriangleBVH(positions, faces)
     boundary = np.unique(topo.edges[topo.boundary_edges])
     diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0)))
-    return _Surface(positions, topo, welded, bvh, boundary, diagonal, affines)
+    return _Surface(positions, faces, topo, welded, bvh, boundary, diagonal, affines)
 
 
 #: posed surfaces kept per rig: a few poses per rig are plenty
@@ -182,9 +185,9 @@ POSED_SURFACES = 8
 def _surface(rig, pose) -> _Surface:
     """The surface of ``rig`` as stored (``pose`` None) or skinned in ``pose``; cached per rig and
     pose (poses are compared by identity, and an entry goes with its pose)."""
+    if pose is None:       # the build checks the mesh first (mesh_arrays), once per rig
+        return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, mesh_arrays(r).vertices, None))
     mesh_arrays(rig)
-    if pose is None:
-        return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, r.vertices, None))
     check_pose(rig, pose)
     posed = rig_cached(rig, "tear.posed", lambda _rig: weakref.WeakKeyDictionary())
     surface = posed.get(pose)

@@ -83,12 +83,12 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
     """Steps 2-3: where the blade meets the skin at both times, the tear plane, and the side of
     every welded vertex.
 
-    bvh : BVHArrays of ``positions`` ; faces : (m, 3) int64 ; mesh : WeldedMesh ; boundary : (b,)
-    int64 welded vertices on a boundary ; tol : absolute snap distance ; min_sine : relative
+    bvh : BVHArrays (as a tuple) of ``positions`` ; faces : (m, 3) int64
+    mesh : WeldedMesh (as a tuple) ; boundary : (b,) int64 welded vertices on a boundary
+    tol : absolute snap distance ; min_sine : relative (``tol.min_sine``)
     returns the fields of ``Ends``
     """
-    wpos, wfaces, face_edges, edges = mesh.positions, mesh.faces, mesh.face_edges, mesh.edges
-    vf_offsets, vf_faces = mesh.vf_offsets, mesh.vf_faces
+    (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
     ends_int = np.zeros((2, 2), np.int64)
     ends_pos = np.zeros((2, 3))
     hits = np.zeros((2, 3))
@@ -168,11 +168,10 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
     return OK, ends_int, ends_pos, hits, hit_faces, plane, cls
 
 
-def locate(surface, faces, scalpel_from, scalpel_to, bvh=None) -> Ends:
+def locate(surface, faces, a0, b0, a1, b1, bvh=None) -> Ends:
     """Steps 2-3 on ``surface`` (``surface._Surface``) of the mesh with ``faces`` (m, 3) int64, for
-    the blade (handle, tip) at t_i and t_{i+1}; ``bvh`` a TriangleBVH of the surface (its own by
-    default)."""
-    (a0, b0), (a1, b1) = np.asarray(scalpel_from, np.float64), np.asarray(scalpel_to, np.float64)
+    the blade (handle a, tip b) at t_i (a0, b0) and t_{i+1} (a1, b1), (3,) float64 each; ``bvh`` a
+    TriangleBVH of the surface (its own by default)."""
     bvh = surface.bvh if bvh is None else bvh
-    return Ends(*_ends(bvh._arrays, a0, b0, a1, b1, surface.positions, faces, surface.welded,
+    return Ends(*_ends(tuple(bvh._arrays), a0, b0, a1, b1, surface.positions, faces, tuple(surface.welded),
                        surface.boundary, tol.snap * surface.diagonal, tol.min_sine))

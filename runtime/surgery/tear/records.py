@@ -100,5 +100,5 @@ class Slit(NamedTuple):
 
 
 #: numba types of the records that kernels take
-PIECES = record(Pieces, I1, I2, I1, I2, F2)
-SLIT = record(Slit, B1, I2, I2, I1, I1)
+PIECES = record(I1, I2, I1, I2, F2)
+SLIT = record(B1, I2, I2, I1, I1)

@@ -241,7 +241,7 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
 def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     """Split every face the path crosses (and every face on a crossed edge) and create the new vertices.
 
-    path_int, path_float : the fields of ``Path`` ; faces : (m, 3) int64 ; mesh : WeldedMesh
+    path_int, path_float : the fields of ``Path`` ; faces : (m, 3) int64 ; mesh : WeldedMesh (as a tuple)
     n_vertices : int, the torn mesh's new vertices count from it ; on_edge : tolerance (``tol.on_edge``)
     returns the fields of ``Pieces``:
         affected (a,) int64 faces replaced by their pieces
@@ -250,8 +250,7 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
         new_src (v, 3) int64, new_coef (v, 3) float64: each new vertex interpolates the data of the
             vertices new_src with coefficients new_coef (``_new_vertex``)
     """
-    wpos, wfaces, face_edges, edges = mesh.positions, mesh.faces, mesh.face_edges, mesh.edges
-    ef_offsets, ef_faces = mesh.ef_offsets, mesh.ef_faces
+    (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
     k_nodes = path_int.shape[0]
     affected = np.empty(4 * k_nodes + 8, np.int64)
     n_aff = np.int64(0)

@@ -212,11 +212,11 @@ def _torn_faces(path_int, path_float, faces, welded, mesh, affected, tris, new_n
     """The faces of the torn mesh, with what ``_open_slit`` needs.
 
     path_int, path_float : the fields of ``Path`` ; faces : (m, 3) int64 ; welded : (n,) int64 welded
-    vertex of each vertex ; mesh : WeldedMesh ; affected, tris, new_node : from ``Pieces``
+    vertex of each vertex ; mesh : WeldedMesh (as a tuple) ; affected, tris, new_node : from ``Pieces``
     returns the fields of ``TornFaces``
     """
-    wfaces, vf_offsets, vf_faces = mesh.faces, mesh.vf_offsets, mesh.vf_faces
-    n_welded = mesh.positions.shape[0]
+    (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
+    n_welded = wpos.shape[0]
     n, m = welded.shape[0], faces.shape[0]
     index = np.zeros(m, np.int64)              # row of each kept face in the torn faces, -1 if removed
     for f in affected:

@@ -72,7 +72,7 @@ from ...animation.rig import Rig
 from ...errors import CgaskinError, InvalidInputError, MissesMeshError, PlacementWarning
 from ...tolerances import tol
 from ..bvh import TriangleBVH
-from ..new_vertices import NewVertices, interpolate_attribute
+from ..new_vertices import attribute_rule, interpolate_in_place
 from ..surface import TEAR_LABEL, _labels, _surface, mesh_arrays, tear_topology
 from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, locate
 from .records import Ends, Path, Pieces, Slit, TornFaces
@@ -134,10 +134,11 @@ def _scalpel(value, name):
     if arr.shape != (2, 3):
         raise InvalidInputError(f"{name} must be a pair of points (handle a, tip b), shape (2, 3), "
                                 f"got shape {arr.shape}")
-    if np.array_equal(arr[0], arr[1]):
+    handle, tip = arr                           # (3,) views, C-contiguous
+    if (handle == tip).all():
         raise InvalidInputError(f"{name}: the handle and the tip coincide at {arr[0].tolist()}; the "
                                 f"scalpel must be a segment of non-zero length")
-    return arr[0], arr[1]
+    return handle, tip
 
 
 def _opening(value) -> float:
@@ -195,10 +196,10 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
         bvh = surface.bvh
     elif not isinstance(bvh, TriangleBVH) or bvh.n_faces != rig.n_faces:
         raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {rig.n_faces} faces")
-    faces = mesh_arrays(rig).faces
+    faces = surface.faces
 
     # 2-3: where the blade meets the skin at both times, the tear plane, the sides of the vertices
-    ends = locate(surface, faces, (a0, b0), (a1, b1), bvh)
+    ends = locate(surface, faces, a0, b0, a1, b1, bvh)
     _check_ends(ends, surface, faces, bvh, (a0, b0), (a1, b1))
     # 4: the path
     path = walk(surface, ends)
@@ -210,8 +211,8 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
             f"section, or a boundary of the mesh is in the way (use shorter strokes)")
     # 5-6: re-triangulate, open the slit (separate kernels, so that a cold start compiles them in
     # parallel: cgaskin.precompile)
-    pieces = Pieces(*_retriangulate(*path, faces, surface.welded, rig.n_vertices, tol.on_edge))
-    torn = TornFaces(*_torn_faces(*path, faces, surface.topo.welded, surface.welded, pieces.affected,
+    pieces = Pieces(*_retriangulate(*path, faces, tuple(surface.welded), rig.n_vertices, tol.on_edge))
+    torn = TornFaces(*_torn_faces(*path, faces, surface.topo.welded, tuple(surface.welded), pieces.affected,
                                   pieces.tris, pieces.new_node))
     slit = Slit(*_open_slit(torn.faces, torn.welded, torn.node_welded, surface.positions, torn.new_positions,
                             ends.plane, torn.candidates))
@@ -225,7 +226,8 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
 def _check_ends(ends: Ends, surface, faces, bvh, blade_from, blade_to) -> None:
     """The errors of steps 2-3, named for the user."""
     if ends.status in (FROM_MISSES, TO_MISSES):
-        name, (a, b) = ("scalpel_from", blade_from) if ends.status == FROM_MISSES else ("scalpel_to", blade_to)
+        missed = ends.status == FROM_MISSES
+        name, (a, b) = ("scalpel_from", blade_from) if missed else ("scalpel_to", blade_to)
         raise MissesMeshError(f"the scalpel {name} (handle {a.tolist()} -> tip {b.tolist()}) does not "
                               f"meet the surface")
     if bvh is not surface.bvh:
@@ -248,17 +250,17 @@ def _torn_rig(rig, surface, path: Path, pieces: Pieces, faces, slit: Slit, plane
     n, n_new = rig.n_vertices, len(pieces.new_node)
     added = n_new + len(slit.twins)
     vertices, joints, weights, labels = (_extended(values, added) for values in mesh[:4])
-    residual = _vertex_data(vertices, joints, weights, labels, n, path.points, pieces, slit, opening,
-                            plane[:3].copy(), affines, posed)
+    residual = _vertex_data(vertices, joints, weights, labels, n, path.points, tuple(pieces), tuple(slit),
+                            opening, plane[:3].copy(), affines, posed)
     if not residual <= tol.placement * surface.diagonal:
         warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
              f"blended transform is singular or nearly so)", PlacementWarning)
-    attributes = {}
-    new = NewVertices(pieces.new_src, pieces.new_coef)
+    attributes, twin_of = {}, slit.twins[:, 0].copy()
     for name, (values, tail) in mesh[4].items():
         rows = _extended(values, added)
-        rows[n:n + n_new] = interpolate_attribute(name, values, new)
-        rows[n + n_new:] = rows[slit.twins[:, 0]]               # a twin has its vertex's data
+        # new vertices interpolate their sources, and a twin has its vertex's data
+        interpolate_in_place(rows, n, pieces.new_src, pieces.new_coef, attribute_rule(name, rows.shape[1]),
+                             twin_of)
         attributes[name] = rows.reshape((len(rows),) + tail)
     if slit.split.any() or TEAR_LABEL in rig.attributes:
         attributes[TEAR_LABEL] = labels[:, None].astype(np.float64)

@@ -24,11 +24,11 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, pieces, slit, openin
     out_v (N, 3) float64, out_j (N, 4) int64, out_w (N, 4) float64, out_l (N,) int64 with N = n + v + t:
         the vertex arrays of the torn mesh, the originals in their first n rows (the caller copies
         them: numpy's copy beats a compiled loop); filled here
-    path_float : (k, 4) Path.points ; pieces : Pieces ; slit : Slit
+    path_float : (k, 4) Path.points ; pieces : Pieces, slit : Slit (as tuples)
     returns the largest placement residual |skinned new vertex - its posed path point| (0 at rest)
     """
-    new_node, new_src, new_coef = pieces.new_node, pieces.new_src, pieces.new_coef
-    twins, moved = slit.twins, slit.moved
+    affected, tris, new_node, new_src, new_coef = pieces
+    split, twins, moved, side_a, side_b = slit
     v, t = new_node.shape[0], twins.shape[0]
     new_joints, new_weights = blend_weight_rows(new_src, new_coef, out_j, out_w)
     top = 0

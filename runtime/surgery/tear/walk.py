@@ -70,11 +70,10 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
     Each face (and each in-plane edge) is crossed at most once, which bounds the search by the face
     count and keeps fronts from looping.
 
-    mesh : WeldedMesh ; cls : (w,) int8 sides of the welded vertices ; plane : (4,)
+    mesh : WeldedMesh (as a tuple) ; cls : (w,) int8 sides of the welded vertices ; plane : (4,)
     returns found (bool), and the fields of ``Path`` from start to target
     """
-    wpos, wfaces, face_edges, edges = mesh.positions, mesh.faces, mesh.face_edges, mesh.edges
-    ef_offsets, ef_faces, vf_offsets, vf_faces = mesh.ef_offsets, mesh.ef_faces, mesh.vf_offsets, mesh.vf_faces
+    (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
     m = wfaces.shape[0]
     cap = m + edges.shape[0] + 4
     ni = np.empty((cap, 5), np.int64)         # kind, id, parent, carrier kind, carrier
@@ -199,14 +198,14 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
 def walk(surface, ends: Ends) -> Path | None:
     """Step 4 on ``surface`` (``surface._Surface``): the path from S_i to S_{i+1} along the section
     (None when the section does not lead there); a one-segment path gets its midpoint."""
-    (s_kind, s_id), (t_kind, t_id) = ends.nodes
+    (s_kind, s_id), (t_kind, t_id) = ends.nodes.tolist()      # Python ints: cheaper than numpy scalars
     s_pos, t_pos = ends.points
     if s_kind == FACE and t_kind == FACE and s_id == t_id:
         path = Path(np.array([[FACE, s_id, NO_CARRIER, -1], [FACE, s_id, FACE_CARRIER, s_id]], np.int64),
                     np.array([[0.0, *s_pos], [0.0, *t_pos]]))
     else:
-        found, nodes, points = _walk(surface.welded, ends.sides, ends.plane, s_kind, s_id, s_pos, t_kind,
-                                     t_id, t_pos)
+        found, nodes, points = _walk(tuple(surface.welded), ends.sides, ends.plane, s_kind, s_id, s_pos,
+                                     t_kind, t_id, t_pos)
         if not found:
             return None
         path = Path(nodes, points)
