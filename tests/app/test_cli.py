@@ -1,6 +1,5 @@
 """The command line, in process: the demo, skin, cut and tear on real files, and its errors."""
 import numpy as np
-import pygltflib
 import pytest
 
 import cgaskin

@@ -60,7 +60,7 @@ from ..surface import mesh_arrays
 from ..topology import rig_topology
 from .assemble import _split_arrays
 from .cap import _cap
-from .result import CAP_VERTEX, NEW_VERTEX, CutResult
+from .result import NEW_VERTEX, CutResult
 from .split import Split, _classify, _split
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",

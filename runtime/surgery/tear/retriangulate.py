@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import F2, I1, I2, f8, helper, i8, kernel
+from ..._shared.jit import F2, I2, f8, helper, i8, kernel
 from ...algebra.vec3 import _distance
 from ...generated.kernels import barycentric
 from ..surface import WELDED_MESH

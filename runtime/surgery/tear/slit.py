@@ -2,7 +2,7 @@
 (the slit opens)."""
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, I2, helper, i8, kernel
+from ..._shared.jit import F1, F2, I1, I2, helper, kernel
 from ...generated.kernels import point_plane_distance
 from ..surface import WELDED_MESH
 from .records import VERTEX

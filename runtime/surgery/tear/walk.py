@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, I2, S1, helper, i8, kernel
+from ..._shared.jit import F1, S1, helper, i8, kernel
 from ...generated.kernels import segment_plane
 from ..surface import WELDED_MESH
 from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER, VERTEX, Ends, Path
