@@ -40,7 +40,8 @@ def run_random_stroke(name, rig, pose, data, opening=0.0):
         # legitimate only when the section really does not join the two hits
         from cgaskin.surgery.surface import _surface, mesh_arrays
         from cgaskin.surgery.tear.locate import locate
-        plane = locate(_surface(rig, pose), mesh_arrays(rig).faces, scalpel_from, scalpel_to).plane
+        blades = np.asarray(scalpel_from, np.float64), np.asarray(scalpel_to, np.float64)
+        plane = locate(_surface(rig, pose), mesh_arrays(rig).faces, *blades[0], *blades[1]).plane
         assert section_separates(rig, plane, (scalpel_from, scalpel_to), pose) in (True, None)
         return None
     for before, after in zip(original, (rig.vertices, rig.faces, rig.joints, rig.weights)):
