@@ -127,8 +127,9 @@ def skin(rig: Rig, pose: Pose | None = None, out=None) -> np.ndarray:
 
 
 def skin_normals(rig: Rig, pose: Pose | None = None, normals=None) -> np.ndarray:
-    """Skinned unit normals (n, 3): the blended linear part's cofactor matrix (inverse transpose up
-    to a positive factor, so scale and non-uniform scale are corrected) applied, then normalised."""
+    """Skinned unit normals (n, 3): the blended linear part M's inverse transpose applied (as
+    |det M| M^-T, the cofactor matrix times sign(det M): scale, non-uniform scale and mirroring are
+    corrected), then normalised."""
     pose = rig.rest_pose() if pose is None else check_pose(rig, pose)
     normals = rig.attributes.get("NORMAL") if normals is None else normals
     if normals is None:
@@ -138,6 +139,8 @@ def skin_normals(rig: Rig, pose: Pose | None = None, normals=None) -> np.ndarray
     lin = np.einsum("nk,nkij->nij", rig.weights, affines[rig.joints][..., :3])
     cof = np.stack([np.cross(lin[:, 1], lin[:, 2]), np.cross(lin[:, 2], lin[:, 0]),
                     np.cross(lin[:, 0], lin[:, 1])], axis=1)       # rows of det(M) M^-T
-    out = np.einsum("nij,nj->ni", cof, normals)
+    det = np.einsum("ni,ni->n", lin[:, 0], cof[:, 0])
+    # the cofactor matrix is det(M) M^-T: a mirrored blend (det < 0) would turn the normals inside out
+    out = np.einsum("nij,nj->ni", cof, normals) * np.where(det < 0, -1.0, 1.0)[:, None]
     length = np.linalg.norm(out, axis=1, keepdims=True)
     return out / np.where(length > 0, length, 1.0)
