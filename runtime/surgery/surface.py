@@ -21,26 +21,32 @@ TEAR_LABEL = "_TEAR"
 
 
 def _labels(rig) -> np.ndarray:
-    """(n,) int64 tear labels of the rig's vertices (0 without the attribute)."""
+    """(n,) int64 tear labels of the rig's vertices (0 without the attribute): whole numbers, any sign."""
     values = rig.attributes.get(TEAR_LABEL)
     if values is None:
         return np.zeros(rig.n_vertices, np.int64)
     values = np.asarray(values, dtype=np.float64).reshape(rig.n_vertices, -1)[:, 0]
     if not np.isfinite(values).all():
         raise InvalidInputError(f"attribute {TEAR_LABEL} holds non-finite values")
-    return np.rint(values).astype(np.int64)
+    labels = np.rint(values)
+    bad = np.flatnonzero((labels != values) | (np.abs(labels) >= 2.0 ** 53))
+    if len(bad):
+        raise InvalidInputError(f"attribute {TEAR_LABEL} must hold whole numbers (labels of slit sides), "
+                                f"got {values[bad[0]]!r} at vertex {bad[0]}")
+    return labels.astype(np.int64)
 
 
 def _build_tear_topology(rig) -> Topology:
     labels = _labels(rig)
     if not labels.any():
         return rig_topology(rig)
-    # weld by position (the shared topology), then split each welded vertex by label: the pair
-    # (welded id, label) is numbered through ``topology`` itself, fed with one exact float per pair
+    # weld by position (the shared topology), then split each welded vertex by label: every distinct
+    # (welded id, label) pair gets its own number (a unique-rows pass: no arithmetic key can collide),
+    # fed to ``topology`` as one exact float per pair
     by_position = rig_topology(rig).welded
-    key = by_position * (int(labels.max()) + 1) + labels
+    _, pair = np.unique(np.stack([by_position, labels], axis=1), axis=0, return_inverse=True)
     keys = np.zeros((rig.n_vertices, 3))
-    keys[:, 0] = key.astype(np.float64)        # exact below 2**53
+    keys[:, 0] = pair.reshape(-1)
     return topology(keys, rig.faces)
 
 

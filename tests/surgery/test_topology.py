@@ -1,7 +1,11 @@
 """The welded topology that cut and tear run on (cgaskin.surgery.topology).
 """
+import dataclasses
+
 import numpy as np
 import pytest
+
+import cgaskin
 
 from cgaskin import capsule_arm, rig_topology
 from cgaskin.errors import InvalidInputError
@@ -69,3 +73,29 @@ def test_topology_rejects_bad_arrays():
         topology(np.zeros((3, 3)), np.array([[0, 1, 3]]))
     with pytest.raises(InvalidInputError):
         topology(np.full((3, 3), np.nan), np.array([[0, 1, 2]]))
+
+
+def test_tear_labels_of_any_sign_never_weld_distant_vertices():
+    """Issue 10, item 6: negative labels made the key welded * (max + 1) + label collide."""
+    from cgaskin.surgery.tear import TEAR_LABEL, tear_topology
+    rig = cgaskin.capsule_arm()
+    by_position = cgaskin.rig_topology(rig)
+    labels = np.random.default_rng(5).integers(-5, 6, by_position.n_welded)[by_position.welded]
+    labelled = dataclasses.replace(rig, attributes={**rig.attributes,
+                                                    TEAR_LABEL: labels[:, None].astype(float)})
+    topo = tear_topology(labelled)
+    assert topo.n_welded == by_position.n_welded
+    spread = np.zeros(topo.n_welded)
+    offsets = np.linalg.norm(rig.vertices - rig.vertices[topo.representative[topo.welded]], axis=1)
+    np.maximum.at(spread, topo.welded, offsets)
+    assert spread.max() == 0.0
+
+
+def test_tear_labels_must_be_whole_numbers():
+    from cgaskin.surgery.tear import TEAR_LABEL
+    rig = cgaskin.capsule_arm()
+    labels = np.zeros((rig.n_vertices, 1))
+    labels[7] = 0.5
+    labelled = dataclasses.replace(rig, attributes={**rig.attributes, TEAR_LABEL: labels})
+    with pytest.raises(cgaskin.InvalidInputError, match="whole numbers.*vertex 7"):
+        cgaskin.tear(labelled, ([0.6, 0.5, 0.0], [0.6, 0.0, 0.0]), ([0.9, 0.5, 0.0], [0.9, 0.0, 0.0]))
