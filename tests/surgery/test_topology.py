@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 import cgaskin
-
 from cgaskin import capsule_arm, rig_topology
 from cgaskin.errors import InvalidInputError
 from cgaskin.surgery.topology import clear_topology_cache, topology
