@@ -2,6 +2,9 @@
 names the argument, before any numba kernel sees it."""
 from __future__ import annotations
 
+import math
+import numbers
+
 import numpy as np
 
 from ..errors import InvalidInputError
@@ -11,6 +14,9 @@ def float_array(value, name: str, last: int | None = None, ndim: int | None = No
     """A finite float64 array (a copy only when needed), with last axis ``last`` if given."""
     try:
         arr = np.asarray(value)
+        if arr.dtype.kind in "USO" and not _all_numbers(arr):
+            # numpy would parse "2" as 2.0: a string where a number belongs is a mistake to report
+            raise TypeError(f"{arr.dtype.kind == 'O' and 'objects' or 'strings'} are not numbers")
         if arr.dtype.kind != "c":
             arr = np.asarray(arr, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -25,6 +31,21 @@ def float_array(value, name: str, last: int | None = None, ndim: int | None = No
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise InvalidInputError(f"{name} holds a non-finite value (NaN or inf) at index {tuple(bad)}")
     return arr
+
+
+def _all_numbers(arr) -> bool:
+    """Whether an object array holds only numbers (not strings, not None)."""
+    return arr.dtype.kind == "O" and all(isinstance(x, numbers.Real) for x in arr.flat)
+
+
+def real_number(value, name: str) -> float:
+    """A finite float from a real number (not a string, not a bool)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise InvalidInputError(f"{name} must be a real number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise InvalidInputError(f"{name} must be finite, got {value}")
+    return value
 
 
 def index_array(value, name: str, upper: int) -> np.ndarray:

@@ -38,6 +38,9 @@ precompiled(K.reverse_versor, (F1r,), cost=0.2)
 precompiled(K.versor_log, (F1r,), cost=0.4)
 precompiled(K.versor_exp, (F1r,), cost=0.2)
 
+#: dilation factors a versor holds: V Ṽ of a dilator cancels terms of the size of the scale, so
+#: beyond about 1e15 (or below 1e-16) float64 cannot hold one at all; 1e±12 keeps a margin
+SCALE_RANGE = (1e-12, 1e12)
 VERSOR_TOLERANCE = tol.versor        # relative residual of V Ṽ beyond which an array is not a versor
 
 
@@ -126,8 +129,11 @@ def rotor_from_quaternion(q) -> np.ndarray:
 def dilator(scale) -> np.ndarray:
     """Uniform scale by ``scale`` > 0 about the origin: apply(dilator(s), x) == s * x."""
     scale = float_array(scale, "scale")
-    if np.any(scale <= 0):
-        raise InvalidInputError(f"scale must be > 0, got {scale.min()}")
+    low, high = SCALE_RANGE
+    outside = (scale < low) | (scale > high)
+    if np.any(outside):
+        raise InvalidInputError(f"scale must lie in [{low:g}, {high:g}] (a dilation float64 can hold), "
+                                f"got {scale[outside].flat[0]!r}")
     return _rows(K.versor_dilator_batch, VERSOR_SIZE, (scale, False))
 
 

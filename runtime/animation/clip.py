@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._shared.checks import real_number
 from ..algebra import versor
 from ..errors import InvalidInputError
 
@@ -94,9 +95,7 @@ def sample_clip(clip: Clip, t: float, rotation_blend: str = "slerp") -> dict:
     rotors in one batch of kernel calls for the whole clip."""
     if rotation_blend not in ROTATION_BLENDS:
         raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
-    t = float(t)
-    if not np.isfinite(t):
-        raise InvalidInputError(f"time must be finite, got {t}")
+    t = real_number(t, "time")
     values = {}
     pending = []                                    # LINEAR rotations: (key, q0, q1, u)
     for channel in clip.channels:

@@ -135,7 +135,8 @@ class Pose:
         return self._edit(joint, left=versor.translator(float_array(vector, "vector", 3)))
 
     def dilate(self, joint, scale) -> "Pose":
-        """Scale ``joint``'s subtree by ``scale`` > 0 about the joint's origin."""
+        """Scale ``joint``'s subtree by ``scale`` about the joint's origin; ``scale`` in
+        ``versor.SCALE_RANGE`` ([1e-12, 1e12]), else InvalidInputError."""
         return self._edit(joint, right=versor.dilator(scale))
 
     # -- evaluation ----------------------------------------------------------------------------

@@ -132,7 +132,9 @@ def _checked_mesh(rig) -> MeshArrays:
         raise InvalidInputError(f"rig.faces must index the {n} vertices, got indices from {faces.min()} to "
                                 f"{faces.max()}")
     if not np.isfinite(vertices).all():
-        raise InvalidInputError("rig.vertices hold non-finite values (NaN or inf)")
+        row = int(np.argwhere(~np.isfinite(vertices))[0, 0])
+        raise InvalidInputError(f"rig.vertices hold a non-finite value (NaN or inf) in row {row}: "
+                                f"{vertices[row].tolist()}")
     if joints.ndim != 2 or joints.shape != weights.shape or len(joints) != n or not 1 <= joints.shape[1] <= 4:
         raise InvalidInputError(f"rig.joints {joints.shape} and rig.weights {weights.shape} must both "
                                 f"have shape ({n}, k) with k <= 4")

@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._shared.checks import float_array
 from ..._shared.jit import F1, f8, precompiled
 from ..._shared.warn import warn
 from ...animation.rig import Rig
@@ -77,21 +78,9 @@ class PlaneMissesMeshWarning(UserWarning):
 
 
 # ---- argument checks ----------------------------------------------------------------------------------
-def _vector(value, name) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{name} must be 3 numbers, got {value!r}: {exc}") from None
-    if arr.shape != (3,):
-        raise InvalidInputError(f"{name} must have shape (3,), got {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise InvalidInputError(f"{name} must be finite, got {arr.tolist()}")
-    return arr
-
-
 def _plane(normal, point) -> np.ndarray:
-    n = _vector(normal, "normal")
-    p = _vector(point, "point")
+    n = float_array(normal, "normal", 3, ndim=1)
+    p = float_array(point, "point", 3, ndim=1)
     scale = np.abs(n).max()
     if scale == 0.0:
         raise InvalidInputError("normal must not be the zero vector")

@@ -66,7 +66,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._shared.cache import rig_cached
-from ..._shared.checks import float_array
+from ..._shared.checks import float_array, real_number
 from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...errors import CgaskinError, InvalidInputError, MissesMeshError, PlacementWarning
@@ -142,11 +142,8 @@ def _scalpel(value, name):
 
 
 def _opening(value) -> float:
-    try:
-        opening = float(value)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"opening must be a number >= 0, got {value!r}") from None
-    if not math.isfinite(opening) or opening < 0:
+    opening = real_number(value, "opening")
+    if opening < 0:
         raise InvalidInputError(f"opening must be a finite number >= 0, got {value!r}")
     return opening
 
