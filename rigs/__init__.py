@@ -5,9 +5,11 @@ glTF (.glb, .gltf) is read natively (``cgaskin.rigs.gltf``); other formats go th
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-from ..errors import ModelFormatError
+from ..animation.rig import Rig
+from ..errors import InvalidInputError, ModelFormatError
 
 GLTF_EXTENSIONS = (".glb", ".gltf")
 #: formats read through assimp; assimp knows more, these are the ones cgaskin is checked on
@@ -16,6 +18,13 @@ ASSIMP_EXTENSIONS = (".fbx", ".dae", ".obj", ".blend", ".3ds", ".x", ".ms3d", ".
 SAVE_EXTENSIONS = GLTF_EXTENSIONS
 
 __all__ = ["load", "save", "GLTF_EXTENSIONS", "ASSIMP_EXTENSIONS", "SAVE_EXTENSIONS"]
+
+
+def _path(value, name: str) -> Path:
+    if not isinstance(value, (str, os.PathLike)):
+        raise InvalidInputError(f"{name} must be a file path (str or os.PathLike), got "
+                                f"{type(value).__name__}")
+    return Path(value)
 
 
 def load(path, **options):
@@ -35,7 +44,7 @@ def load(path, **options):
     NoSkinError
         The file holds no skinned mesh.
     """
-    path = Path(path)
+    path = _path(path, "path")
     suffix = path.suffix.lower()
     if suffix in GLTF_EXTENSIONS:
         from .gltf import load_gltf
@@ -58,7 +67,9 @@ def save(rig, path):
     ModelFormatError
         The extension is not .glb or .gltf.
     """
-    path = Path(path)
+    if not isinstance(rig, Rig):
+        raise InvalidInputError(f"rig must be a cgaskin.Rig, got {type(rig).__name__}")
+    path = _path(path, "path")
     if path.suffix.lower() not in SAVE_EXTENSIONS:
         raise ModelFormatError(f"cannot save {path.name}: cgaskin writes {', '.join(SAVE_EXTENSIONS)} "
                                f"(skinned glTF 2.0)")

@@ -81,6 +81,8 @@ def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | N
     from .gltf import load_gltf   # imported here: gltf.py imports nothing of this module
 
     src = pathlib.Path(os.fspath(path))
+    if src.is_dir():
+        raise ModelFormatError(f"{src}: is a directory, not a model file")
     if not src.is_file():
         raise ModelFormatError(f"{src}: no such file")
     exe = executable or assimp_executable()

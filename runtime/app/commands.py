@@ -134,6 +134,9 @@ def _pose_of(rig, args, time=None):
 def _cut(args) -> int:
     from ..rigs import load, save
     from ..surgery.cut import cut
+    if Path(args.out[0]).resolve() == Path(args.out[1]).resolve():
+        raise InvalidInputError(f"--out names one file twice ({args.out[0]}): the second half would "
+                                f"overwrite the first; give two paths")
     rig = load(args.model)
     halves = cut(rig, args.normal, args.point, pose=_pose_of(rig, args), cap=args.cap)
     for half, path in zip(halves, args.out):
@@ -162,6 +165,8 @@ def _skin(args) -> int:
     from ..animation.skinning import skin, skin_normals
     from ..rigs import load
     from ..rigs.export import save_mesh
+    if args.frames < 1:
+        raise InvalidInputError(f"--frames must be at least 1, got {args.frames}")
     if args.frames > 1 and args.clip is None:
         raise InvalidInputError("--frames bakes a clip over time: name it with --clip")
     rig = load(args.model)
@@ -196,8 +201,8 @@ class _Edit(argparse.Action):
         namespace.edits = (namespace.edits or []) + [(self.dest, joint, numbers)]
 
 
-def _add_pose_options(p) -> None:
-    g = p.add_argument_group("pose (default: the mesh as stored); edits apply after the clip, in order")
+def _add_pose_options(p, default: str) -> None:
+    g = p.add_argument_group(f"pose (default: {default}); edits apply after the clip, in order")
     g.add_argument("--rest", action="store_true",
                    help="the rest pose of the nodes (what a viewer shows; differs from the stored mesh "
                         "when the bind matrices are not the rest pose's, e.g. a mesh node with an offset)")
@@ -220,7 +225,7 @@ def register(sub) -> None:
 
     p = sub.add_parser("skin", help="skin a model at a clip time and write the posed mesh (.glb/.gltf)")
     p.add_argument("model")
-    _add_pose_options(p)
+    _add_pose_options(p, "the rest pose of the nodes")
     p.add_argument("--frames", type=int, default=1, help="bake this many frames from --time to --end")
     p.add_argument("--end", type=float, default=None, help="last time when baking (default: clip end)")
     p.add_argument("--out", required=True)
@@ -231,7 +236,7 @@ def register(sub) -> None:
     p.add_argument("--normal", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--point", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--cap", action="store_true", help="close each half with a cap on the plane")
-    _add_pose_options(p)
+    _add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", nargs=2, required=True, metavar=("POSITIVE.glb", "NEGATIVE.glb"),
                    help="the half the normal points to, then the other")
     p.set_defaults(run=_cut)
@@ -244,6 +249,6 @@ def register(sub) -> None:
     p.add_argument("--to", type=float, nargs=6, required=True, metavar=("AX", "AY", "AZ", "BX", "BY", "BZ"),
                    help="the scalpel at the end of the stroke")
     p.add_argument("--opening", type=float, default=0.0, help="push the two sides apart by this distance")
-    _add_pose_options(p)
+    _add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", required=True)
     p.set_defaults(run=_tear)

@@ -122,7 +122,7 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
     split = Split(*_split(plane, positions, faces, topo.faces, topo.welded, topo.representative, sign,
                           topo.face_vertex_edges, topo.vertex_edges))
     if len(split.pos_faces) == 0 or len(split.neg_faces) == 0:
-        return _missed(rig, len(split.pos_faces) > 0, plane, on_plane)
+        return _missed(rig, len(split.pos_faces) > 0, not sign.any(), plane, on_plane)
 
     new = on_edges(split.new_lo, split.new_hi, split.new_t)
     new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
@@ -163,10 +163,13 @@ def _placed(vertices, new, targets, new_joints, new_weights, affines, diag):
     return rest, residual
 
 
-def _missed(rig, on_positive: bool, plane, on_plane) -> CutResult:
-    """The plane misses the mesh: the whole rig (a copy) on its side, an empty rig on the other."""
-    warn(f"the cutting plane does not cross the mesh of {rig.name!r}: it lies entirely on "
-         f"the {'positive' if on_positive else 'negative'} side; the other half is empty",
+def _missed(rig, on_positive: bool, in_plane: bool, plane, on_plane) -> CutResult:
+    """The plane misses the mesh: the whole rig (a copy) on its side, an empty rig on the other. A
+    mesh lying in the plane goes to the side its faces point away from."""
+    side, other = ("positive", "negative") if on_positive else ("negative", "positive")
+    where = (f"the mesh lies in the plane, its faces facing the {other} side, so it is the {side} half"
+             if in_plane else f"the mesh lies entirely on the {side} side")
+    warn(f"the cutting plane does not cross the mesh of {rig.name!r}: {where}; the other half is empty",
          PlaneMissesMeshWarning)
     names = (f"{rig.name}_positive", f"{rig.name}_negative")
     whole, empty = _copy(rig, names[1 - on_positive]), _empty_like(rig, names[on_positive])
