@@ -52,3 +52,19 @@ def test_open_boundary_in_the_plane_is_not_capped(models_dir):
     result = cut_details(rig, [1, 0.3, 0.2], rig.vertices.mean(axis=0), cap=True)
     after = sum(len(topology(h.vertices, h.faces).boundary_edges) for h in (result.positive, result.negative))
     assert after == before
+
+
+@pytest.mark.parametrize("shift", [1e8, 1e10])
+def test_caps_close_the_halves_far_from_the_origin(models_dir, shift):
+    """Issue 10, item 3: a posed capped cut of the Fox moved 1e8 away left the halves open, at 1e10
+    without any cap: the cap now uses the cut's own on-plane bookkeeping and section coordinates."""
+    fox = model(models_dir, "Fox.glb")
+    faces = []
+    for offset in (0.0, shift):
+        pose = fox.rest_pose().translate(0, [offset] * 3)
+        point = cgaskin.skin(fox, pose).mean(axis=0)
+        result = cut_details(fox, [0, 1, 0.2], point, pose=pose, cap=True)
+        for half in (result.positive, result.negative):
+            assert len(topology(half.vertices, half.faces).boundary_edges) == 0      # closed
+        faces.append([result.positive.n_faces, result.negative.n_faces])
+    assert faces[0] == faces[1]

@@ -138,9 +138,10 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
     new_sources = np.full(len(split.new_lo), NEW_VERTEX, np.int64)
     sources = [np.concatenate([split.pos_src, new_sources]), np.concatenate([split.neg_src, new_sources])]
     if cap:
+        on_plane_input = (sign == 0)[topo.welded]
         for h, kept in enumerate((split.pos_src, split.neg_src)):
             cut_positions = np.concatenate([positions[kept], split.new_point])
-            halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions, plane, on_plane, topo,
+            halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions, plane, on_plane_input, topo,
                                          outward=-1.0 if h == 0 else 1.0, affines=affines)
     return CutResult(halves[0], halves[1], tuple(sources), new.src,
                      split.new_t, split.new_point, (len(split.pos_src), len(split.neg_src)), plane, on_plane,

@@ -1,13 +1,10 @@
 """Step 7 of a cut: planar caps over the loops the cut opened (ear clipping, holes bridged in)."""
 import numpy as np
 
-from ..._shared.jit import F2, I1, F2ar, helper, kernel, precompiled
+from ..._shared.jit import F2, I1, helper, kernel
 from ...animation.rig import Rig
-from ...generated.kernels import point_plane_distance_batch
 from ..topology import Topology, directed_loops, topology
 from .result import CAP_VERTEX
-
-precompiled(point_plane_distance_batch, (F2ar, F2, F2), cost=0.3)
 
 
 @helper
@@ -197,19 +194,25 @@ def _plane_basis(normal):
     return u, np.cross(normal, u)
 
 
-def _cap(half: Rig, sources, cut_positions, plane, tol, original: Topology, outward: float, affines):
+def _cap(half: Rig, sources, cut_positions, plane, on_plane_input, original: Topology, outward: float,
+         affines):
     """Close ``half`` over the loops the cut opened; returns the capped rig and its sources.
 
     cut_positions : (n, 3) the half's vertices in the space that was cut (posed for a posed cut)
+    on_plane_input : (n_input,) bool, the input vertices the cut classified as on the plane
     outward : -1 for the positive half (its caps face -n), +1 for the negative half
+
+    Which vertices are on the plane comes from the cut's own bookkeeping (its new vertices, and the
+    input vertices it classified so), not from distances recomputed here: far from the origin those
+    lose the precision that tells a vertex on the plane from one beside it (no cap at 1e10). The
+    loops are triangulated in coordinates relative to the section for the same reason.
     """
     # The cut's loops run along edges whose two ends are on the plane, and every face on such an edge
     # has both ends as corners: the welded topology of the faces with two or more corners on the plane
     # has the same boundary edges there as the whole half's, and is much smaller.
-    n = len(half.vertices)
-    dist = np.empty((n, 1))
-    point_plane_distance_batch(np.broadcast_to(plane, (n, 4)), cut_positions, dist)
-    on_vertex = np.abs(dist[:, 0]) <= tol
+    on_vertex = np.ones(len(half.vertices), bool)          # new vertices lie on the plane
+    kept = sources >= 0
+    on_vertex[kept] = on_plane_input[sources[kept]]
     near = half.faces[np.count_nonzero(on_vertex[half.faces], axis=1) >= 2]
     if len(near) == 0:
         return half, sources
@@ -238,6 +241,7 @@ def _cap(half: Rig, sources, cut_positions, plane, tol, original: Topology, outw
     local = np.full(ht.n_welded, -1, np.int64)
     local[loop_welded] = np.arange(len(loop_welded))
     p = cut_positions[rep[loop_welded]]
+    p = p - p.mean(axis=0)                      # relative to the section: exact differences far out
     xy = np.stack([p @ u, p @ v], axis=1)
     # A cap runs along each loop against its faces' direction, so it continues their orientation:
     # chain the reversed edges. Where loops touch at a vertex (the plane through a saddle vertex),
@@ -271,7 +275,7 @@ def _cap(half: Rig, sources, cut_positions, plane, tol, original: Topology, outw
             extra = (xy - xy.min(axis=0)) / extent        # planar projection, aspect kept
         attributes[key] = np.concatenate([values, extra.astype(values.dtype, copy=False)])
     capped = Rig(vertices=np.concatenate([half.vertices, half.vertices[row]]),
-                 faces=np.concatenate([half.faces, triangles + n]),
+                 faces=np.concatenate([half.faces, triangles + half.n_vertices]),
                  joints=np.concatenate([half.joints, half.joints[row]]),
                  weights=np.concatenate([half.weights, half.weights[row]]),
                  skeleton=half.skeleton, clips=half.clips, attributes=attributes, name=half.name)
