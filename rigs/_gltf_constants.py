@@ -40,5 +40,9 @@ QUAT_UNIT_TOLERANCE = 1e-12
 #: application-specific attributes (spec 3.7.2.1: custom semantics start with "_") that cgaskin
 #: writes next to WEIGHTS_n: float64 weights w = (WEIGHTS_n + LO) + LO2 exactly, all float32
 WEIGHT_RESIDUALS = ("_CGASKIN_WEIGHTS_{}_LO", "_CGASKIN_WEIGHTS_{}_LO2")
+#: cgaskin's data in a primitive's ``extras`` (accessor indices), and the float64 positions'
+#: rounding residuals there: POSITION + LO + LO2 == the float64 vertices exactly
+EXTRAS_KEY = "cgaskin"
+POSITION_RESIDUALS = ("POSITION_LO", "POSITION_LO2")
 #: inverse bind matrices and node matrices must be affine: last row (0, 0, 0, 1) within this
 AFFINE_TOLERANCE = 1e-6

@@ -8,7 +8,8 @@ import numpy as np
 import pygltflib
 
 from ..errors import NoSkinError
-from ._gltf_constants import COMPONENT_NAMES, INTEGER_INDEX_TYPES, MODE_NAMES, WEIGHT_RESIDUALS
+from ._gltf_constants import (COMPONENT_NAMES, EXTRAS_KEY, INTEGER_INDEX_TYPES, MODE_NAMES, POSITION_RESIDUALS,
+                              WEIGHT_RESIDUALS)
 from ._gltf_document import _GltfFile
 
 
@@ -43,6 +44,26 @@ def _triangles(f: _GltfFile, mode: int, idx: np.ndarray, where: str) -> np.ndarr
     return faces[keep]
 
 
+def _exact_positions(f, prim, positions, where: str) -> np.ndarray:
+    """``positions`` (n, 3) float64 of the float32 POSITION plus the rounding residuals that
+    ``save_gltf`` keeps in the primitive's extras (the float64 vertices exactly); unchanged when the
+    file has none."""
+    ours = prim.extras.get(EXTRAS_KEY) if isinstance(prim.extras, dict) else None
+    if not isinstance(ours, dict):
+        return positions
+    for name in POSITION_RESIDUALS:
+        if name not in ours:
+            continue
+        index = ours[name]
+        if isinstance(index, bool) or not isinstance(index, int):
+            raise f.error(f"{where} extras.{EXTRAS_KEY}.{name} must be an accessor index, got {index!r}")
+        residual = f.accessor(index, f"{where} extras.{EXTRAS_KEY}.{name}")
+        if residual.shape != positions.shape or residual.dtype != np.float64 or not np.isfinite(residual).all():
+            raise f.error(f"{where} extras.{EXTRAS_KEY}.{name} must be finite VEC3 floats like POSITION")
+        positions = positions + residual
+    return positions
+
+
 def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
     """Decode one triangle primitive; for points and lines return the mode's name instead.
 
@@ -72,6 +93,7 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
         v = int(np.flatnonzero(bad.any(axis=1))[0])
         raise f.error(f"{where} POSITION (accessor {attrs['POSITION']}) holds non-finite coordinates: "
                       f"vertex {v} is {positions[v].tolist()} ({int(bad.any(axis=1).sum())} such vertices)")
+    positions = _exact_positions(f, prim, positions, where)
 
     if prim.indices is not None:
         _, ctype, itype, _ = f.accessor_info(prim.indices, f"{where} indices")

@@ -32,7 +32,7 @@ from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS
 from ..animation.rig import Rig
 from ..animation.validate import EXACT_SUM_TOLERANCE, check_mesh
 from ..errors import InvalidInputError
-from .gltf import WEIGHT_RESIDUALS, trs_to_matrix
+from .gltf import EXTRAS_KEY, POSITION_RESIDUALS, WEIGHT_RESIDUALS, trs_to_matrix
 
 __all__ = ["save_gltf", "save_mesh"]
 
@@ -152,8 +152,18 @@ def save_gltf(rig: Rig, path) -> Path:
         raise InvalidInputError("the rig has no faces: glTF needs at least one triangle")
 
     out = _BinaryBuilder()
-    attributes = {"POSITION": out.add(_float32(vertices, "vertices"), FLOAT, 3,
-                                      target=ARRAY_BUFFER, min_max=True)}
+    positions = _float32(vertices, "vertices")
+    attributes = {"POSITION": out.add(positions, FLOAT, 3, target=ARRAY_BUFFER, min_max=True)}
+    extras = {}
+    if not np.array_equal(positions, vertices):
+        # float64 positions = (hi + lo) + lo2 exactly, as for the weights; kept in the primitive's
+        # extras, not as vertex attributes, so that readers that concatenate application
+        # attributes of every width (Blender) never see them: a torn model saved and loaded again
+        # has the exact positions its next stroke continues from
+        lo = (vertices - positions).astype(np.float32)
+        lo2 = (vertices - positions - lo.astype(np.float64)).astype(np.float32)
+        extras[EXTRAS_KEY] = {name: out.add(residual, FLOAT, 3) for name, residual in
+                              zip(POSITION_RESIDUALS, (lo, lo2))}
     for name, values in rig.attributes.items():
         values = np.asarray(values)
         if values.ndim == 1:
@@ -188,7 +198,7 @@ def save_gltf(rig: Rig, path) -> Path:
     roots = [i for i in range(sk.n_nodes) if sk.parents[i] == -1] + [mesh_node]
 
     primitive = pygltflib.Primitive(attributes=pygltflib.Attributes(**attributes), indices=indices,
-                                    mode=pygltflib.TRIANGLES)
+                                    mode=pygltflib.TRIANGLES, extras=extras)
     gltf = pygltflib.GLTF2(
         asset=pygltflib.Asset(generator="cgaskin", version="2.0"),
         scene=0,

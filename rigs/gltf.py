@@ -21,7 +21,10 @@ Precision: glTF stores positions, weights, inverse bind matrices and keyframes a
 returned as float64 holding exactly the float32 values, except the weights, which are renormalised
 in float64 so that every row sums to 1 (``check_mesh``). Files written by ``save_gltf`` carry the
 float64 weights' rounding residuals in two application-specific attributes (``WEIGHT_RESIDUALS``),
-from which they are rebuilt exactly; other readers ignore them and use the float32 WEIGHTS_0.
+from which they are rebuilt exactly; other readers ignore them and use the float32 WEIGHTS_0. The
+float64 positions' residuals are in the primitive's ``extras["cgaskin"]`` (accessor indices,
+``POSITION_RESIDUALS``), so that a torn model saved and loaded again has the exact positions its
+next stroke continues from.
 
 This module is the driver; the work is done by private modules, one topic each:
 ``_gltf_container`` (file bytes -> document), ``_gltf_document`` (``_GltfFile``: checked access
@@ -44,7 +47,7 @@ from ._gltf_clips import _read_clips
 from ._gltf_constants import (AFFINE_TOLERANCE, COMPONENT_DTYPES, COMPONENT_NAMES, GLB_BIN_CHUNK,
                               GLB_JSON_CHUNK, GLB_MAGIC, INTEGER_INDEX_TYPES, MAX_BUFFERLESS_COMPONENTS,
                               MODE_NAMES, NORMALIZED_DIVISORS, QUAT_UNIT_TOLERANCE, TYPE_SHAPES,
-                              UNSUPPORTED_EXTENSIONS, WEIGHT_RESIDUALS)
+                              UNSUPPORTED_EXTENSIONS, WEIGHT_RESIDUALS, EXTRAS_KEY, POSITION_RESIDUALS)
 from ._gltf_container import _read_document
 from ._gltf_document import _GltfFile
 from ._gltf_mesh import _merge_primitives, _read_primitive
