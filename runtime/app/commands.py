@@ -148,16 +148,49 @@ def _cut(args) -> int:
     return 0
 
 
+def _blades(args) -> list:
+    """The blade positions in order: --from, every --stroke, the lines of --strokes, --to; each a
+    (2, 3) array (handle, tip)."""
+    rows = ([args.from_] if args.from_ else []) + list(args.stroke or [])
+    if args.strokes:
+        try:
+            text = Path(args.strokes).read_text(encoding="utf-8")
+        except OSError as exc:
+            raise InvalidInputError(f"--strokes {args.strokes}: cannot read it ({exc.strerror})") from None
+        for number, line in enumerate(text.splitlines(), 1):
+            line = line.split("#")[0].replace(",", " ").split()
+            if not line:
+                continue
+            try:
+                values = [float(v) for v in line]
+            except ValueError:
+                values = []
+            if len(values) != 6:
+                raise InvalidInputError(f"--strokes {args.strokes}, line {number}: give 6 numbers (handle "
+                                        f"AX AY AZ, tip BX BY BZ), got {' '.join(line)!r}")
+            rows.append(values)
+    rows += [args.to] if args.to else []
+    if len(rows) < 2:
+        raise InvalidInputError("a tear needs the blade at two times at least: --from and --to, or "
+                                "--stroke repeated, or a --strokes file")
+    return [np.array(row, dtype=np.float64).reshape(2, 3) for row in rows]
+
+
 def _tear(args) -> int:
     from ..rigs import load, save
     from ..surgery.tear import tear
     rig = load(args.model)
+    blades = _blades(args)
     pose = _pose_of(rig, args)
-    torn = tear(rig, (args.from_[:3], args.from_[3:]), (args.to[:3], args.to[3:]), pose=pose,
-                opening=args.opening)
+    torn = rig
+    steps = zip(blades[:-1], blades[1:])
+    if len(blades) > 2:
+        steps = progress(steps, len(blades) - 1, "tearing")
+    for blade_from, blade_to in steps:              # one progressive tear: each stroke continues the slit
+        torn = tear(torn, blade_from, blade_to, pose=pose, opening=args.opening)
     save(torn, args.out)
-    print(f"wrote {args.out}: {torn.n_vertices} vertices ({torn.n_vertices - rig.n_vertices} new), "
-          f"{torn.n_faces} faces")
+    print(f"wrote {args.out}: {len(blades) - 1} stroke(s), {torn.n_vertices} vertices "
+          f"({torn.n_vertices - rig.n_vertices} new), {torn.n_faces} faces")
     return 0
 
 
@@ -241,13 +274,18 @@ def register(sub) -> None:
                    help="the half the normal points to, then the other")
     p.set_defaults(run=_cut)
 
-    p = sub.add_parser("tear", help="tear a model along the path of a moving scalpel (.glb)")
+    p = sub.add_parser("tear", help="tear a model along the path of a moving scalpel (.glb); the blade "
+                                    "positions in order: --from, each --stroke, the --strokes file, --to")
     p.add_argument("model")
-    p.add_argument("--from", dest="from_", type=float, nargs=6, required=True,
-                   metavar=("AX", "AY", "AZ", "BX", "BY", "BZ"),
+    blade = ("AX", "AY", "AZ", "BX", "BY", "BZ")
+    p.add_argument("--from", dest="from_", type=float, nargs=6, metavar=blade,
                    help="the scalpel (handle A, tip B) at the start of the stroke")
-    p.add_argument("--to", type=float, nargs=6, required=True, metavar=("AX", "AY", "AZ", "BX", "BY", "BZ"),
-                   help="the scalpel at the end of the stroke")
+    p.add_argument("--stroke", type=float, nargs=6, action="append", metavar=blade,
+                   help="a further blade position; repeat it: consecutive positions are strokes of one "
+                        "progressive tear, each continuing the slit")
+    p.add_argument("--strokes", metavar="FILE",
+                   help="a text file of blade positions, one per line (6 numbers; '#' comments)")
+    p.add_argument("--to", type=float, nargs=6, metavar=blade, help="the scalpel at the end of the stroke")
     p.add_argument("--opening", type=float, default=0.0, help="push the two sides apart by this distance")
     _add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", required=True)

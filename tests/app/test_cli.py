@@ -169,3 +169,36 @@ def test_readme_example_runs(models_dir, tmp_path, monkeypatch):
     exec(compile(code, "README.md", "exec"), namespace)
     assert (tmp_path / "fox_nod.glb").exists()
     assert namespace["torn"].n_vertices > namespace["rig"].n_vertices
+
+
+def test_tear_takes_a_sequence_of_blade_positions(models_dir, tmp_path, capsys):
+    """Issue 10, item 1: one progressive tear from the command line, by --stroke or a file, equal to
+    the strokes made one after another from Python."""
+    model = models_dir / "Fox.glb"
+    blades = [[0.3, 120, 0.7, 0.3, 40, 0.7], [0.3, 120, 10.1, 0.3, 40, 10.1], [0.3, 120, 20.3, 0.3, 40, 20.3]]
+    expected = cgaskin.load(model)
+    for a, b in zip(blades[:-1], blades[1:]):
+        expected = cgaskin.tear(expected, np.reshape(a, (2, 3)), np.reshape(b, (2, 3)))
+    by_options = ["--stroke", *map(str, blades[0]), "--stroke", *map(str, blades[1]),
+                  "--stroke", *map(str, blades[2])]
+    listing = tmp_path / "blades.txt"
+    listing.write_text("# handle, tip\n" + "\n".join(", ".join(map(str, b)) for b in blades) + "\n")
+    for i, options in enumerate((by_options, ["--strokes", str(listing)],
+                                 ["--from", *map(str, blades[0]), "--stroke", *map(str, blades[1]),
+                                  "--to", *map(str, blades[2])])):
+        out = tmp_path / f"torn{i}.glb"
+        assert main(["tear", str(model), *options, "--out", str(out)]) == 0
+        torn = cgaskin.load(out)
+        np.testing.assert_array_equal(torn.faces, expected.faces)
+        np.testing.assert_array_equal(torn.vertices, expected.vertices)
+    assert "2 stroke(s)" in capsys.readouterr().out
+
+
+def test_tear_needs_two_blade_positions(models_dir, tmp_path, capsys):
+    model = str(models_dir / "Fox.glb")
+    assert main(["tear", model, "--stroke", *["1"] * 6, "--out", str(tmp_path / "t.glb")]) == 2
+    assert "two times at least" in capsys.readouterr().err
+    bad = tmp_path / "bad.txt"
+    bad.write_text("1 2 3 4 5\n")
+    assert main(["tear", model, "--strokes", str(bad), "--out", str(tmp_path / "t.glb")]) == 2
+    assert "line 1: give 6 numbers" in capsys.readouterr().err
