@@ -29,6 +29,9 @@ class Tolerances:
     on_edge: float = 1e-9
     #: tear: below this sine, three points are too close to one line to define the tear plane
     min_sine: float = 1e-6
+    #: caps: a corner of a loop turning by a sine below this is straight (no ear: collinear loop
+    #: vertices would make zero-area cap triangles)
+    collinear_sine: float = 1e-9
     #: BVH: boxes grow by this times the mesh's extent, so that rounding never loses a hit on a face
     #: lying in a box's side
     box_padding: float = 1e-9

@@ -68,3 +68,18 @@ def test_caps_close_the_halves_far_from_the_origin(models_dir, shift):
             assert len(topology(half.vertices, half.faces).boundary_edges) == 0      # closed
         faces.append([result.positive.n_faces, result.negative.n_faces])
     assert faces[0] == faces[1]
+
+
+def test_collinear_loop_vertices_make_no_zero_area_cap_triangle(models_dir):
+    """Issue 10, item 3: a plane through a flat part of the mesh gives a loop with a run of collinear
+    vertices; ear clipping fanned them into triangles of zero area."""
+    rig = model(models_dir, "3Cylinder4bones.glb")
+    normal = [-1.2992598701307787, 1.265543092596161, 0.4771785779139319]
+    result = cut_details(rig, normal, rig.vertices[486], cap=True)
+    diag = np.linalg.norm(np.ptp(rig.vertices, axis=0))
+    for half, sources in zip((result.positive, result.negative), result.sources):
+        v, f = half.vertices, half.faces
+        caps = (sources[f] == CAP_VERTEX).all(axis=1)
+        areas = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+        assert caps.any() and areas[caps].min() > 1e-9 * diag ** 2
+        assert len(topology(v, f).boundary_edges) == 0                       # still closed

@@ -1,8 +1,11 @@
 """Step 7 of a cut: planar caps over the loops the cut opened (ear clipping, holes bridged in)."""
+import math
+
 import numpy as np
 
-from ..._shared.jit import F2, I1, helper, kernel
+from ..._shared.jit import F2, I1, f8, helper, kernel
 from ...animation.rig import Rig
+from ...tolerances import tol
 from ..topology import Topology, directed_loops, topology
 from .result import CAP_VERTEX
 
@@ -14,14 +17,17 @@ def _orient(ax, ay, bx, by, cx, cy):
 
 
 @helper
-def _is_ear(xy, ids, nxt, p, i, q):
-    """Whether corner i (between p and q) of the remaining polygon can be clipped: strictly convex, and
-    no other remaining vertex inside or on the triangle (vertices that repeat one of its three, as
-    bridge endpoints do, are ignored)."""
+def _is_ear(xy, ids, nxt, p, i, q, min_sine):
+    """Whether corner i (between p and q) of the remaining polygon can be clipped: convex by more
+    than rounding (sine of its turn > ``min_sine``: a run of collinear loop vertices, where the plane
+    meets a flat part of the mesh, would otherwise be fanned into zero-area triangles), and no other
+    remaining vertex inside or on the triangle (vertices that repeat one of its three, as bridge
+    endpoints do, are ignored)."""
     ax, ay = xy[p, 0], xy[p, 1]
     bx, by = xy[i, 0], xy[i, 1]
     cx, cy = xy[q, 0], xy[q, 1]
-    if _orient(ax, ay, bx, by, cx, cy) <= 0.0:
+    turn = _orient(ax, ay, bx, by, cx, cy)
+    if turn <= min_sine * math.sqrt(((bx - ax) ** 2 + (by - ay) ** 2) * ((cx - bx) ** 2 + (cy - by) ** 2)):
         return False
     v = nxt[q]
     while v != p:
@@ -34,8 +40,8 @@ def _is_ear(xy, ids, nxt, p, i, q):
     return True
 
 
-@kernel((F2, I1), cost=0.5)
-def _ear_clip(xy, ids):
+@kernel((F2, I1, f8), cost=0.5)
+def _ear_clip(xy, ids, min_sine):
     """Triangulate a counter-clockwise simple polygon (possibly weakly simple: holes bridged in, with
     repeated vertices) by ear clipping.
 
@@ -58,7 +64,7 @@ def _ear_clip(xy, ids):
     while remaining > 3:
         p = prev[i]
         q = nxt[i]
-        if _is_ear(xy, ids, nxt, p, i, q):
+        if _is_ear(xy, ids, nxt, p, i, q, min_sine):
             pass
         elif misses > remaining:
             # A full turn without an ear: the polygon is degenerate here (collinear or touching
@@ -179,10 +185,10 @@ def _cap_triangles(loops: list, xy) -> np.ndarray:
             else:
                 polygon = merged
         ids = np.asarray(polygon, np.int64)
-        triangles.append(ids[_ear_clip(np.ascontiguousarray(xy[ids]), ids)])
+        triangles.append(ids[_ear_clip(np.ascontiguousarray(xy[ids]), ids, tol.collinear_sine)])
     for hole in lone_holes:
         ids = polys[hole][::-1]
-        triangles.append(ids[_ear_clip(np.ascontiguousarray(xy[ids]), ids)][:, ::-1])
+        triangles.append(ids[_ear_clip(np.ascontiguousarray(xy[ids]), ids, tol.collinear_sine)][:, ::-1])
     return np.concatenate(triangles)
 
 
