@@ -14,11 +14,12 @@ def float_array(value, name: str, last: int | None = None, ndim: int | None = No
     """A finite float64 array (a copy only when needed), with last axis ``last`` if given."""
     try:
         arr = np.asarray(value)
-        if arr.dtype.kind in "USO" and not _all_numbers(arr):
+        kind = arr.dtype.kind
+        if kind in "USO" and not _all_numbers(arr):
             # numpy would parse "2" as 2.0: a string where a number belongs is a mistake to report
-            raise TypeError(f"{arr.dtype.kind == 'O' and 'objects' or 'strings'} are not numbers")
-        if arr.dtype.kind != "c":
-            arr = np.asarray(arr, dtype=np.float64)
+            raise TypeError(f"{kind == 'O' and 'objects' or 'strings'} are not numbers")
+        if kind != "c" and arr.dtype != np.float64:
+            arr = arr.astype(np.float64)
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
     if arr.dtype.kind == "c":           # numpy would drop the imaginary part with a mere warning
@@ -27,7 +28,9 @@ def float_array(value, name: str, last: int | None = None, ndim: int | None = No
         raise InvalidInputError(f"{name} must have shape (..., {last}), got {arr.shape}")
     if ndim is not None and arr.ndim != ndim:
         raise InvalidInputError(f"{name} must be {ndim}-dimensional, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    # a finite sum is the cheap proof (these checks run on every call); only an overflowing sum of
+    # finite values reaches the elementwise test without a culprit
+    if not math.isfinite(arr.sum()) and not np.isfinite(arr).all():
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise InvalidInputError(f"{name} holds a non-finite value (NaN or inf) at index {tuple(bad)}")
     return arr
@@ -40,7 +43,8 @@ def _all_numbers(arr) -> bool:
 
 def real_number(value, name: str) -> float:
     """A finite float from a real number (not a string, not a bool)."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+    if type(value) is not float and (isinstance(value, (bool, np.bool_))
+                                     or not isinstance(value, numbers.Real)):
         raise InvalidInputError(f"{name} must be a real number, got {value!r}")
     value = float(value)
     if not math.isfinite(value):
