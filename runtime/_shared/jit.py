@@ -34,7 +34,6 @@ S1, U2 = types.int8[::1], types.uint64[:, ::1]
 B1 = types.boolean[::1]
 F1r = types.Array(types.float64, 1, "C", readonly=True)
 F2r = types.Array(types.float64, 2, "C", readonly=True)
-F2ar = types.Array(types.float64, 2, "A", readonly=True)       # np.broadcast_to of one row
 i8, f8, b1 = types.int64, types.float64, types.boolean
 
 

@@ -15,18 +15,8 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 from cgaskin import TearPathError, tear_stroke
 from cgaskin.surgery.tear import tear_topology
 
-from tests.helpers.tear_checks import (MODELS, check_like_original, check_stroke, diagonal, face_normal,
-                                       get_rig, save_gltf, section_separates, some_pose, some_tear, strokes,
-                                       surface)
-
-
-@pytest.fixture(scope="module", params=MODELS)
-def model(request):
-    """(name, rig); the file models skip without the models folder."""
-    name = request.param
-    if name == "capsule":
-        return name, get_rig(name)
-    return name, get_rig(name, request.getfixturevalue("models_dir"))
+from tests.helpers.tear_checks import (check_like_original, check_stroke, diagonal, face_normal, save_gltf,
+                                       section_separates, some_pose, some_tear, strokes, surface)
 
 
 # ---- random strokes ------------------------------------------------------------------------------------
@@ -52,8 +42,8 @@ def run_random_stroke(name, rig, pose, data, opening=0.0):
 
 @settings(suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow], deadline=None)
 @given(data=st.data())
-def test_random_strokes_at_rest(model, data):
-    name, rig = model
+def test_random_strokes_at_rest(tear_model, data):
+    name, rig = tear_model
     result = run_random_stroke(name, rig, None, data)
     if result is not None:
         check_like_original(rig, result.rig, some_pose(name, rig))
@@ -61,10 +51,10 @@ def test_random_strokes_at_rest(model, data):
 
 @settings(suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow], deadline=None)
 @given(data=st.data())
-def test_random_strokes_posed(model, data):
+def test_random_strokes_posed(tear_model, data):
     """Posed tears: intersections and walk in the pose; new vertices placed through their inverse
     blended transforms land exactly on the posed path when the torn rig is skinned."""
-    name, rig = model
+    name, rig = tear_model
     pose = some_pose(name, rig)
     result = run_random_stroke(name, rig, pose, data)
     if result is not None:
@@ -74,8 +64,8 @@ def test_random_strokes_posed(model, data):
 @settings(suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow], deadline=None,
           max_examples=20)
 @given(data=st.data(), opening=st.floats(1e-4, 0.02), posed=st.booleans())
-def test_random_strokes_with_opening(model, data, opening, posed):
-    name, rig = model
+def test_random_strokes_with_opening(tear_model, data, opening, posed):
+    name, rig = tear_model
     pose = some_pose(name, rig) if posed else None
     run_random_stroke(name, rig, pose, data, opening=opening * diagonal(surface(rig, pose)))
 
@@ -83,11 +73,11 @@ def test_random_strokes_with_opening(model, data, opening, posed):
 @settings(suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow], deadline=None,
           max_examples=25)
 @given(data=st.data(), posed=st.booleans(), opening=st.sampled_from([0.0, 0.0, 0.004]))
-def test_two_strokes_make_one_slit(model, data, posed, opening):
+def test_two_strokes_make_one_slit(tear_model, data, posed, opening):
     """The second stroke starts where the first ended (same blade): it continues the same slit, so
     a closed surface gets exactly one boundary loop, made of both paths on both sides -- also when
     the slits are opened (the blade then meets the tip of the first slit's gap)."""
-    name, rig = model
+    name, rig = tear_model
     pose = some_pose(name, rig) if posed else None
     points = surface(rig, pose)
     opening *= diagonal(points)
@@ -124,8 +114,8 @@ def test_two_strokes_make_one_slit(model, data, posed, opening):
 
 
 @pytest.mark.skipif(save_gltf is None, reason="cgaskin.rigs.export is not available")
-def test_torn_rigs_export_and_reload(model, tmp_path):
-    name, rig = model
+def test_torn_rigs_export_and_reload(tear_model, tmp_path):
+    name, rig = tear_model
     pose = some_pose(name, rig)
     for result in (some_tear(rig), some_tear(rig, pose, seed=1)):
         check_like_original(rig, result.rig, pose, tmp_path)
