@@ -37,12 +37,17 @@ MAX_BUFFERLESS_COMPONENTS = 1 << 26
 #: quaternions further than this from unit length are renormalised; closer ones are kept as
 #: stored so that a save -> load round trip is exact (renormalising is not idempotent in floats)
 QUAT_UNIT_TOLERANCE = 1e-12
-#: application-specific attributes (spec 3.7.2.1: custom semantics start with "_") that cgaskin
-#: writes next to WEIGHTS_n: float64 weights w = (WEIGHTS_n + LO) + LO2 exactly, all float32
-WEIGHT_RESIDUALS = ("_CGASKIN_WEIGHTS_{}_LO", "_CGASKIN_WEIGHTS_{}_LO2")
-#: cgaskin's data in a primitive's ``extras`` (accessor indices), and the float64 positions'
-#: rounding residuals there: POSITION + LO + LO2 == the float64 vertices exactly
+#: cgaskin's data in a primitive's ``extras`` (accessor indices, never vertex attributes: see
+#: export.py): the float64 positions' rounding residuals, POSITION + LO + LO2 == the float64
+#: vertices exactly, and the float64 weights', (WEIGHTS_n + LO) + LO2 == the weights of set n
 EXTRAS_KEY = "cgaskin"
 POSITION_RESIDUALS = ("POSITION_LO", "POSITION_LO2")
+WEIGHT_RESIDUALS = ("WEIGHTS_{}_LO", "WEIGHTS_{}_LO2")
+#: where earlier versions of cgaskin kept the weight residuals: application-specific vertex
+#: attributes (custom semantics start with "_"); still read, no longer written
+LEGACY_WEIGHT_RESIDUALS = ("_CGASKIN_WEIGHTS_{}_LO", "_CGASKIN_WEIGHTS_{}_LO2")
+#: in ``extras["cgaskin"]``: {"_NAME": width} of the application attributes that ``save_gltf``
+#: zero-padded to the width of the widest (Blender imports "_" attributes of one width only)
+ATTRIBUTE_WIDTHS = "ATTRIBUTE_WIDTHS"
 #: inverse bind matrices and node matrices must be affine: last row (0, 0, 0, 1) within this
 AFFINE_TOLERANCE = 1e-6

@@ -8,8 +8,8 @@ import numpy as np
 import pygltflib
 
 from ..errors import NoSkinError
-from ._gltf_constants import (COMPONENT_NAMES, EXTRAS_KEY, INTEGER_INDEX_TYPES, MODE_NAMES, POSITION_RESIDUALS,
-                              WEIGHT_RESIDUALS)
+from ._gltf_constants import (ATTRIBUTE_WIDTHS, COMPONENT_NAMES, EXTRAS_KEY, INTEGER_INDEX_TYPES,
+                              LEGACY_WEIGHT_RESIDUALS, MODE_NAMES, POSITION_RESIDUALS, WEIGHT_RESIDUALS)
 from ._gltf_document import _GltfFile
 
 
@@ -44,24 +44,36 @@ def _triangles(f: _GltfFile, mode: int, idx: np.ndarray, where: str) -> np.ndarr
     return faces[keep]
 
 
-def _exact_positions(f, prim, positions, where: str) -> np.ndarray:
-    """``positions`` (n, 3) float64 of the float32 POSITION plus the rounding residuals that
-    ``save_gltf`` keeps in the primitive's extras (the float64 vertices exactly); unchanged when the
-    file has none."""
+def _with_residuals(f, prim, names, values: np.ndarray, where: str) -> np.ndarray:
+    """``values`` (n, c) float64 plus the rounding residuals that ``save_gltf`` keeps in the
+    primitive's extras (accessor indices ``extras["cgaskin"][name]`` for ``name`` in ``names``,
+    each finite floats of the same shape): the float64 originals exactly; unchanged without them."""
     ours = prim.extras.get(EXTRAS_KEY) if isinstance(prim.extras, dict) else None
     if not isinstance(ours, dict):
-        return positions
-    for name in POSITION_RESIDUALS:
+        return values
+    for name in names:
         if name not in ours:
             continue
         index = ours[name]
         if isinstance(index, bool) or not isinstance(index, int):
             raise f.error(f"{where} extras.{EXTRAS_KEY}.{name} must be an accessor index, got {index!r}")
         residual = f.accessor(index, f"{where} extras.{EXTRAS_KEY}.{name}")
-        if residual.shape != positions.shape or residual.dtype != np.float64 or not np.isfinite(residual).all():
-            raise f.error(f"{where} extras.{EXTRAS_KEY}.{name} must be finite VEC3 floats like POSITION")
-        positions = positions + residual
-    return positions
+        if residual.shape != values.shape or residual.dtype != np.float64 or not np.isfinite(residual).all():
+            raise f.error(f"{where} extras.{EXTRAS_KEY}.{name} must be finite floats shaped like "
+                          f"{name.rsplit('_', 1)[0]} {values.shape}")
+        values = values + residual
+    return values
+
+
+def _padded_widths(f, prim, where: str) -> dict:
+    """{"_NAME": width} of the application attributes that ``save_gltf`` wrote zero-padded."""
+    ours = prim.extras.get(EXTRAS_KEY) if isinstance(prim.extras, dict) else None
+    widths = ours.get(ATTRIBUTE_WIDTHS, {}) if isinstance(ours, dict) else {}
+    if not isinstance(widths, dict) or not all(
+            type(w) is int and 1 <= w <= 4 for w in widths.values()):
+        raise f.error(f"{where} extras.{EXTRAS_KEY}.{ATTRIBUTE_WIDTHS} must map attribute names to "
+                      f"widths 1..4, got {widths!r}")
+    return widths
 
 
 def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
@@ -93,7 +105,7 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
         v = int(np.flatnonzero(bad.any(axis=1))[0])
         raise f.error(f"{where} POSITION (accessor {attrs['POSITION']}) holds non-finite coordinates: "
                       f"vertex {v} is {positions[v].tolist()} ({int(bad.any(axis=1).sum())} such vertices)")
-    positions = _exact_positions(f, prim, positions, where)
+    positions = _with_residuals(f, prim, POSITION_RESIDUALS, positions, where)
 
     if prim.indices is not None:
         _, ctype, itype, _ = f.accessor_info(prim.indices, f"{where} indices")
@@ -112,10 +124,11 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
     faces = _triangles(f, mode, idx, where)
 
     out = {"positions": positions, "faces": faces, "attributes": {}}
-    residuals = {r.format(s) for r in WEIGHT_RESIDUALS for s in range(8)}
+    residuals = {r.format(s) for r in LEGACY_WEIGHT_RESIDUALS for s in range(8)}
     # NORMAL, TEXCOORD_0 and application-specific attributes ("_NAME", e.g. the tear's "_TEAR"
     # labels): carried through cut, tear and export
     custom = [(name, None) for name in attrs if name.startswith("_") and name not in residuals]
+    widths = _padded_widths(f, prim, where)
     for name, width in (("NORMAL", 3), ("TEXCOORD_0", 2), *custom):
         if name in attrs:
             _, ctype, atype, _ = f.accessor_info(attrs[name], f"{where} {name}")
@@ -128,6 +141,8 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
             if not np.isfinite(values).all():
                 v = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
                 raise f.error(f"{where} {name} holds non-finite values (vertex {v}: {values[v].tolist()})")
+            if name in widths:  # zero-padded by save_gltf to the width of the other "_" attributes
+                values = values[:, :widths[name]]
             out["attributes"][name] = values
 
     sets = sorted({int(k.split("_")[1]) for k in attrs
@@ -149,8 +164,10 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
         if wshape != "VEC4" or w.dtype != np.float64:
             raise f.error(f"{where} WEIGHTS_{s} must be VEC4 float or normalized unsigned "
                           f"byte/short, got {wshape} {COMPONENT_NAMES[wtype]} (not normalized)")
-        for name in (r.format(s) for r in WEIGHT_RESIDUALS):
-            if name in attrs:  # written by save_gltf: restores the float64 weights exactly
+        # written by save_gltf: restore the float64 weights exactly (earlier versions: attributes)
+        w = _with_residuals(f, prim, [r.format(s) for r in WEIGHT_RESIDUALS], w, where)
+        for name in (r.format(s) for r in LEGACY_WEIGHT_RESIDUALS):
+            if name in attrs:
                 residual = f.accessor(attrs[name], f"{where} {name}")
                 if residual.shape != w.shape or residual.dtype != np.float64:
                     raise f.error(f"{where} {name} must be VEC4 float like WEIGHTS_{s}")

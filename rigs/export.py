@@ -16,8 +16,21 @@ node transforms are JSON numbers and keep float64. Hence:
 Weights are the exception that needs care: the loader renormalises them in float64 (rows must sum
 to 1 for skinning to match glTF to 1e-9), so they are not float32 values. WEIGHTS_0 holds their
 float32 rounding (what every viewer reads); when that alone would not reload to the same float64
-weights, two application-specific attributes ``_CGASKIN_WEIGHTS_0_LO`` and ``_LO2`` hold the
-rounding residuals, with w == (WEIGHTS_0 + LO) + LO2 exactly (24 + 24 + 24 bits >= 53).
+weights, two float32 residuals hold the rest, w == (WEIGHTS_0 + LO) + LO2 exactly (24 + 24 + 24
+bits >= 53). Float64 positions get the same treatment (POSITION + LO + LO2).
+
+Layout for other readers (every file the CLI writes is opened in Blender 5.0 and three.js by
+tests/clients). Blender's importer (io_scene_gltf2, blender/imp/mesh.py) keeps the names of the
+application-specific "_NAME" attributes in a set and their arrays in a list, and concatenates
+them in the set's order: when two of them differ in width (the tear's SCALAR ``_TEAR`` beside a
+VEC4, or a user's VEC3 ``_FOO``) the import fails for some ``PYTHONHASHSEED`` values. Hence:
+
+* the residuals are no vertex attributes but accessors named in the primitive's
+  ``extras["cgaskin"]`` (``POSITION_LO``, ``WEIGHTS_0_LO``, ...), which other readers ignore
+  (earlier versions wrote ``_CGASKIN_WEIGHTS_0_LO`` attributes; the loader still reads them);
+* the application attributes of one file all have one width, the widest: narrower ones are
+  zero-padded and their own widths kept in ``extras["cgaskin"]["ATTRIBUTE_WIDTHS"]``, from which
+  the loader trims them back (three.js reads any width; Blender then reads them all).
 """
 from __future__ import annotations
 
@@ -32,7 +45,8 @@ from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS
 from ..animation.rig import Rig
 from ..animation.validate import EXACT_SUM_TOLERANCE, check_mesh
 from ..errors import InvalidInputError
-from .gltf import EXTRAS_KEY, POSITION_RESIDUALS, WEIGHT_RESIDUALS, trs_to_matrix
+from ._gltf_constants import ATTRIBUTE_WIDTHS, EXTRAS_KEY, POSITION_RESIDUALS, WEIGHT_RESIDUALS
+from .gltf import trs_to_matrix
 
 __all__ = ["save_gltf", "save_mesh"]
 
@@ -156,24 +170,14 @@ def save_gltf(rig: Rig, path) -> Path:
     attributes = {"POSITION": out.add(positions, FLOAT, 3, target=ARRAY_BUFFER, min_max=True)}
     extras = {}
     if not np.array_equal(positions, vertices):
-        # float64 positions = (hi + lo) + lo2 exactly, as for the weights; kept in the primitive's
-        # extras, not as vertex attributes, so that readers that concatenate application
-        # attributes of every width (Blender) never see them: a torn model saved and loaded again
-        # has the exact positions its next stroke continues from
+        # float64 positions = (hi + lo) + lo2 exactly, as for the weights (in the extras: see the
+        # module docstring): a torn model saved and loaded again has the exact positions its next
+        # stroke continues from
         lo = (vertices - positions).astype(np.float32)
         lo2 = (vertices - positions - lo.astype(np.float64)).astype(np.float32)
         extras[EXTRAS_KEY] = {name: out.add(residual, FLOAT, 3) for name, residual in
                               zip(POSITION_RESIDUALS, (lo, lo2))}
-    for name, values in rig.attributes.items():
-        values = np.asarray(values)
-        if values.ndim == 1:
-            values = values[:, None]
-        if values.ndim != 2 or len(values) != len(vertices) or values.shape[1] not in (1, 2, 3, 4):
-            raise InvalidInputError(f"attribute {name!r} has shape {values.shape}; vertex attributes "
-                                    f"are ({len(vertices)}, 1..4)")
-        gltf_name = name if KNOWN_ATTRIBUTES.get(name) == values.shape[1] else "_" + name.lstrip("_")
-        attributes[gltf_name] = out.add(_float32(values, f"attribute {name}"), FLOAT, values.shape[1],
-                                        target=ARRAY_BUFFER)
+    _write_attributes(rig.attributes, len(vertices), out, attributes, extras)
     joint_type = UNSIGNED_BYTE if n_bones <= 256 else UNSIGNED_SHORT
     attributes["JOINTS_0"] = out.add(joints, joint_type, 4, target=ARRAY_BUFFER)
     high = _float32(weights, "weights")
@@ -184,8 +188,8 @@ def save_gltf(rig: Rig, path) -> Path:
         # float64 weights = (hi + lo) + lo2 exactly: each residual is the rounding error of the last
         lo = (weights - high).astype(np.float32)
         lo2 = (weights - high - lo.astype(np.float64)).astype(np.float32)
-        for name, residual in zip(WEIGHT_RESIDUALS, (lo, lo2)):
-            attributes[name.format(0)] = out.add(residual, FLOAT, 4, target=ARRAY_BUFFER)
+        extras.setdefault(EXTRAS_KEY, {}).update(
+            {name.format(0): out.add(residual, FLOAT, 4) for name, residual in zip(WEIGHT_RESIDUALS, (lo, lo2))})
     indices = out.add(faces.reshape(-1), UNSIGNED_INT, 1, target=ELEMENT_ARRAY_BUFFER)
     # the spec stores matrices column-major
     ibm = out.add(_float32(np.transpose(sk.inverse_bind, (0, 2, 1)), "inverse bind matrices"),
@@ -212,6 +216,31 @@ def save_gltf(rig: Rig, path) -> Path:
         buffers=[pygltflib.Buffer(byteLength=len(out.blob))],
     )
     return _write(gltf, out.blob, path)
+
+
+def _write_attributes(rig_attributes: dict, n: int, out: _BinaryBuilder, attributes: dict, extras: dict) -> None:
+    """Add the rig's (n, c) attributes to the primitive's ``attributes``: glTF's own names at their
+    widths, anything else as "_NAME", all application attributes at one width (zero-padded to the
+    widest, the true widths in ``extras``; see the module docstring)."""
+    written = {}
+    for name, values in rig_attributes.items():
+        values = np.asarray(values)
+        if values.ndim == 1:
+            values = values[:, None]
+        if values.ndim != 2 or len(values) != n or values.shape[1] not in (1, 2, 3, 4):
+            raise InvalidInputError(f"attribute {name!r} has shape {values.shape}; vertex attributes "
+                                    f"are ({n}, 1..4)")
+        gltf_name = name if KNOWN_ATTRIBUTES.get(name) == values.shape[1] else "_" + name.lstrip("_")
+        written[gltf_name] = _float32(values, f"attribute {name}")
+    widths = {name: values.shape[1] for name, values in written.items() if name.startswith("_")}
+    common = max(widths.values(), default=0)
+    if len(set(widths.values())) > 1:
+        extras.setdefault(EXTRAS_KEY, {})[ATTRIBUTE_WIDTHS] = {
+            name: width for name, width in widths.items() if width < common}
+    for name, values in written.items():
+        if name in widths and widths[name] < common:
+            values = np.pad(values, ((0, 0), (0, common - widths[name])))
+        attributes[name] = out.add(values, FLOAT, values.shape[1], target=ARRAY_BUFFER)
 
 
 def _write(gltf: pygltflib.GLTF2, blob: bytearray, path: Path) -> Path:

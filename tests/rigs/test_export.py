@@ -92,7 +92,7 @@ def assert_same_rig(a: Rig, b: Rig, convert=lambda x: x):
     assert np.array_equal(b.vertices, a.vertices)  # always exact: float32 + residuals in the extras
     assert np.array_equal(b.faces, a.faces)
     assert np.array_equal(b.joints, a.joints)
-    assert np.array_equal(b.weights, a.weights)  # always exact: float32 + residual attributes
+    assert np.array_equal(b.weights, a.weights)  # always exact: float32 + residuals in the extras
     assert b.skeleton.names == a.skeleton.names
     for name in SKELETON_ARRAYS:
         expected = getattr(a.skeleton, name)
@@ -136,7 +136,9 @@ def test_float64_rig_round_trips_to_float32_precision(tmp_path, suffix):
     # what other readers use: the float32 POSITION, the originals rounded
     doc = pygltflib.GLTF2().load(str(path))
     (prim,) = doc.meshes[0].primitives
-    assert set(prim.extras["cgaskin"]) == {"POSITION_LO", "POSITION_LO2"}
+    assert set(prim.extras["cgaskin"]) <= {"POSITION_LO", "POSITION_LO2", "WEIGHTS_0_LO", "WEIGHTS_0_LO2"}
+    assert {"POSITION_LO", "POSITION_LO2"} <= set(prim.extras["cgaskin"])
+    assert not [name for name in vars(prim.attributes) if name.startswith("_CGASKIN")]
     # and a second round trip changes nothing any more
     again2 = load_gltf(save_gltf(again, tmp_path / ("again" + suffix)))
     assert_same_rig(again, again2)
@@ -257,6 +259,48 @@ def test_weight_residuals_are_written_only_when_needed(models_dir, tmp_path):
     renormalised = load_quietly(models_dir / "Arm5.glb")
     for rig, expected in ((exact, False), (renormalised, True)):
         doc = pygltflib.GLTF2().load(str(save_gltf(rig, tmp_path / "x.glb")))
-        attrs = vars(doc.meshes[0].primitives[0].attributes)
-        assert ("_CGASKIN_WEIGHTS_0_LO" in attrs) == expected
-        assert ("_CGASKIN_WEIGHTS_0_LO2" in attrs) == expected
+        (prim,) = doc.meshes[0].primitives
+        # in the primitive's extras, not as vertex attributes (Blender's importer concatenates
+        # application attributes of different widths and fails: tests/clients/test_blender.py)
+        assert not [k for k, v in vars(prim.attributes).items() if k.startswith("_") and v is not None]
+        ours = (prim.extras or {}).get("cgaskin", {})
+        assert ("WEIGHTS_0_LO" in ours) == expected
+        assert ("WEIGHTS_0_LO2" in ours) == expected
+
+
+def test_weight_residuals_of_earlier_versions_still_load(models_dir, tmp_path):
+    """Files of earlier versions hold the residuals as attributes _CGASKIN_WEIGHTS_0_LO/_LO2."""
+    rig = load_quietly(models_dir / "Arm5.glb")
+    doc = pygltflib.GLTF2().load(str(save_gltf(rig, tmp_path / "new.glb")))
+    (prim,) = doc.meshes[0].primitives
+    ours = prim.extras.pop("cgaskin")
+    for name in ("LO", "LO2"):
+        setattr(prim.attributes, f"_CGASKIN_WEIGHTS_0_{name}", ours[f"WEIGHTS_0_{name}"])
+    doc.save(str(tmp_path / "old.glb"))
+    old = load_gltf(tmp_path / "old.glb")
+    assert np.array_equal(old.weights, rig.weights) and old.attributes.keys() == rig.attributes.keys()
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf"])
+def test_application_attributes_share_one_width(tmp_path, suffix):
+    """Blender imports "_NAME" attributes only when they have one width (tests/clients): a SCALAR
+    _TEAR and a VEC3 _FOO are written as VEC3 (zero-padded) and reload at their own widths."""
+    rig = float64_rig()
+    n = rig.n_vertices
+    extra = {"_TEAR": np.arange(n, dtype=np.float64)[:, None], "FOO": f32(rig.vertices * 2),
+             "_PAIR": np.ones((n, 2))}
+    rig = rig.with_mesh(rig.vertices, rig.faces, rig.joints, rig.weights, {**rig.attributes, **extra})
+    path = save_gltf(rig, tmp_path / ("tube" + suffix))
+    doc = pygltflib.GLTF2().load(str(path))
+    (prim,) = doc.meshes[0].primitives
+    custom = {k: doc.accessors[v].type for k, v in vars(prim.attributes).items() if k.startswith("_") and v is not None}
+    assert custom == {"_TEAR": "VEC3", "_FOO": "VEC3", "_PAIR": "VEC3"}
+    assert prim.extras["cgaskin"]["ATTRIBUTE_WIDTHS"] == {"_TEAR": 1, "_PAIR": 2}
+    again = load_gltf(path)
+    for name, values in extra.items():
+        assert np.array_equal(again.attributes["_" + name.lstrip("_")], values)
+    # one width already: written as it is, no widths recorded
+    single = rig.with_mesh(rig.vertices, rig.faces, rig.joints, rig.weights, {"_TEAR": extra["_TEAR"]})
+    (prim,) = pygltflib.GLTF2().load(str(save_gltf(single, tmp_path / ("one" + suffix)))).meshes[0].primitives
+    assert "ATTRIBUTE_WIDTHS" not in prim.extras["cgaskin"]
+    assert np.array_equal(load_gltf(tmp_path / ("one" + suffix)).attributes["_TEAR"], extra["_TEAR"])
