@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Install what the tests need beyond pip: the assimp command line (FBX/DAE), and the real clients
+# that tests/clients open cgaskin's files in: three.js in headless Chromium (Debian chromium, npm
+# three + puppeteer-core, no browser download) and Blender as a module (bpy, Python 3.11 only).
+# Idempotent: when everything is there it only checks (a few seconds).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PYTHON="${PYTHON:-python}"
+JS=tests/clients/js
+
+# --- Debian packages ----------------------------------------------------------------------------
+missing=()
+command -v assimp >/dev/null 2>&1 || missing+=(assimp-utils)
+command -v chromium >/dev/null 2>&1 || missing+=(chromium)
+command -v node >/dev/null 2>&1 || missing+=(nodejs)
+command -v npm >/dev/null 2>&1 || missing+=(npm)
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "install-test-deps: apt-get install ${missing[*]}"
+    sudo=""
+    [ "$(id -u)" = 0 ] || sudo="sudo"
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# --- npm: three and puppeteer-core at the versions pinned in $JS/package-lock.json ----------------
+# (puppeteer-core never downloads a browser: the tests drive /usr/bin/chromium)
+if ! (cd "$JS" && node -e '
+    const want = require("./package.json").dependencies;
+    for (const [name, version] of Object.entries(want))
+        if (require(`./node_modules/${name}/package.json`).version !== version) process.exit(1);
+' >/dev/null 2>&1); then
+    echo "install-test-deps: npm ci in $JS"
+    (cd "$JS" && npm ci --no-audit --no-fund --loglevel=error)
+fi
+
+# --- Blender as a Python module ---------------------------------------------------------------------
+if "$PYTHON" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
+    if ! "$PYTHON" -c 'import importlib.metadata as m, sys; sys.exit(m.version("bpy") != "5.0.1")' 2>/dev/null; then
+        echo "install-test-deps: pip install bpy==5.0.1 (about 375 MB)"
+        "$PYTHON" -m pip install -q bpy==5.0.1
+    fi
+else
+    echo "install-test-deps: bpy 5.0.1 needs Python 3.11, this is $("$PYTHON" -V 2>&1):" \
+         "the Blender tests cannot run here (they skip, and fail under CGASKIN_CI=1)" >&2
+fi
+echo "install-test-deps: assimp, chromium, three, puppeteer-core$("$PYTHON" -c 'import sys; print(", bpy" if sys.version_info[:2] == (3, 11) else "")') ready"

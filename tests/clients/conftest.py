@@ -1,0 +1,62 @@
+"""Real clients (three.js in headless Chromium, Blender as a module): what they need, and the files
+they open. A missing client skips with the command that installs it; under CGASKIN_CI=1 it fails,
+so that CI never passes without having opened the files."""
+import importlib.util
+import os
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+from .files import write_files
+
+JS = Path(__file__).resolve().parent / "js"
+INSTALL = "bash scripts/install-test-deps.sh"
+CHROMIUM = os.environ.get("CGASKIN_CHROMIUM", "/usr/bin/chromium")
+#: one line per client test run: what was compared (printed at the end of the session)
+SUMMARY: list = []
+
+
+def pytest_terminal_summary(terminalreporter):
+    if SUMMARY:
+        terminalreporter.section("real clients")
+        for line in SUMMARY:
+            terminalreporter.write_line(line)
+
+
+def require(missing: list, what: str) -> None:
+    """Skip (fail under CGASKIN_CI=1) when anything in ``missing`` is absent."""
+    if not missing:
+        return
+    reason = f"{what} needs {', '.join(missing)}: run `{INSTALL}`"
+    if os.environ.get("CGASKIN_CI") == "1":
+        pytest.fail(f"CGASKIN_CI=1: {reason}", pytrace=False)
+    pytest.skip(reason)
+
+
+@pytest.fixture(scope="session")
+def threejs() -> dict:
+    """Paths for tests/clients/js/skin_positions.mjs: node and the Chromium binary."""
+    node = shutil.which("node")
+    missing = [name for name, ok in (("node", node), (CHROMIUM, Path(CHROMIUM).is_file()),
+                                     ("npm packages three and puppeteer-core in tests/clients/js/node_modules",
+                                      all((JS / "node_modules" / p / "package.json").is_file()
+                                          for p in ("three", "puppeteer-core")))) if not ok]
+    require(missing, "the three.js test")
+    return {"node": node, "chromium": CHROMIUM, "js": JS}
+
+
+@pytest.fixture(scope="session")
+def blender() -> str:
+    """The Python that imports bpy (Blender 5.0 as a module: Python 3.11 only)."""
+    if sys.version_info[:2] != (3, 11):
+        require([f"Python 3.11 (bpy 5.0.1 has no wheel for {sys.version.split()[0]})"], "the Blender test")
+    require([] if importlib.util.find_spec("bpy") else ["bpy 5.0.1"], "the Blender test")
+    return sys.executable
+
+
+@pytest.fixture(scope="session")
+def client_files(models_dir, tmp_path_factory) -> dict:
+    """name -> path of every file in ``files.NAMES``, written once per session by the CLI."""
+    return write_files(models_dir, tmp_path_factory.mktemp("client_files"))
