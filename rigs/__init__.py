@@ -1,7 +1,9 @@
 """Model I/O: load any supported file as a ``Rig``, save a ``Rig`` as skinned glTF 2.0.
 
-glTF (.glb, .gltf) is read natively (``cgaskin.rigs.gltf``); other formats go through assimp
-(``cgaskin.rigs.assimp``, imported only when needed).
+glTF (.glb, .gltf) is read natively (``cgaskin.rigs.gltf``); every other extension goes to assimp
+(``cgaskin.rigs.assimp``, imported only when needed), which decides whether it can read the file
+(``assimp listext`` prints what the installed one knows: FBX, Collada, OBJ, PLY, STL, 3DS, ...).
+Models with or without a skin load alike: a mesh without a skin becomes a rigid bone.
 """
 from __future__ import annotations
 
@@ -12,12 +14,9 @@ from ..animation.rig import Rig
 from ..errors import InvalidInputError, ModelFormatError
 
 GLTF_EXTENSIONS = (".glb", ".gltf")
-#: formats read through assimp; assimp knows more, these are the ones cgaskin is checked on
-ASSIMP_EXTENSIONS = (".fbx", ".dae", ".obj", ".blend", ".3ds", ".x", ".ms3d", ".md5mesh", ".smd",
-                     ".ply", ".stl")
 SAVE_EXTENSIONS = GLTF_EXTENSIONS
 
-__all__ = ["load", "save", "GLTF_EXTENSIONS", "ASSIMP_EXTENSIONS", "SAVE_EXTENSIONS"]
+__all__ = ["load", "save", "GLTF_EXTENSIONS", "SAVE_EXTENSIONS"]
 
 
 def _path(value, name: str) -> Path:
@@ -28,21 +27,27 @@ def _path(value, name: str) -> Path:
 
 
 def load(path, **options):
-    """Load a rigged model as a ``Rig``, picking the reader by file extension.
+    """Load a model, skinned or not, as a ``Rig``, picking the reader by file extension.
+
+    .glb / .gltf are read natively; every other extension is converted by assimp (FBX, Collada,
+    .zae, IQM, MS3D, OBJ, PLY, STL, 3DS, ... whatever the installed ``assimp`` reads) and then read
+    as glTF. Mesh nodes without a skin (static formats such as OBJ/PLY/STL, props, scans) load as
+    rigid bones at their rest positions (see ``cgaskin.rigs.gltf.load_gltf``), so they pose, cut and
+    tear like any skinned model.
 
     Parameters
     ----------
     path : str or os.PathLike
-        .glb / .gltf (native reader) or a format assimp reads (.fbx, .dae, ...).
     **options
-        Passed to the reader (the glTF reader takes none).
+        Passed to the reader (the glTF reader takes none; assimp: ``timeout``, ``executable``).
 
     Raises
     ------
     ModelFormatError
-        Unknown extension (the message lists the supported ones), or a malformed file.
+        A malformed file, or one assimp cannot read (the message names the file and the formats
+        the installed assimp knows), or a non-glTF file without the ``assimp`` tool installed.
     NoSkinError
-        The file holds no skinned mesh.
+        The file holds no mesh.
     """
     path = _path(path, "path")
     suffix = path.suffix.lower()
@@ -51,12 +56,8 @@ def load(path, **options):
         if options:
             raise TypeError(f"load_gltf takes no options, got {', '.join(sorted(options))}")
         return load_gltf(path)
-    if suffix in ASSIMP_EXTENSIONS:
-        from .assimp import load_assimp  # lazy: needs the assimp library or command line
-        return load_assimp(path, **options)
-    raise ModelFormatError(
-        f"{path.name}: unknown model format {suffix or '(no extension)'!r}; cgaskin reads "
-        f"{', '.join(GLTF_EXTENSIONS + ASSIMP_EXTENSIONS)}")
+    from .assimp import load_assimp  # lazy: needs the assimp command line
+    return load_assimp(path, **options)
 
 
 def save(rig, path):

@@ -1,8 +1,8 @@
 """Node hierarchy and skins of a glTF document (spec 3.5 "Nodes and hierarchy", 3.8 "Skins").
 
-Parents (a tree, no cycles), the default scene's nodes, node transforms (TRS or matrix), the
-bones of the skins used, the skeleton order (joints and their ancestors, parents first), unique
-joint names, and the ``Skeleton`` built from them.
+Parents (a tree, no cycles), the default scene's nodes and its mesh nodes (with and without a
+skin), node transforms (TRS or matrix), the bones of the skins used, the skeleton order (joints
+and their ancestors, parents first), unique joint names, and the ``Skeleton`` built from them.
 """
 from __future__ import annotations
 
@@ -209,3 +209,19 @@ def _build_skeleton(f: _GltfFile, bone_file_nodes: list[int], inverse_bind: np.n
         inverse_bind=inverse_bind,
     )
     return skeleton, node_to_skeleton
+
+
+def _mesh_nodes(f: _GltfFile, scene_nodes: list[int]):
+    """The mesh nodes of the scene: ([(node, skin)] with a skin, [node] without), in scene order."""
+    nodes = f.items("nodes")
+    skinned, rigid = [], []
+    for i in scene_nodes:
+        node = nodes[i]
+        if node.mesh is None:
+            continue
+        f.index(node.mesh, "meshes", f"node {i} mesh")
+        if node.skin is None:
+            rigid.append(i)
+        else:
+            skinned.append((i, f.index(node.skin, "skins", f"node {i} skin")))
+    return skinned, rigid

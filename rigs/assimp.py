@@ -1,5 +1,10 @@
 """FBX, Collada and every other format assimp reads, through the ``assimp`` command line.
 
+``cgaskin.load`` sends every extension but .glb/.gltf here; assimp decides what it can read
+(``assimp_formats()``: what ``assimp listext`` prints), and its "cannot read" becomes the
+``ModelFormatError``. Static formats (OBJ, PLY, STL, ...) convert to a glTF without a skin, which
+the glTF loader reads as rigid bones at the rest positions.
+
 Why the command line and not a Python binding: PyPI ``pyassimp`` 5.2.5 declares the ``aiBone`` struct
 of assimp 5.0, without the ``mArmature``/``mNode`` fields that libassimp >= 5.1 has, so reading any
 bone through it fails ("NULL pointer access") against Debian's libassimp5 5.2.5. The ``assimp`` tool
@@ -27,6 +32,7 @@ from __future__ import annotations
 
 import os
 import pathlib
+import re
 import shutil
 import subprocess
 import tempfile
@@ -37,7 +43,7 @@ from .._shared.warn import warn
 from ..animation.rig import Rig
 from ..errors import ModelFormatError
 
-__all__ = ["load_assimp", "assimp_executable", "DEFAULT_TIMEOUT_S"]
+__all__ = ["load_assimp", "assimp_executable", "assimp_formats", "DEFAULT_TIMEOUT_S"]
 
 #: Seconds a conversion may take. Arm5.fbx (2.5 MB, 5037 faces) converts in ~0.1 s; the limit only
 #: guards against a hang on a hostile file.
@@ -55,6 +61,37 @@ def assimp_executable() -> str:
     return exe
 
 
+_FORMATS: dict[str, tuple[str, ...]] = {}     # executable -> what its listext printed (answers only)
+
+
+def assimp_formats(executable: str | None = None) -> tuple[str, ...]:
+    """The extensions (".fbx", ".dae", ...) the installed ``assimp`` reads, as ``assimp listext``
+    prints them; () when the tool is missing or does not answer."""
+    exe = executable or shutil.which("assimp")
+    if not exe:
+        return ()
+    if exe not in _FORMATS:
+        try:
+            proc = subprocess.run([exe, "listext"], stdin=subprocess.DEVNULL, capture_output=True,
+                                  text=True, errors="replace", timeout=30, check=False)
+        except (OSError, subprocess.SubprocessError):
+            return ()
+        found = re.findall(r"\*\.([A-Za-z0-9_.]+)", proc.stdout) if proc.returncode == 0 else []
+        if not found:
+            return ()
+        _FORMATS[exe] = tuple(dict.fromkeys("." + e.lower() for e in found))
+    return _FORMATS[exe]
+
+
+def _cannot_read(src: pathlib.Path, exe: str, returncode: int, output: str) -> ModelFormatError:
+    """assimp's "cannot read", saying how cgaskin reads models and what this assimp knows."""
+    known = [e for e in assimp_formats(exe) if e not in (".glb", ".gltf")]
+    formats = f"; this assimp reads {' '.join(known)}" if known else ""
+    return ModelFormatError(f"{src}: assimp cannot read this file (exit status {returncode}): "
+                            f"{_failure_text(output)} (cgaskin reads glTF, .glb and .gltf, natively "
+                            f"and every other format through assimp{formats})")
+
+
 def _failure_text(output: str) -> str:
     """The lines of assimp's output that say what went wrong (it prints errors to stdout)."""
     lines = [ln.strip() for ln in output.splitlines() if ln.strip()]
@@ -63,11 +100,11 @@ def _failure_text(output: str) -> str:
 
 
 def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | None = None) -> Rig:
-    """Load a rigged model in any format assimp reads (FBX, DAE, ...) as a ``Rig``.
+    """Load a model in any format assimp reads (FBX, DAE, OBJ, PLY, STL, ...) as a ``Rig``.
 
     The file is converted with ``assimp export <path> <tmp>/<stem>.glb -fglb2 -lbw`` (no other
     post-processing; see the module docstring for what assimp does) and read by
-    ``cgaskin.rigs.gltf.load_gltf``.
+    ``cgaskin.rigs.gltf.load_gltf`` (meshes without a skin become rigid bones, see there).
 
     path : str or os.PathLike
     timeout : float seconds allowed for the conversion
@@ -76,7 +113,7 @@ def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | N
     returns Rig named after the file's stem
 
     Raises ModelFormatError when the file is missing, assimp cannot read it, the conversion times
-    out, or the ``assimp`` tool is not installed; NoSkinError when it holds no skinned mesh.
+    out, or the ``assimp`` tool is not installed; NoSkinError when it holds no mesh.
     """
     from .gltf import load_gltf   # imported here: gltf.py imports nothing of this module
 
@@ -100,9 +137,7 @@ def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | N
         except subprocess.TimeoutExpired:
             raise ModelFormatError(f"{src}: assimp did not finish converting within {timeout:g} s") from None
         if proc.returncode != 0 or not out.is_file() or out.stat().st_size == 0:
-            detail = _failure_text(proc.stdout + "\n" + proc.stderr)
-            raise ModelFormatError(f"{src}: assimp cannot read this file (exit status {proc.returncode}): "
-                                   f"{detail}")
+            raise _cannot_read(src, exe, proc.returncode, proc.stdout + "\n" + proc.stderr)
         try:
             # The glTF loader warns about repaired weights naming the file it read; re-issue those
             # warnings naming the user's file instead of our temporary copy.

@@ -1,4 +1,4 @@
-"""glTF 2.0 loader: a skinned .glb/.gltf file -> ``Rig``.
+"""glTF 2.0 loader: a .glb/.gltf file, skinned or not -> ``Rig``.
 
 pygltflib parses the JSON into dataclasses; everything else is decoded here with numpy, following
 the glTF 2.0 specification (section 3.6 "Binary data storage", 3.7 "Geometry", 3.8 "Transforms and
@@ -7,14 +7,15 @@ skinning", 3.11 "Animations"):
 * accessors of every component type, ``normalized`` integers, ``byteStride``, accessor and
   bufferView ``byteOffset``, matrix column padding, sparse accessors, accessors without bufferView;
 * buffers from a GLB binary chunk, ``data:`` URIs and external files next to the .gltf;
-* all triangle primitives (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN) of all skinned mesh nodes of
-  the default scene, merged into one mesh; JOINTS_n/WEIGHTS_n sets reduced to 4 influences;
-* every skin used, merged into one skeleton (joints plus all their ancestors);
+* all triangle primitives (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN) of all mesh nodes of the
+  default scene, merged into one mesh; JOINTS_n/WEIGHTS_n sets reduced to 4 influences;
+* every skin used, merged into one skeleton (joints plus all their ancestors); a mesh node
+  without a skin is a rigid bone of its own (``_gltf_rigid``);
 * TRS and matrix node transforms, animations of skeleton nodes.
 
 A file is untrusted input: pygltflib checks neither types nor ranges, so every index, count and
 offset is checked here before use, and every problem becomes a ``ModelFormatError`` that names the
-file and the offending object (``NoSkinError`` when the file is valid but holds no skin). The
+file and the offending object (``NoSkinError`` when the file is valid but holds no mesh). The
 loader never returns NaN or infinity.
 
 Precision: glTF stores positions, weights, inverse bind matrices and keyframes as float32; they are
@@ -29,7 +30,8 @@ next stroke continues from.
 This module is the driver; the work is done by private modules, one topic each:
 ``_gltf_container`` (file bytes -> document), ``_gltf_document`` (``_GltfFile``: checked access
 to the JSON, buffers and accessors), ``_gltf_nodes`` (hierarchy, node transforms, skins,
-skeleton), ``_gltf_mesh`` (primitives, merged mesh), ``_gltf_clips`` (animations) and
+skeleton), ``_gltf_mesh`` (primitives, merged mesh), ``_gltf_rigid`` (meshes without a skin,
+and the skeleton and mesh of both kinds), ``_gltf_clips`` (animations) and
 ``_gltf_constants`` (the tables).
 """
 from __future__ import annotations
@@ -50,8 +52,8 @@ from ._gltf_constants import (AFFINE_TOLERANCE, COMPONENT_DTYPES, COMPONENT_NAME
                               UNSUPPORTED_EXTENSIONS, WEIGHT_RESIDUALS, EXTRAS_KEY, POSITION_RESIDUALS)
 from ._gltf_container import _read_document
 from ._gltf_document import _GltfFile
-from ._gltf_mesh import _merge_primitives, _read_primitive
-from ._gltf_nodes import _build_skeleton, _parents, _read_skins, _scene_nodes
+from ._gltf_nodes import _mesh_nodes, _parents, _scene_nodes
+from ._gltf_rigid import _skeleton_and_mesh
 
 __all__ = ["load_gltf", "trs_to_matrix", "matrix_to_trs", "quat_to_matrix", "matrix_to_quat"]
 
@@ -70,13 +72,30 @@ def trs_to_matrix(translation, rotation, scale) -> np.ndarray:
 # --- the loader ---------------------------------------------------------------------------------------
 
 def load_gltf(path) -> Rig:
-    """Load a skinned glTF 2.0 file (.glb or .gltf) as a ``Rig``.
+    """Load a glTF 2.0 file (.glb or .gltf), skinned or not, as a ``Rig``.
 
-    Every node with both ``mesh`` and ``skin`` in the default scene (all nodes when the file has no
-    scene) contributes all its triangle primitives, merged in scene order into one mesh; the
-    mesh nodes' own transforms are ignored (glTF skinning semantics). The skeleton holds the joints
-    of every skin used and all their ancestors. Influences beyond 4 are reduced to the largest 4
-    and weight rows renormalised (with a warning, see ``check_mesh``).
+    Every mesh node of the default scene (all nodes when the file has no scene) contributes all
+    its triangle primitives, merged into one mesh: first the skinned ones (node with ``mesh`` and
+    ``skin``) in scene order, then the unskinned ones in scene order.
+
+    * Skinned mesh nodes: the vertices as stored (the bind pose), their joints and weights; the
+      mesh nodes' own transforms are ignored (glTF skinning semantics).
+    * Mesh nodes without a skin (a static organ, a prop, a scanned mesh) are *rigid bones*: each
+      such node is a bone of the skeleton, its vertices are put into the bind pose
+      ``B · v_local`` with inverse bind matrix ``B⁻¹`` and weight 1 on that bone. ``B`` is the
+      node's global transform with every skin joint at its bind pose (``Pose.bind``'s rule); in a
+      file without skins that is the rest (node) global transform, so ``rig.vertices`` is the mesh
+      as a viewer shows it, ``skin(rig, rig.rest_pose())`` returns it, and animations of the mesh
+      nodes or their ancestors play. Mirrored nodes (negative determinant) get their faces' winding
+      reversed so that outward stays outward; NORMAL is transformed with the inverse transpose; a
+      node with a singular transform (scale 0) keeps its local vertices with an identity inverse
+      bind matrix, with a warning. In a file with both kinds the
+      rigid meshes come along (eyes, props, armour attached to a character move with the joint
+      they hang from, as in a viewer).
+
+    The skeleton holds the joints of every skin used, every rigid mesh node, and all their
+    ancestors. Influences beyond 4 are reduced to the largest 4 and weight rows renormalised (with
+    a warning, see ``check_mesh``).
 
     Parameters
     ----------
@@ -95,7 +114,7 @@ def load_gltf(path) -> Rig:
     ModelFormatError
         The file is missing, truncated, not glTF 2.0, or inconsistent (the message says where).
     NoSkinError
-        The file is valid but holds no skinned mesh.
+        The file is valid but its scene holds no mesh (or no triangle of one).
     """
     path = Path(path)
     f = _read_document(path)
@@ -111,49 +130,24 @@ def load_gltf(path) -> Rig:
 
 
 def _build_rig(f: _GltfFile) -> Rig:
-    """The rig of a read document: scene, skins, merged mesh (checked by ``check_mesh``), skeleton,
-    clips. Every problem raises ``ModelFormatError`` (``NoSkinError`` when nothing is skinned)."""
-    nodes = f.items("nodes")
+    """The rig of a read document: the scene's mesh nodes, skeleton and merged mesh
+    (``_gltf_rigid``: skinned nodes and rigid ones), checked by ``check_mesh``, clips. Every problem
+    raises ``ModelFormatError`` (``NoSkinError`` when the scene holds no triangle mesh)."""
     parents = _parents(f)
-    scene_nodes = _scene_nodes(f, parents)
-
-    skinned, rigid = [], []
-    for i in scene_nodes:
-        node = nodes[i]
-        if node.mesh is None:
-            continue
-        f.index(node.mesh, "meshes", f"node {i} mesh")
-        if node.skin is None:
-            rigid.append(i)
-        else:
-            skinned.append((i, f.index(node.skin, "skins", f"node {i} skin")))
-    if not skinned:
-        # Decode the rigid meshes anyway, so that a broken file gets its specific error rather
-        # than a generic "no skin".
-        for i in rigid:
-            mesh = f.items("meshes")[nodes[i].mesh]
-            for p, prim in enumerate(mesh.primitives or []):
-                _read_primitive(f, nodes[i].mesh, p, prim, skinned=False)
-        what = (f"{len(rigid)} mesh node(s) without a skin" if rigid else "no mesh in its scene")
-        raise f.error(f"holds no skinned mesh ({what}); cgaskin needs a skin "
-                      f"(JOINTS_0/WEIGHTS_0 + node.skin)", cls=NoSkinError)
-
-    skin_indices = sorted({s for _, s in skinned})
-    bone_file_nodes, inverse_bind, slot_maps = _read_skins(f, skin_indices)
-    n_bones = len(bone_file_nodes)
-    vertices, faces, joints, weights, attributes = _merge_primitives(f, skinned, slot_maps)
-
+    skinned, rigid = _mesh_nodes(f, _scene_nodes(f, parents))
+    if not skinned and not rigid:
+        raise f.error("holds no mesh (no node of its scene has one): nothing to load", cls=NoSkinError)
+    skeleton, node_to_skeleton, mesh = _skeleton_and_mesh(f, parents, skinned, rigid)
+    vertices, faces, joints, weights, attributes = mesh
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             vertices, faces, joints, weights = check_mesh(vertices, faces, joints, weights,
-                                                          n_bones=n_bones, source=f.path.name)
+                                                          n_bones=skeleton.n_bones, source=f.path.name)
     except InvalidInputError as exc:
         raise ModelFormatError(str(exc)) from None
     for warning in caught:  # re-issued so that they point at the caller of load, not in here
         f.warn(str(warning.message), prefix=False)
-
-    skeleton, node_to_skeleton = _build_skeleton(f, bone_file_nodes, inverse_bind, parents)
     clips = _read_clips(f, node_to_skeleton)
     return Rig(vertices=vertices, faces=faces, joints=joints, weights=weights, skeleton=skeleton,
                clips=clips, attributes=attributes, name=f.path.stem)

@@ -170,14 +170,41 @@ def test_missing_file(tmp_path):
 
 
 @needs_assimp
-def test_rigid_mesh_has_no_skin(tmp_path):
-    """assimp reads it fine, but there is nothing to skin: the glTF loader's NoSkinError comes through
-    naming the user's file, not the temporary one."""
+def test_rigid_mesh_loads_as_a_rigid_bone(tmp_path):
+    """A static OBJ has no skin: it loads as one rigid bone (tests/rigs/test_skinless.py has more)."""
     obj = tmp_path / "tri.obj"
     obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
-    with pytest.raises(NoSkinError) as info:
+    rig = A.load_assimp(obj)
+    assert rig.name == "tri" and rig.n_faces == 1 and rig.skeleton.n_bones == 1
+    np.testing.assert_array_equal(rig.vertices[rig.faces[0]], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+
+
+@needs_assimp
+def test_file_without_a_mesh_names_the_users_file(tmp_path):
+    """assimp reads it fine, but it holds no mesh: the glTF loader's NoSkinError comes through
+    naming the user's file, not the temporary one."""
+    obj = tmp_path / "points.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    with pytest.raises(NoSkinError, match="holds no triangle mesh") as info:
         A.load_assimp(obj)
-    assert "cgaskin-assimp-" not in str(info.value)
+    assert "points.obj" in str(info.value) and "cgaskin-assimp-" not in str(info.value)
+
+
+def test_cannot_read_lists_what_this_assimp_reads(tmp_path, monkeypatch):
+    def fake_run(cmd, **kwargs):
+        if cmd[1] == "listext":
+            return subprocess.CompletedProcess(cmd, 0, stdout="*.3ds;*.fbx;*.glb;*.obj\n", stderr="")
+        return subprocess.CompletedProcess(cmd, 10, stdout="ERROR: Failed to load file: No suitable reader", stderr="")
+
+    model = tmp_path / "m.abc"
+    model.write_bytes(b"x")
+    monkeypatch.setattr(A.subprocess, "run", fake_run)
+    monkeypatch.setattr(A, "_FORMATS", {})
+    with pytest.raises(ModelFormatError, match=r"m.abc: assimp cannot read this file \(exit status 10\): "
+                                               r"ERROR: Failed to load file: No suitable reader \(cgaskin reads "
+                                               r"glTF, .glb and .gltf, natively and every other format through "
+                                               r"assimp; this assimp reads .3ds .fbx .obj\)"):
+        A.load_assimp(model, executable="fake-assimp")
 
 
 def test_missing_executable_says_how_to_install(tmp_path, monkeypatch):
@@ -217,7 +244,7 @@ def test_path_like_and_dash_names(tmp_path, monkeypatch):
     seen = {}
 
     def fake_run(cmd, **kwargs):
-        seen["cmd"] = cmd
+        seen.setdefault("cmd", cmd)        # the export (a "listext" may follow its failure)
         return subprocess.CompletedProcess(cmd, 1, stdout="ERROR: Failed to load file: nope", stderr="")
 
     model = tmp_path / "-cfull.fbx"
