@@ -22,6 +22,8 @@ import cgaskin
 from cgaskin import TearPathError, TriangleBVH, capsule_arm, skin, tear_stroke
 from cgaskin.surgery.tear import SNAP_TOLERANCE, tear_topology
 
+from .swept_region import hull_distance
+
 PLANE_TOL = 1e-9        # path vertices on the tear plane, relative to the diagonal
 AREA_TOL = 1e-9         # relative area change with opening 0
 MODELS = ["Arm5.glb", "3Cylinder4bones.glb", "Fox.glb", "capsule"]
@@ -155,13 +157,17 @@ def check_stroke(rig, result, pose, opening=0.0):
     # topology: the new welded boundary is the path, once per side; nothing non-manifold
     t0, t1 = tear_topology(rig), tear_topology(torn)
     assert len(t1.nonmanifold_edges) == len(t0.nonmanifold_edges) == 0
-    side_a = welded_edges(t1, zip(result.side_a[:-1], result.side_a[1:]))
-    side_b = welded_edges(t1, zip(result.side_b[:-1], result.side_b[1:]))
-    assert len(side_a) == len(side_b) == k - 1 and not side_a & side_b
+    # (a segment that jumps across an existing slit is no edge: each of its ends splits a boundary edge)
+    cut = ~result.jumps[1:]
+    side_a = welded_edges(t1, zip(result.side_a[:-1][cut], result.side_a[1:][cut]))
+    side_b = welded_edges(t1, zip(result.side_b[:-1][cut], result.side_b[1:][cut]))
+    assert len(side_a) == len(side_b) == cut.sum() and not side_a & side_b
     new_boundary = boundary_edges(t1)
     assert side_a | side_b <= new_boundary
-    assert len(new_boundary) == len(t0.boundary_edges) + 2 * (k - 1)
-    if opening == 0:
+    jump_ends = np.flatnonzero(result.jumps[1:])
+    split_old = sum(result.kinds[j] == 1 for j in np.concatenate([jump_ends, jump_ends + 1]))
+    assert len(new_boundary) == len(t0.boundary_edges) + 2 * cut.sum() + split_old
+    if opening == 0 and not result.jumps.any():
         # the other boundary edges are the old ones (same end positions; an old edge at a split end of
         # the path now ends at one of the end's copies)
         def ends(topo, points, edges):
@@ -192,10 +198,11 @@ def check_like_original(rig, torn, pose, tmp_path=None):
         np.testing.assert_allclose(back.weights, torn.weights, atol=1e-6)
 
 
-def section_separates(rig, result_plane, hits, pose):
+def section_separates(rig, result_plane, hits, pose, within=None):
     """Brute force: do the two hit faces lie on different connected pieces of the plane's section?
-    (faces crossed by the plane, joined across crossed edges with two faces). None when a vertex
-    lies on the plane (the simple sign test does not decide then)."""
+    (faces crossed by the plane, joined across crossed edges with two faces, where the crossing lies
+    within ``within`` = (blades, margin) of the blades' hull when given). None when a vertex lies on
+    the plane (the simple sign test does not decide then)."""
     topo = tear_topology(rig)
     points = surface(rig, pose)[topo.representative]
     d = points @ result_plane[:3] - result_plane[3]
@@ -212,6 +219,11 @@ def section_separates(rig, result_plane, hits, pose):
     crossed = np.flatnonzero(sign[topo.edges[:, 0]] * sign[topo.edges[:, 1]] < 0)
     for e in crossed:
         faces = topo.edge_faces(e)
+        if within is not None:
+            a, b = points[topo.edges[e]]
+            da, db = d[topo.edges[e]]
+            if hull_distance(a + da / (da - db) * (b - a), within[0]) > within[1]:
+                continue
         if len(faces) == 2:
             parent[find(faces[0])] = find(faces[1])
     bvh = TriangleBVH(surface(rig, pose), rig.faces)

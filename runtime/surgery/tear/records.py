@@ -15,8 +15,9 @@ from ..._shared.jit import B1, F2, I1, I2, record
 
 # path node kinds
 VERTEX, EDGE, FACE = np.int64(0), np.int64(1), np.int64(2)
-# how a path segment runs from the previous node: across a face, or along an edge in the plane
-NO_CARRIER, FACE_CARRIER, EDGE_CARRIER = np.int64(-1), np.int64(0), np.int64(1)
+# how a path segment runs from the previous node: across a face, along an edge in the plane, or
+# through an opening of the surface (a jump across an existing slit or hole, between boundary points)
+NO_CARRIER, FACE_CARRIER, EDGE_CARRIER, JUMP_CARRIER = np.int64(-1), np.int64(0), np.int64(1), np.int64(2)
 
 
 # ---- the data handed from step to step -------------------------------------------------------------
@@ -42,7 +43,8 @@ class Path(NamedTuple):
     """Step 4 (``walk``): the path from S_i to S_{i+1}, one row per node.
 
     nodes : (k, 4) int64 (kind, id, carrier kind, carrier id): the carrier is what the segment from
-        the previous node runs through (a face, or an edge lying in the plane)
+        the previous node runs through (a face, an edge lying in the plane, or -- JUMP_CARRIER, id -1 --
+        an opening of the surface between two boundary points)
     points : (k, 4) float64 (edge parameter t from edges[id, 0], x, y, z)
     """
 

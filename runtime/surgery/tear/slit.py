@@ -54,9 +54,10 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
     Around each path node, the faces that touch it fall into groups joined by edges from the node
     that are not path edges: two groups at a node inside the path (one per side), one at an end that
     lies inside the surface (it stays single: the slit's end), two at an end on an existing boundary.
-    The groups of all split nodes, joined the same way, form the two sides of the slit; the side
-    whose faces lie furthest along the plane normal (summed signed distances of their centroids) keeps
-    the original vertices, the other gets copies ("twins"), one per attribute-split copy it uses. A
+    The groups of all split nodes, joined the same way, form the two sides of the slit (two per piece
+    of a path that jumps across an existing slit); at each node the side whose faces lie furthest
+    along the plane normal (summed signed distances of their centroids) keeps the original vertices,
+    the other gets copies ("twins"), one per attribute-split copy it uses. A
     copy used only by far-side faces is moved to that side instead of being twinned.
 
     returns split (k,) bool; twins (t, 3) int64 rows (vertex it copies, far side rank: 0 for the usual
@@ -159,6 +160,8 @@ def _open_slit(faces, wf, node_w, positions, new_positions, plane, candidates):
         side_b[j] = side_a[j]
         if not split[j]:
             continue
+        # the keeper: of the sides at this node, the one furthest along the normal (per node, as a
+        # path that jumps across an existing slit has two sides for each of its pieces)
         root = np.empty(e - s, np.int64)
         keeper = -1
         for a in range(s, e):

@@ -26,9 +26,13 @@ blade at time t_i and ``scalpel_to = (a1, b1)`` at t_{i+1}. Steps (design.md sec
    faces (signed distances by the generated ``point_plane_distance``, crossing parameters by
    ``segment_plane``), in both directions at once, and keeps the shorter: a front-propagation over
    the curve that visits each face at most once (so the face count bounds it, with no other step cap)
-   and follows the curve through vertices that lie on the plane and along edges that lie in it. A
-   curve that never reaches S_{i+1} (the two hits lie on different pieces of the plane's section)
-   raises ``TearPathError``.
+   and follows the curve through vertices that lie on the plane and along edges that lie in it. The
+   path stays in the region the blade swept (``region.py``: the hull of the blade at both times,
+   widened by the stroke's length and a face): it never detours round an obstacle. Where the curve
+   meets an existing slit (or any opening of the surface), the path jumps across it to the curve
+   on the other side, so that the new slit crosses the old one (an X junction) or ends on it (a T
+   junction). A curve that does not reach S_{i+1} within the region, and a stroke that would only
+   run through existing openings, raise ``TearPathError``.
 5. **Re-triangulation.** Every crossed face is split so that the path is a chain of mesh edges: the
    edge crossings and the two end points become new vertices, with weights interpolated (edge: by
    the edge parameter t; inside a face: by its barycentric coordinates from the generated
@@ -75,7 +79,7 @@ from ..bvh import TriangleBVH
 from ..new_vertices import attribute_rule, interpolate_in_place
 from ..surface import TEAR_LABEL, _labels, _surface, mesh_arrays, tear_topology
 from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, locate
-from .records import Ends, Path, Pieces, Slit, TornFaces
+from .records import JUMP_CARRIER, Ends, Path, Pieces, Slit, TornFaces
 from .retriangulate import _retriangulate
 from .slit import _open_slit, _torn_faces
 from .vertex_data import _vertex_data
@@ -111,6 +115,8 @@ class TearResult:
         slit's ends inside the surface); other attribute-split copies may exist
     split : (k,) bool, whether the path point was split into two sides
     hits : (2, 3) float64 S_i and S_{i+1} as the scalpel met the surface (before snapping)
+    jumps : (k,) bool, whether the path reaches the point by jumping from the previous one across an
+        opening of the surface (where it crosses an existing slit: both points lie on its sides)
     """
 
     rig: Rig
@@ -121,6 +127,7 @@ class TearResult:
     side_b: np.ndarray
     split: np.ndarray
     hits: np.ndarray
+    jumps: np.ndarray
 
 
 def _scalpel(value, name):
@@ -178,7 +185,8 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     MissesMeshError
         A scalpel segment does not meet the surface (the message names which).
     TearPathError
-        The plane's section of the surface does not lead from S_i to S_{i+1}.
+        The plane's section of the surface does not lead from S_i to S_{i+1} within the region the
+        blade swept, or the stroke runs only through existing openings (nothing to tear).
     InvalidInputError
         Wrong shapes, non-finite values, a negative opening, a zero-length blade, a stroke that does
         not move across the surface, a pose of another skeleton, a BVH of other positions.
@@ -199,13 +207,18 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     ends = locate(surface, faces, a0, b0, a1, b1, bvh)
     _check_ends(ends, surface, faces, bvh, (a0, b0), (a1, b1))
     # 4: the path
-    path = walk(surface, ends)
+    path = walk(surface, ends, bvh, (a0, b0), (a1, b1))
+    s_pos, t_pos = ends.points
     if path is None:
-        s_pos, t_pos = ends.points
         raise TearPathError(
-            f"the tear plane's section of the surface, followed from S_i = {s_pos.tolist()}, does "
-            f"not reach S_(i+1) = {t_pos.tolist()}: the two points lie on different pieces of the "
-            f"section, or a boundary of the mesh is in the way (use shorter strokes)")
+            f"the tear plane's section of the surface, followed from S_i = {s_pos.tolist()} within the "
+            f"region the blade swept, does not reach S_(i+1) = {t_pos.tolist()}: the surface between "
+            f"them leaves that region (a fold, or a boundary or slit of the mesh that the section "
+            f"cannot cross there), or they lie on different pieces of the section (use shorter strokes)")
+    if len(path.nodes) == 0:
+        raise TearPathError(
+            f"nothing to tear: the stroke from S_i = {s_pos.tolist()} to S_(i+1) = {t_pos.tolist()} runs "
+            f"only through openings the surface already has (an existing slit or hole)")
     # 5-6: re-triangulate, open the slit (separate kernels, so that a cold start compiles them in
     # parallel: cgaskin.precompile)
     pieces = Pieces(*_retriangulate(*path, faces, tuple(surface.welded), rig.n_vertices, tol.on_edge))
@@ -217,7 +230,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     torn_rig = _torn_rig(rig, surface, path, pieces, torn.faces, slit, ends.plane, opening, pose is not None)
     return TearResult(rig=torn_rig, plane=ends.plane, points=path.points[:, 1:4].copy(),
                       kinds=path.nodes[:, 0].copy(), side_a=slit.side_a, side_b=slit.side_b, split=slit.split,
-                      hits=ends.hits)
+                      hits=ends.hits, jumps=path.nodes[:, 2] == JUMP_CARRIER)
 
 
 def _check_ends(ends: Ends, surface, faces, bvh, blade_from, blade_to) -> None:

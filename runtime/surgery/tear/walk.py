@@ -5,10 +5,14 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import F1, S1, helper, i8, kernel
+from ..._shared.jit import F1, I1, S1, f8, helper, i8, kernel, record
+from ...tolerances import tol
 from ...generated.kernels import segment_plane
+from ...algebra.vec3 import _dot, _norm, _sub
+from ..bvh import BVH_ARRAYS, _first_hit
 from ..surface import WELDED_MESH
-from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, NO_CARRIER, VERTEX, Ends, Path
+from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CARRIER, VERTEX, Ends, Path
+from .region import _margin, _outside
 
 
 @helper
@@ -40,26 +44,140 @@ def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carr
 
 
 @helper
-def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges,
-                  t_kind, t_id, vertex_used):
-    """Append the node for a boundary element (a vertex on the plane, or the crossing of an edge,
+def _element_point(kind, ident, plane, wpos, edges):
+    """(t, x, y, z) of a boundary element: a vertex on the plane (t = 0), or the crossing of an edge,
     computed by the generated ``segment_plane`` on the edge's welded ends in canonical order so that
-    every copy of a seam edge gets the same point). Returns the new count, unchanged when the element
-    is a vertex the path already went through (the front dies there: no self-crossing path)."""
-    is_target = t_kind == kind and ident == t_id
+    every copy of a seam edge gets the same point."""
     if kind == VERTEX:
-        if vertex_used[ident] and not is_target:
-            return n
-        vertex_used[ident] = True
         p = wpos[ident]
-        return _push(ni, nf, target, n, VERTEX, ident, 0.0, p[0], p[1], p[2], parent, carrier_kind,
-                     carrier, is_target)
-    t, x, y, z = segment_plane(plane, wpos[edges[ident, 0]], wpos[edges[ident, 1]])
-    return _push(ni, nf, target, n, EDGE, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
+        return 0.0, p[0], p[1], p[2]
+    return segment_plane(plane, wpos[edges[ident, 0]], wpos[edges[ident, 1]])
 
 
-@kernel((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1), cost=2.1)
-def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
+@helper
+def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges,
+                  t_kind, t_id, vertex_used, region, margin):
+    """Append the node for a boundary element (``_element_point``). Returns the new count, unchanged
+    when the element lies outside the swept region (``region.py``: the front dies there, no detour)
+    or is a vertex the path already went through (no self-crossing path)."""
+    is_target = t_kind == kind and ident == t_id
+    if kind == VERTEX and vertex_used[ident] and not is_target:
+        return n
+    t, x, y, z = _element_point(kind, ident, plane, wpos, edges)
+    if not is_target:
+        # within the margin of S_i (the root: in the hull) is within the region; else measure
+        near = (x - nf[0, 1]) ** 2 + (y - nf[0, 2]) ** 2 + (z - nf[0, 3]) ** 2 <= margin * margin
+        if not near and _outside((x, y, z), region) > margin:
+            return n
+    if kind == VERTEX:
+        vertex_used[ident] = True
+    return _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
+
+
+@helper
+def _openings(cls, edges, ef_offsets, plane, wpos, region, margin):
+    """Where the plane meets the surface's boundary inside the swept region: (c, 2) int64 (kind, id)
+    of the boundary edges it crosses (EDGE) and the boundary vertices on it (VERTEX)."""
+    found = np.empty((16, 2), np.int64)
+    count = 0
+    for e in range(edges.shape[0]):
+        if ef_offsets[e + 1] - ef_offsets[e] != 1:
+            continue
+        for kind, ident in ((EDGE, e), (VERTEX, edges[e, 0]), (VERTEX, edges[e, 1])):
+            if kind == EDGE and cls[edges[e, 0]] * cls[edges[e, 1]] >= 0:
+                continue
+            if kind == VERTEX and cls[ident] != 0:
+                continue
+            seen = False
+            for c in range(count):
+                seen = seen or (found[c, 0] == kind and found[c, 1] == ident)
+            if seen or _outside(_element_point(kind, ident, plane, wpos, edges)[1:], region) > margin:
+                continue
+            if count == found.shape[0]:
+                found = np.concatenate((found, np.empty_like(found)))
+            found[count, 0], found[count, 1] = kind, ident
+            count += 1
+    return found[:count]
+
+
+@helper
+def _unit(u):
+    length = _norm(u)
+    for k in range(3):
+        u[k] /= max(length, 1e-300)
+    return u
+
+
+@helper
+def _jump(bvh, mesh, cls, plane, p_kind, p_id, p, before, q_kind, q_id, q, snap):
+    """Whether the path may jump from boundary point p (reached from ``before``; p itself when it is
+    the start) to boundary point q through an opening of the surface: the two sides of a closed slit
+    (within ``snap`` of each other), or two boundary edges' crossings with no face between them, the
+    jump going on the way the section arrives at p and leaves q into its face (so never back, nor
+    along a slit, nor over the skin from one slit to another)."""
+    (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
+    d = _sub(q, p)
+    length = _norm(d)
+    if length <= snap:
+        return True
+    if p_kind != EDGE or q_kind != EDGE:
+        return False
+    d = _unit(d)
+    if _dot(d, _sub(p, before)) < 0.0:
+        return False
+    # where the section leaves q's face (its one face: q lies on a boundary edge)
+    g = ef_faces[ef_offsets[q_id]]
+    kinds, ids = np.empty(3, np.int64), np.empty(3, np.int64)
+    count = _elements(g, wfaces, face_edges, cls, kinds, ids)
+    for c in range(count):
+        if not (kinds[c] == EDGE and ids[c] == q_id):
+            _, x, y, z = _element_point(kinds[c], ids[c], plane, wpos, edges)
+            if (x - q[0]) * d[0] + (y - q[1]) * d[1] + (z - q[2]) * d[2] <= 0.0:
+                return False
+    s = min(0.25, snap / length + 1e-7)      # the ends lie on faces: leave them out
+    a, b = np.empty(3), np.empty(3)
+    for k in range(3):
+        a[k] = p[k] + s * length * d[k]
+        b[k] = q[k] - s * length * d[k]
+    return _first_hit(bvh, a, b)[0] < 0
+
+
+@helper
+def _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces):
+    """Whether welded vertex w lies on the boundary (an edge from it has one face)."""
+    for r in range(vf_offsets[w], vf_offsets[w + 1]):
+        g = vf_faces[r]
+        for k in range(3):
+            if wfaces[g, k] == w:
+                for e in (face_edges[g, k], face_edges[g, (k + 2) % 3]):
+                    if ef_offsets[e + 1] - ef_offsets[e] == 1:
+                        return True
+    return False
+
+
+@helper
+def _jumps(node, ni, nf, target, n, cap, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id, vertex_used,
+           region, margin, snap):
+    """Push the jumps from boundary node ``node`` to the ``openings`` (``_openings``) not yet jumped
+    to that ``_jump`` allows; returns the new node count."""
+    wpos, edges = mesh[0], mesh[3]
+    kind, ident = ni[node, 0], ni[node, 1]
+    came_from = nf[max(ni[node, 2], 0), 1:4]
+    to = np.empty(3)
+    for c in range(openings.shape[0]):
+        ok, oid = openings[c, 0], openings[c, 1]
+        if jumped[c] or (ok == kind and oid == ident) or n + 8 > cap:
+            continue
+        _, to[0], to[1], to[2] = _element_point(ok, oid, plane, wpos, edges)
+        if _jump(bvh, mesh, cls, plane, kind, ident, nf[node, 1:4], came_from, ok, oid, to, snap):
+            jumped[c] = True
+            n = _push_element(ni, nf, target, n, ok, oid, node, JUMP_CARRIER, np.int64(-1), plane, wpos, edges,
+                              t_kind, t_id, vertex_used, region, margin)
+    return n
+
+
+@kernel((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=2.6)
+def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap):
     """Follow the plane's section of the surface from the start node to the target node.
 
     Nodes are (kind, id): VERTEX (welded vertex on the plane), EDGE (edge crossed by the plane, at
@@ -68,12 +186,20 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
     from the start along every direction the section leaves it by (two, or more at a saddle), always
     advancing the shortest one, so the first front to pop the target is the shorter way round.
     Each face (and each in-plane edge) is crossed at most once, which bounds the search by the face
-    count and keeps fronts from looping.
+    count and keeps fronts from looping. A front dies where it leaves the swept region (``region``,
+    ``margin``: see region.py). A front that reaches the surface's boundary (an existing slit, a hole,
+    a border) may jump through the opening to a boundary point across it on the plane in the region
+    (``_jump``): the new slit then crosses the old one (an X junction), or ends on it (a T junction)
+    when the target is there.
 
     mesh : WeldedMesh (as a tuple) ; cls : (w,) int8 sides of the welded vertices ; plane : (4,)
+    bvh : BVHArrays (as a tuple) of the surface ; region : the blade at both times, (a0, b0, a1, b1)
+    (3,) each ; hit_faces : (2,) the faces it hit
+    snap : absolute distance
     returns found (bool), and the fields of ``Path`` from start to target
     """
     (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
+    margin = _margin(wpos, wfaces, hit_faces, s_pos, t_pos)
     m = wfaces.shape[0]
     cap = m + edges.shape[0] + 4
     ni = np.empty((cap, 5), np.int64)         # kind, id, parent, carrier kind, carrier
@@ -85,6 +211,9 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
     vertex_used = np.zeros(wpos.shape[0], np.bool_)
     kinds = np.empty(3, np.int64)
     ids = np.empty(3, np.int64)
+    openings = np.empty((0, 2), np.int64)   # boundary points on the plane, found when first needed
+    jumped = np.empty(0, np.bool_)
+    looked = False
 
     ni[0, 0], ni[0, 1], ni[0, 2], ni[0, 3], ni[0, 4] = s_kind, s_id, -1, NO_CARRIER, -1
     nf[0, 0], nf[0, 1], nf[0, 2], nf[0, 3], nf[0, 4] = 0.0, s_pos[0], s_pos[1], s_pos[2], 0.0
@@ -119,7 +248,7 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
             count = _elements(g, wfaces, face_edges, cls, kinds, ids)
             for q in range(count):
                 n = _push_element(ni, nf, target, n, kinds[q], ids[q], node, FACE_CARRIER, g, plane,
-                                  wpos, edges, t_kind, t_id, vertex_used)
+                                  wpos, edges, t_kind, t_id, vertex_used, region, margin)
         elif kind == EDGE:
             # across the edge into each other face on it (one on a manifold edge)
             for r in range(ef_offsets[ident], ef_offsets[ident + 1]):
@@ -140,7 +269,7 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
                         ek, eid = kinds[q], ids[q]
                 if exits == 1:       # 0: the section ends (cannot happen); > 1: g lies in the plane
                     n = _push_element(ni, nf, target, n, ek, eid, node, FACE_CARRIER, g, plane, wpos,
-                                      edges, t_kind, t_id, vertex_used)
+                                      edges, t_kind, t_id, vertex_used, region, margin)
         else:
             # through a vertex on the plane: every face of its fan that the plane crosses from it,
             # and every edge from it that lies in the plane
@@ -160,7 +289,7 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
                 if cls[x] * cls[y] < 0:
                     face_used[g] = True
                     n = _push_element(ni, nf, target, n, EDGE, face_edges[g, (k + 1) % 3], node,
-                                      FACE_CARRIER, g, plane, wpos, edges, t_kind, t_id, vertex_used)
+                                      FACE_CARRIER, g, plane, wpos, edges, t_kind, t_id, vertex_used, region, margin)
                     continue
                 for side in range(2):
                     z = x if side == 0 else y
@@ -171,33 +300,60 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos):
                         continue     # a boundary edge: the surface is already open there
                     edge_used[e] = True
                     n = _push_element(ni, nf, target, n, VERTEX, z, node, EDGE_CARRIER, e, plane,
-                                      wpos, edges, t_kind, t_id, vertex_used)
+                                      wpos, edges, t_kind, t_id, vertex_used, region, margin)
+        at_boundary = ((kind == EDGE and ef_offsets[ident + 1] - ef_offsets[ident] == 1)
+                       or (kind == VERTEX and _boundary_vertex(ident, wfaces, face_edges, ef_offsets, vf_offsets,
+                                                              vf_faces)))
+        if at_boundary and ck != JUMP_CARRIER:
+            # at the boundary (not just arrived by a jump): through the opening to the points across it
+            if not looked:
+                looked = True
+                openings = _openings(cls, edges, ef_offsets, plane, wpos, region, margin)
+                jumped = np.zeros(openings.shape[0], np.bool_)
+            n = _jumps(node, ni, nf, target, n, cap, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id,
+                       vertex_used, region, margin, snap)
         for q in range(before, n):
             open_[n_open] = q
             n_open += 1
 
     if found < 0:
         return False, np.empty((0, 4), np.int64), np.empty((0, 4))
+    # the path, leaf to root; a jump at either end only reaches a hit across an opening: the slit ends
+    # where it meets the opening (no nodes at all when the path only jumps: nothing to tear)
     length = 0
     q = found
     while q >= 0:
         length += 1
         q = ni[q, 2]
-    path_int = np.empty((length, 4), np.int64)
-    path_float = np.empty((length, 4))
+    chain = np.empty(length, np.int64)
     q = found
     for r in range(length - 1, -1, -1):
-        path_int[r, 0], path_int[r, 1] = ni[q, 0], ni[q, 1]
-        path_int[r, 2], path_int[r, 3] = ni[q, 3], ni[q, 4]
-        for c in range(4):
-            path_float[r, c] = nf[q, c]
+        chain[r] = q
         q = ni[q, 2]
+    first, last = 0, length - 1
+    while last > 0 and ni[chain[last], 3] == JUMP_CARRIER:
+        last -= 1
+    while first < last and ni[chain[first + 1], 3] == JUMP_CARRIER:
+        first += 1
+    if first == last:
+        return True, np.empty((0, 4), np.int64), np.empty((0, 4))
+    path_int = np.empty((last - first + 1, 4), np.int64)
+    path_float = np.empty((last - first + 1, 4))
+    for r in range(first, last + 1):
+        q = chain[r]
+        path_int[r - first, 0], path_int[r - first, 1] = ni[q, 0], ni[q, 1]
+        path_int[r - first, 2], path_int[r - first, 3] = ni[q, 3], ni[q, 4]
+        for c in range(4):
+            path_float[r - first, c] = nf[q, c]
+    path_int[0, 2], path_int[0, 3] = NO_CARRIER, -1
     return True, path_int, path_float
 
 
-def walk(surface, ends: Ends) -> Path | None:
-    """Step 4 on ``surface`` (``surface._Surface``): the path from S_i to S_{i+1} along the section
-    (None when the section does not lead there); a one-segment path gets its midpoint."""
+def walk(surface, ends: Ends, bvh, blade_from, blade_to) -> Path | None:
+    """Step 4 on ``surface`` (``surface._Surface``, ``bvh`` a TriangleBVH of it) for the blade (handle,
+    tip) at both times: the path from S_i to S_{i+1} along the section within the swept region (None
+    when the section does not lead there, no nodes when it runs only through openings); a
+    one-segment path gets its midpoint."""
     (s_kind, s_id), (t_kind, t_id) = ends.nodes.tolist()      # Python ints: cheaper than numpy scalars
     s_pos, t_pos = ends.points
     if s_kind == FACE and t_kind == FACE and s_id == t_id:
@@ -205,11 +361,14 @@ def walk(surface, ends: Ends) -> Path | None:
                     np.array([[0.0, *s_pos], [0.0, *t_pos]]))
     else:
         found, nodes, points = _walk(tuple(surface.welded), ends.sides, ends.plane, s_kind, s_id, s_pos,
-                                     t_kind, t_id, t_pos)
+                                     t_kind, t_id, t_pos, tuple(bvh._arrays), (*blade_from, *blade_to),
+                                     ends.hit_faces, tol.snap * surface.diagonal)
         if not found:
             return None
         path = Path(nodes, points)
-    return _insert_midpoint(path, surface.welded) if len(path.nodes) == 2 else path
+    if len(path.nodes) == 2:
+        return _insert_midpoint(path, surface.welded)
+    return path
 
 
 def _insert_midpoint(path, mesh) -> Path:
