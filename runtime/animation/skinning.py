@@ -46,12 +46,16 @@ def _mesh_args(rest, joints, weights):
     return rest, np.ascontiguousarray(joints), np.ascontiguousarray(weights)
 
 
-def _diagnose(rest, joints, weights, affines, bad_joints, bad_values):
+def _diagnose(rest, joints, weights, affines, bad_joints, bad_weights, bad_values):
     """Name the first bad input after the blend loop reported a problem (the slow path)."""
     if bad_joints:
         index_array(joints, "joints", len(affines))
     for name, arr in (("rest", rest), ("weights", weights), ("affines", affines)):
         float_array(arr, name)
+    if bad_weights:
+        i, k = np.argwhere(weights < 0)[0]
+        raise InvalidInputError(f"weights must be >= 0 (a blend of transforms): vertex {i} has weight "
+                                f"{float(weights[i, k])!r} on influence {k} ({bad_weights} negative weights)")
     raise InvalidInputError(f"{bad_values} skinned vertices are not finite; the bone transforms "
                             f"overflow float64")
 
@@ -78,9 +82,10 @@ def skin_affine(rest, joints, weights, affines, parallel=None, out=None) -> np.n
         raise InvalidInputError(f"out must be a C-contiguous float64 array of shape {rest.shape}")
     if parallel is None:
         parallel = len(rest) >= PARALLEL_THRESHOLD
-    bad_joints, bad_values = (skin_blend_parallel if parallel else skin_blend)(rest, joints, weights, affines, out)
-    if bad_joints or bad_values:
-        _diagnose(rest, joints, weights, affines, bad_joints, bad_values)
+    bad_joints, bad_weights, bad_values = (skin_blend_parallel if parallel else skin_blend)(
+        rest, joints, weights, affines, out)
+    if bad_joints or bad_weights or bad_values:
+        _diagnose(rest, joints, weights, affines, bad_joints, bad_weights, bad_values)
     return out
 
 

@@ -1,6 +1,6 @@
 """Numbers given where numbers belong: strings are refused (numpy would parse "2" as 2.0), dilations
 outside what float64 holds are refused where they are given, a NaN vertex is named by its row
-(issue 10, "clear errors")."""
+negative weights are refused (issue 10, "clear errors")."""
 import dataclasses
 
 import numpy as np
@@ -50,3 +50,15 @@ def test_a_nan_vertex_is_named_by_its_row(operation):
     bad = dataclasses.replace(rig, vertices=vertices)
     with pytest.raises(InvalidInputError, match="row 123"):
         cgaskin.cut(bad, [1, 0, 0], [1.5, 0, 0]) if operation == "cut" else cgaskin.tear(bad, *STROKE)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_negative_weights_are_refused_naming_the_vertex(parallel):
+    rig = cgaskin.capsule_arm()
+    weights = np.array(rig.weights)
+    weights[7, :2] = [1.5, -0.5]                   # sums to 1, but is no blend
+    versors = np.tile(versor.motor([0, 0, 1], 0.3, [0, 0, 0]), (rig.skeleton.n_bones, 1))
+    before = weights.copy()
+    with pytest.raises(InvalidInputError, match=r"weights must be >= 0.*vertex 7 has weight -0.5 on influence 1"):
+        cgaskin.skin_vertices(rig.vertices, rig.joints, weights, versors, parallel=parallel)
+    np.testing.assert_array_equal(weights, before)
