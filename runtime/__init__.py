@@ -23,7 +23,8 @@ __version__ = "0.1.0"
 
 
 def load(path, **options):
-    """Load a rigged model (.glb, .gltf, .fbx, .dae) as a ``Rig``."""
+    """Load a model as a ``Rig``: .glb/.gltf natively, every other format assimp reads (.fbx, .dae, .obj,
+    .stl, ...) through it; a mesh without a skin loads with its mesh nodes as rigid bones."""
     from .rigs import load as _load
     return _load(path, **options)
 
