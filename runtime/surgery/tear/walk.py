@@ -6,9 +6,9 @@ import math
 import numpy as np
 
 from ..._shared.jit import F1, I1, S1, f8, helper, i8, kernel, record
-from ...tolerances import tol
-from ...generated.kernels import segment_plane
 from ...algebra.vec3 import _dot, _norm, _sub
+from ...generated.kernels import segment_plane
+from ...tolerances import tol
 from ..bvh import BVH_ARRAYS, _first_hit
 from ..surface import WELDED_MESH
 from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CARRIER, VERTEX, Ends, Path
