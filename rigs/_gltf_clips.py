@@ -4,8 +4,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
-from ._gltf_constants import COMPONENT_NAMES
+from ._gltf_constants import COMPONENT_NAMES, INPUT_RESIDUALS, OUTPUT_RESIDUALS
 from ._gltf_document import _GltfFile
+from ._residuals import with_residuals
 
 
 # --- animations -----------------------------------------------------------------------------------
@@ -41,6 +42,8 @@ def _read_clips(f: _GltfFile, node_to_skeleton: dict) -> list[Clip]:
             if ttype != 5126 or tshape != "SCALAR":
                 raise f.error(f"{where}: key times must be SCALAR float, got {tshape} {COMPONENT_NAMES[ttype]}")
             times = f.accessor(sampler.input, f"{where} input")
+            # written by save_gltf: float64 times and values exactly (residuals in the sampler's extras)
+            times = with_residuals(f, sampler, INPUT_RESIDUALS, times, f"{where} sampler {ch.sampler}")
             if not np.isfinite(times).all():
                 raise f.error(f"{where}: key times hold non-finite values")
             steps = np.diff(times)
@@ -60,6 +63,7 @@ def _read_clips(f: _GltfFile, node_to_skeleton: dict) -> list[Clip]:
             if values.dtype != np.float64:
                 raise f.error(f"{where}: {path} values must be float or normalized integers, got "
                               f"{COMPONENT_NAMES[vtype]}")
+            values = with_residuals(f, sampler, OUTPUT_RESIDUALS, values, f"{where} sampler {ch.sampler}")
             if not np.isfinite(values).all():
                 raise f.error(f"{where}: keyframe values hold non-finite numbers")
             if per_key == 3:

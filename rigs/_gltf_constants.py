@@ -43,6 +43,12 @@ QUAT_UNIT_TOLERANCE = 1e-12
 EXTRAS_KEY = "cgaskin"
 POSITION_RESIDUALS = ("POSITION_LO", "POSITION_LO2")
 WEIGHT_RESIDUALS = ("WEIGHTS_{}_LO", "WEIGHTS_{}_LO2")
+#: the same in a skin's ``extras["cgaskin"]`` (inverseBindMatrices + LO + LO2 == the float64
+#: inverse bind matrices) and in an animation sampler's (input / output + LO + LO2 == the float64
+#: key times / values)
+INVERSE_BIND_RESIDUALS = ("INVERSE_BIND_LO", "INVERSE_BIND_LO2")
+INPUT_RESIDUALS = ("INPUT_LO", "INPUT_LO2")
+OUTPUT_RESIDUALS = ("OUTPUT_LO", "OUTPUT_LO2")
 #: where earlier versions of cgaskin kept the weight residuals: application-specific vertex
 #: attributes (custom semantics start with "_"); still read, no longer written
 LEGACY_WEIGHT_RESIDUALS = ("_CGASKIN_WEIGHTS_{}_LO", "_CGASKIN_WEIGHTS_{}_LO2")

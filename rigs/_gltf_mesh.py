@@ -11,6 +11,7 @@ from ..errors import NoSkinError
 from ._gltf_constants import (ATTRIBUTE_WIDTHS, COMPONENT_NAMES, EXTRAS_KEY, INTEGER_INDEX_TYPES,
                               LEGACY_WEIGHT_RESIDUALS, MODE_NAMES, POSITION_RESIDUALS, WEIGHT_RESIDUALS)
 from ._gltf_document import _GltfFile
+from ._residuals import with_residuals
 
 
 # --- meshes -----------------------------------------------------------------------------------------
@@ -42,27 +43,6 @@ def _triangles(f: _GltfFile, mode: int, idx: np.ndarray, where: str) -> np.ndarr
     # strips are stitched with degenerate triangles: they carry no surface, drop them
     keep = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
     return faces[keep]
-
-
-def _with_residuals(f, prim, names, values: np.ndarray, where: str) -> np.ndarray:
-    """``values`` (n, c) float64 plus the rounding residuals that ``save_gltf`` keeps in the
-    primitive's extras (accessor indices ``extras["cgaskin"][name]`` for ``name`` in ``names``,
-    each finite floats of the same shape): the float64 originals exactly; unchanged without them."""
-    ours = prim.extras.get(EXTRAS_KEY) if isinstance(prim.extras, dict) else None
-    if not isinstance(ours, dict):
-        return values
-    for name in names:
-        if name not in ours:
-            continue
-        index = ours[name]
-        if isinstance(index, bool) or not isinstance(index, int):
-            raise f.error(f"{where} extras.{EXTRAS_KEY}.{name} must be an accessor index, got {index!r}")
-        residual = f.accessor(index, f"{where} extras.{EXTRAS_KEY}.{name}")
-        if residual.shape != values.shape or residual.dtype != np.float64 or not np.isfinite(residual).all():
-            raise f.error(f"{where} extras.{EXTRAS_KEY}.{name} must be finite floats shaped like "
-                          f"{name.rsplit('_', 1)[0]} {values.shape}")
-        values = values + residual
-    return values
 
 
 def _padded_widths(f, prim, where: str) -> dict:
@@ -105,7 +85,7 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
         v = int(np.flatnonzero(bad.any(axis=1))[0])
         raise f.error(f"{where} POSITION (accessor {attrs['POSITION']}) holds non-finite coordinates: "
                       f"vertex {v} is {positions[v].tolist()} ({int(bad.any(axis=1).sum())} such vertices)")
-    positions = _with_residuals(f, prim, POSITION_RESIDUALS, positions, where)
+    positions = with_residuals(f, prim, POSITION_RESIDUALS, positions, where)
 
     if prim.indices is not None:
         _, ctype, itype, _ = f.accessor_info(prim.indices, f"{where} indices")
@@ -165,7 +145,7 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
             raise f.error(f"{where} WEIGHTS_{s} must be VEC4 float or normalized unsigned "
                           f"byte/short, got {wshape} {COMPONENT_NAMES[wtype]} (not normalized)")
         # written by save_gltf: restore the float64 weights exactly (earlier versions: attributes)
-        w = _with_residuals(f, prim, [r.format(s) for r in WEIGHT_RESIDUALS], w, where)
+        w = with_residuals(f, prim, [r.format(s) for r in WEIGHT_RESIDUALS], w, where)
         for name in (r.format(s) for r in LEGACY_WEIGHT_RESIDUALS):
             if name in attrs:
                 residual = f.accessor(attrs[name], f"{where} {name}")

@@ -12,8 +12,9 @@ import numpy as np
 
 from ..algebra.transforms import matrix_to_trs, trs_matrix
 from ..animation.skeleton import Skeleton
-from ._gltf_constants import AFFINE_TOLERANCE, COMPONENT_NAMES, QUAT_UNIT_TOLERANCE
+from ._gltf_constants import AFFINE_TOLERANCE, COMPONENT_NAMES, INVERSE_BIND_RESIDUALS, QUAT_UNIT_TOLERANCE
 from ._gltf_document import _GltfFile
+from ._residuals import with_residuals
 
 
 # --- scene graph --------------------------------------------------------------------------------
@@ -126,7 +127,9 @@ def _read_skins(f: _GltfFile, skin_indices: list[int]):
                               f"{COMPONENT_NAMES[ctype]}")
             if count < len(joints):
                 raise f.error(f"skin {s} has {len(joints)} joints but only {count} inverse bind matrices")
-            ibm = f.accessor(skin.inverseBindMatrices, f"skin {s} inverseBindMatrices")[:len(joints)]
+            ibm = f.accessor(skin.inverseBindMatrices, f"skin {s} inverseBindMatrices")
+            # written by save_gltf: the float64 matrices exactly (residuals in the skin's extras)
+            ibm = with_residuals(f, skin, INVERSE_BIND_RESIDUALS, ibm, f"skin {s}")[:len(joints)]
             if not np.isfinite(ibm).all():
                 k = int(np.flatnonzero(~np.isfinite(ibm).all(axis=(1, 2)))[0])
                 raise f.error(f"skin {s}: inverse bind matrix {k} holds non-finite values")

@@ -10,14 +10,21 @@ node transforms are JSON numbers and keep float64. Hence:
 
 * a rig loaded from a glTF file (whose data were float32 to begin with) saves and reloads to
   bit-identical arrays: vertices, faces, joints, weights, every skeleton array, every clip;
-* a rig built in float64 reloads exactly to float32 rounding (relative 6e-8) for positions,
-  inverse bind matrices, keyframes and attributes, and exactly for everything else.
+* a rig built in float64 (the capsule arm, a ``clip_from_poses`` clip, an edited skeleton)
+  reloads bit-identical too, except its attributes (NORMAL, TEXCOORD_0, "_NAME"),
+  which reload to float32 rounding (relative 6e-8). So ``skin(loaded, loaded.pose(clip, t))`` is
+  ``skin(rig, rig.pose(clip, t))`` exactly, and a posed tear stroke continues a saved slit.
 
-Weights are the exception that needs care: the loader renormalises them in float64 (rows must sum
-to 1 for skinning to match glTF to 1e-9), so they are not float32 values. WEIGHTS_0 holds their
-float32 rounding (what every viewer reads); when that alone would not reload to the same float64
-weights, two float32 residuals hold the rest, w == (WEIGHTS_0 + LO) + LO2 exactly (24 + 24 + 24
-bits >= 53). Float64 positions get the same treatment (POSITION + LO + LO2).
+Each float32 accessor of positions, weights, inverse bind matrices, key times and keyframe values
+holds the float32 rounding of the float64 data (what every viewer reads); when that is not the
+float64 value, two float32 residuals hold the rest, x == (hi + LO) + LO2 exactly (24 + 24 + 24
+bits >= 53; ``_residuals.split``; exact for 0 and |x| >= 2^-97 ~ 6e-30, below that the residuals
+underflow float32). Weights need them even when they are float32 values that do not sum to 1 in
+float64 (the loader would renormalise them). The residuals are accessors named in the
+``extras["cgaskin"]`` of the object that holds the data: the primitive (``POSITION_LO``/``_LO2``,
+``WEIGHTS_0_LO``/``_LO2``), the skin (``INVERSE_BIND_LO``/``_LO2``) and each animation sampler
+(``INPUT_LO``/``_LO2`` for its times, ``OUTPUT_LO``/``_LO2`` for its values). Samplers with the same
+float64 key times share one input accessor and its residuals.
 
 Layout for other readers (every file the CLI writes is opened in Blender 5.0 and three.js by
 tests/clients). Blender's importer (io_scene_gltf2, blender/imp/mesh.py) keeps the names of the
@@ -25,8 +32,8 @@ application-specific "_NAME" attributes in a set and their arrays in a list, and
 them in the set's order: when two of them differ in width (the tear's SCALAR ``_TEAR`` beside a
 VEC4, or a user's VEC3 ``_FOO``) the import fails for some ``PYTHONHASHSEED`` values. Hence:
 
-* the residuals are no vertex attributes but accessors named in the primitive's
-  ``extras["cgaskin"]`` (``POSITION_LO``, ``WEIGHTS_0_LO``, ...), which other readers ignore
+* the residuals are no vertex attributes but accessors named in ``extras["cgaskin"]`` (of the
+  primitive, the skin, the samplers), which other readers ignore
   (earlier versions wrote ``_CGASKIN_WEIGHTS_0_LO`` attributes; the loader still reads them);
 * the application attributes of one file all have one width, the widest: narrower ones are
   zero-padded and their own widths kept in ``extras["cgaskin"]["ATTRIBUTE_WIDTHS"]``, from which
@@ -45,7 +52,9 @@ from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS
 from ..animation.rig import Rig
 from ..animation.validate import EXACT_SUM_TOLERANCE, check_mesh
 from ..errors import InvalidInputError
-from ._gltf_constants import ATTRIBUTE_WIDTHS, EXTRAS_KEY, POSITION_RESIDUALS, WEIGHT_RESIDUALS
+from ._gltf_constants import (ATTRIBUTE_WIDTHS, EXTRAS_KEY, INPUT_RESIDUALS, INVERSE_BIND_RESIDUALS,
+                              OUTPUT_RESIDUALS, POSITION_RESIDUALS, WEIGHT_RESIDUALS)
+from ._residuals import split
 from .gltf import trs_to_matrix
 
 __all__ = ["save_gltf", "save_mesh"]
@@ -97,6 +106,15 @@ def _float32(array, what: str) -> np.ndarray:
     return out
 
 
+def _residuals(out: _BinaryBuilder, names, values, high: np.ndarray, width: int, force=False) -> dict:
+    """{name: accessor} of the float64 ``values``' rounding residuals beside their float32 rounding
+    ``high`` (``_residuals.split``), for ``extras["cgaskin"]``; {} when ``high`` already is
+    ``values`` (and not ``force``): the residuals would be zeros."""
+    if not force and np.array_equal(high, values):
+        return {}
+    return {name: out.add(residual, FLOAT, width) for name, residual in zip(names, split(values, high))}
+
+
 def _check_skeleton(rig: Rig) -> None:
     sk = rig.skeleton
     j, b = sk.n_nodes, sk.n_bones
@@ -140,9 +158,9 @@ def save_gltf(rig: Rig, path) -> Path:
     -------
     Path of the written file.
 
-    Round trips (see the module docstring): positions, inverse bind matrices, keyframes and
-    attributes go through float32, which is exact for rigs loaded from glTF and float32-rounding
-    for float64 rigs; weights reload exactly in both cases (float32 + residuals). Skeleton nodes
+    Round trips (see the module docstring): positions, weights, inverse bind matrices and
+    keyframes reload exactly (float32 + residuals where float32 alone is not exact); attributes go
+    through float32, exact for rigs loaded from glTF, float32-rounding for float64 ones. Skeleton nodes
     whose ``rest_matrices`` differ from their TRS (matrix nodes, shear) are written as matrices,
     unless a clip animates them (glTF allows only TRS on animated nodes).
 
@@ -168,15 +186,10 @@ def save_gltf(rig: Rig, path) -> Path:
     out = _BinaryBuilder()
     positions = _float32(vertices, "vertices")
     attributes = {"POSITION": out.add(positions, FLOAT, 3, target=ARRAY_BUFFER, min_max=True)}
-    extras = {}
-    if not np.array_equal(positions, vertices):
-        # float64 positions = (hi + lo) + lo2 exactly, as for the weights (in the extras: see the
-        # module docstring): a torn model saved and loaded again has the exact positions its next
-        # stroke continues from
-        lo = (vertices - positions).astype(np.float32)
-        lo2 = (vertices - positions - lo.astype(np.float64)).astype(np.float32)
-        extras[EXTRAS_KEY] = {name: out.add(residual, FLOAT, 3) for name, residual in
-                              zip(POSITION_RESIDUALS, (lo, lo2))}
+    # float64 positions = (hi + lo) + lo2 exactly (in the extras: see the module docstring): a torn
+    # model saved and loaded again has the exact positions its next stroke continues from
+    ours = _residuals(out, POSITION_RESIDUALS, vertices, positions, 3)
+    extras = {EXTRAS_KEY: ours} if ours else {}
     _write_attributes(rig.attributes, len(vertices), out, attributes, extras)
     joint_type = UNSIGNED_BYTE if n_bones <= 256 else UNSIGNED_SHORT
     attributes["JOINTS_0"] = out.add(joints, joint_type, 4, target=ARRAY_BUFFER)
@@ -184,16 +197,16 @@ def save_gltf(rig: Rig, path) -> Path:
     attributes["WEIGHTS_0"] = out.add(high, FLOAT, 4, target=ARRAY_BUFFER)
     reloads_exactly = (np.array_equal(high, weights)
                        and (np.abs(high.astype(np.float64).sum(axis=1) - 1) <= EXACT_SUM_TOLERANCE).all())
-    if not reloads_exactly:
-        # float64 weights = (hi + lo) + lo2 exactly: each residual is the rounding error of the last
-        lo = (weights - high).astype(np.float32)
-        lo2 = (weights - high - lo.astype(np.float64)).astype(np.float32)
-        extras.setdefault(EXTRAS_KEY, {}).update(
-            {name.format(0): out.add(residual, FLOAT, 4) for name, residual in zip(WEIGHT_RESIDUALS, (lo, lo2))})
+    if not reloads_exactly:  # float64 weights = (hi + lo) + lo2 exactly
+        extras.setdefault(EXTRAS_KEY, {}).update(_residuals(
+            out, [name.format(0) for name in WEIGHT_RESIDUALS], weights, high, 4, force=True))
     indices = out.add(faces.reshape(-1), UNSIGNED_INT, 1, target=ELEMENT_ARRAY_BUFFER)
-    # the spec stores matrices column-major
-    ibm = out.add(_float32(np.transpose(sk.inverse_bind, (0, 2, 1)), "inverse bind matrices"),
-                  FLOAT, 16)
+    # the spec stores matrices column-major; float64 matrices = (hi + lo) + lo2 exactly, so that a
+    # posed surface (a posed tear's next stroke) is the same after save and load
+    ibm64 = np.transpose(np.asarray(sk.inverse_bind, dtype=np.float64), (0, 2, 1))
+    ibm32 = _float32(ibm64, "inverse bind matrices")
+    ibm = out.add(ibm32, FLOAT, 16)
+    ibm_residuals = _residuals(out, INVERSE_BIND_RESIDUALS, ibm64, ibm32, 16)
 
     animations, animated = _animations(rig, out)
     nodes = _skeleton_nodes(rig, animated)
@@ -209,7 +222,8 @@ def save_gltf(rig: Rig, path) -> Path:
         scenes=[pygltflib.Scene(nodes=roots)],
         nodes=nodes,
         meshes=[pygltflib.Mesh(name=rig.name, primitives=[primitive])],
-        skins=[pygltflib.Skin(joints=[int(b) for b in sk.bone_nodes], inverseBindMatrices=ibm)],
+        skins=[pygltflib.Skin(joints=[int(b) for b in sk.bone_nodes], inverseBindMatrices=ibm,
+                              extras={EXTRAS_KEY: ibm_residuals} if ibm_residuals else {})],
         animations=animations,
         accessors=out.accessors,
         bufferViews=out.views,
@@ -327,21 +341,29 @@ def _animations(rig: Rig, out: _BinaryBuilder):
             if not 0 <= ch.node < rig.skeleton.n_nodes:
                 raise InvalidInputError(f"{where} targets node {ch.node}, outside the skeleton")
             width = CHANNEL_PATHS[ch.path]
-            times = _float32(np.asarray(ch.times).reshape(-1), f"{where} times")
+            times64 = np.asarray(ch.times, dtype=np.float64).reshape(-1)
+            times = _float32(times64, f"{where} times")
             if len(times) == 0 or (np.diff(times) <= 0).any():
                 raise InvalidInputError(f"{where}: key times must increase strictly (in float32)")
             per_key = 3 if ch.interpolation == "CUBICSPLINE" else 1
-            values = np.asarray(ch.values)
+            values = np.asarray(ch.values, dtype=np.float64)
             if values.shape != ((len(times), 3, width) if per_key == 3 else (len(times), width)):
                 raise InvalidInputError(f"{where}: values have shape {values.shape} for {len(times)} "
                                         f"{ch.interpolation} keys of {ch.path}")
-            # channels of one clip usually share their key times: store each set once
-            key = times.tobytes()
+            # channels of one clip usually share their key times: store each set once, with its
+            # residuals (float64 times = (hi + lo) + lo2 exactly), keyed by the float64 times
+            key = times64.tobytes()
             if key not in inputs:
-                inputs[key] = out.add(times, FLOAT, 1, min_max=True)  # the spec requires min/max
-            output = out.add(_float32(values.reshape(-1, width), f"{where} values"), FLOAT, width)
-            samplers.append(pygltflib.AnimationSampler(input=inputs[key], output=output,
-                                                       interpolation=ch.interpolation))
+                inputs[key] = (out.add(times, FLOAT, 1, min_max=True),  # the spec requires min/max
+                               _residuals(out, INPUT_RESIDUALS, times64, times, 1))
+            input_, ours = inputs[key]
+            values = values.reshape(-1, width)
+            high = _float32(values, f"{where} values")
+            output = out.add(high, FLOAT, width)
+            ours = {**ours, **_residuals(out, OUTPUT_RESIDUALS, values, high, width)}
+            samplers.append(pygltflib.AnimationSampler(input=input_, output=output,
+                                                       interpolation=ch.interpolation,
+                                                       extras={EXTRAS_KEY: ours} if ours else {}))
             channels.append(pygltflib.AnimationChannel(
                 sampler=len(samplers) - 1,
                 target=pygltflib.AnimationChannelTarget(node=int(ch.node), path=ch.path)))

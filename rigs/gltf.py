@@ -21,11 +21,14 @@ loader never returns NaN or infinity.
 Precision: glTF stores positions, weights, inverse bind matrices and keyframes as float32; they are
 returned as float64 holding exactly the float32 values, except the weights, which are renormalised
 in float64 so that every row sums to 1 (``check_mesh``). Files written by ``save_gltf`` carry the
-float64 weights' rounding residuals in two application-specific attributes (``WEIGHT_RESIDUALS``),
-from which they are rebuilt exactly; other readers ignore them and use the float32 WEIGHTS_0. The
-float64 positions' residuals are in the primitive's ``extras["cgaskin"]`` (accessor indices,
-``POSITION_RESIDUALS``), so that a torn model saved and loaded again has the exact positions its
-next stroke continues from.
+float64 data's rounding residuals as accessors named in ``extras["cgaskin"]`` (``_residuals``):
+the primitive's for positions and weights (``POSITION_RESIDUALS``, ``WEIGHT_RESIDUALS``; earlier
+versions kept the weights' in "_CGASKIN_WEIGHTS_n_LO" attributes, still read), the skin's for the
+inverse bind matrices (``INVERSE_BIND_RESIDUALS``) and each animation sampler's for its key times
+and values (``INPUT_RESIDUALS``, ``OUTPUT_RESIDUALS``). The loader adds them back, so a float64
+rig saved and loaded again has exactly its positions, weights, bind matrices and keyframes: a
+torn model, posed or not, is the same surface and its next stroke continues the slit. Other
+readers ignore the extras and use the float32 data.
 
 This module is the driver; the work is done by private modules, one topic each:
 ``_gltf_container`` (file bytes -> document), ``_gltf_document`` (``_GltfFile``: checked access
