@@ -104,3 +104,26 @@ def test_random_strokes_across_a_slit_of_the_capsule(x, angle, length, opening):
         return
     assert max_outside(across, *blades) < 1.0
     assert pieces(across.rig) == 1
+
+
+@pytest.mark.parametrize("opening", [0.0, 0.002])
+def test_an_incision_along_a_row_of_vertices_never_runs_back_along_its_slit(opening):
+    """Small strokes along the top of the capsule, in a plane through its row of vertices and edges
+    (issue 13's degenerate family): the two sides of the closed slit lie in the plane, and a path may
+    not jump between them (it ran back along the slit). Each stroke tears without a jump and within
+    the swept region, or raises TearPathError. (That a path here may still overshoot to the next
+    vertex of the row and come back inside the region is the exact handling of such planes, issue 13.)"""
+    rig, x = capsule_arm(), 0.1
+    blade = ([x, 0.35, 0.0], [x, 0.0, 0.0])
+    for _ in range(40):
+        following = ([x + 0.014, 0.35, 0.0], [x + 0.014, 0.0, 0.0])
+        try:
+            result = tear_stroke(rig, blade, following, opening=opening)
+        except TearPathError:
+            assert opening == 0.0                    # the opened slit never meets the degenerate case
+            return
+        assert not result.jumps.any()
+        corners = rig.vertices[rig.faces]
+        longest = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max()   # bounds the margin
+        assert max_outside(result, blade, following) * 0.014 <= 0.014 + longest
+        rig, blade, x = result.rig, following, x + 0.014

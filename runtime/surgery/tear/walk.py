@@ -119,6 +119,12 @@ def _jump(bvh, mesh, cls, plane, p_kind, p_id, p, before, q_kind, q_id, q, snap)
     d = _sub(q, p)
     length = _norm(d)
     if length <= snap:
+        # across a closed slit, unless the slit runs along the plane there (a jump between its two
+        # sides would then follow the slit, not cross it)
+        for kind, w in ((p_kind, p_id), (q_kind, q_id)):
+            if kind == VERTEX and _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cls,
+                                                   True):
+                return False
         return True
     if p_kind != EDGE or q_kind != EDGE:
         return False
@@ -143,14 +149,17 @@ def _jump(bvh, mesh, cls, plane, p_kind, p_id, p, before, q_kind, q_id, q, snap)
 
 
 @helper
-def _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces):
-    """Whether welded vertex w lies on the boundary (an edge from it has one face)."""
+def _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cls, in_plane):
+    """Whether welded vertex w lies on the boundary (an edge from it has one face); with ``in_plane``,
+    on a boundary edge that lies in the plane (its other end on the plane too)."""
     for r in range(vf_offsets[w], vf_offsets[w + 1]):
         g = vf_faces[r]
         for k in range(3):
             if wfaces[g, k] == w:
-                for e in (face_edges[g, k], face_edges[g, (k + 2) % 3]):
-                    if ef_offsets[e + 1] - ef_offsets[e] == 1:
+                for side in range(2):
+                    e = face_edges[g, k] if side == 0 else face_edges[g, (k + 2) % 3]
+                    other = wfaces[g, (k + 1) % 3] if side == 0 else wfaces[g, (k + 2) % 3]
+                    if ef_offsets[e + 1] - ef_offsets[e] == 1 and (not in_plane or cls[other] == 0):
                         return True
     return False
 
@@ -303,7 +312,7 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
                                       wpos, edges, t_kind, t_id, vertex_used, region, margin)
         at_boundary = ((kind == EDGE and ef_offsets[ident + 1] - ef_offsets[ident] == 1)
                        or (kind == VERTEX and _boundary_vertex(ident, wfaces, face_edges, ef_offsets, vf_offsets,
-                                                              vf_faces)))
+                                                              vf_faces, cls, False)))
         if at_boundary and ck != JUMP_CARRIER:
             # at the boundary (not just arrived by a jump): through the opening to the points across it
             if not looked:
