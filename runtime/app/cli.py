@@ -7,12 +7,23 @@ import warnings
 
 
 def _build(args) -> int:
+    if (args.catalogue is None) != (args.out is None):
+        print("cgaskin build: error: --catalogue FILE and --out DIR go together", file=sys.stderr)
+        return 2
     try:
-        from ..codegen import build
+        from ..codegen import build, catalogue_build
     except ImportError as exc:                        # sympy is a build-time extra
         print(f"cgaskin build needs sympy: pip install 'cgaskin[build]' ({exc})", file=sys.stderr)
         return 2
-    stale = build.build(check=args.check)
+    if args.catalogue is None:
+        stale = build.build(check=args.check)
+    else:
+        from ..codegen.ir import CodegenError
+        try:
+            stale = catalogue_build.build_catalogue(args.catalogue, args.out, check=args.check)
+        except CodegenError as exc:                   # the user's catalogue: one line, no traceback
+            print(f"cgaskin build: error: {exc}", file=sys.stderr)
+            return 2
     return 1 if (args.check and stale) else 0
 
 
@@ -46,8 +57,14 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="cgaskin", description="Deform, cut and tear skinned models with CGA.")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("build", help="regenerate the numba kernels in generated/ from codegen/")
-    p.add_argument("--check", action="store_true", help="do not write: fail if generated/ is stale")
+    p = sub.add_parser("build", help="regenerate the numba kernels in generated/ from codegen/, or build "
+                                     "a catalogue of @kernel functions into a module")
+    p.add_argument("--check", action="store_true", help="do not write: fail if generated/ (or the catalogue's "
+                                                        "module) is stale, naming the stale kernels")
+    p.add_argument("--catalogue", metavar="FILE", help="a Python file (or module name) of @kernel functions "
+                                                       "(cgaskin.codegen.kernel)")
+    p.add_argument("--out", metavar="DIR", help="with --catalogue: the folder to write FILE's module into "
+                                                "(DIR/<FILE stem>.py), or the .py file itself")
     p.set_defaults(run=_build)
 
     p = sub.add_parser("precompile", help="compile the numba kernels now, on every core (a fresh install "

@@ -1,0 +1,335 @@
+"""Build a user's catalogue of ``@kernel`` functions (``codegen.language``) into one numba module.
+
+    build_catalogue("mykernels.py", "mypkg/generated")          # writes mypkg/generated/mykernels.py
+    build_catalogue("mykernels.py", "mypkg/generated", check=True)   # 0 when up to date
+    cgaskin build --catalogue mykernels.py --out mypkg/generated [--check]
+
+The module holds, per kernel, ``name(...)`` (the scalar form: inputs as 1-D arrays or floats, returns
+a float or a tuple of floats) and ``name_batch(..., out)`` (every row: uniform inputs single, the
+others (N, ...), out (N, k)); a stamped header as generated/kernels.py has; each kernel's docstring
+holds its symbolic expansion and its operation counts. It imports numpy and numba only.
+
+Uniform inputs (``@kernel(uniform=("V",))``) are hoisted: every output is written as a polynomial in
+the per-row symbols whose coefficients are polynomials in the uniform ones (divided by the result's
+down-projection weight when that depends on uniforms only); those coefficients are computed once per
+call by ``_name_uniform`` and the row loop calls ``_name_row`` on them. For a versor sandwich on a
+point this finds the 3×4 affine map that ``versor_to_affine`` stages by hand. The staging is used only
+when it saves work per row (counted after CSE); otherwise the loop calls the scalar kernel with the
+uniform inputs passed once (their unpacking is then left to numba/LLVM, nothing is hoisted).
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import re
+import sys
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import sympy
+
+from . import algebra, build, printer
+from .ir import CodegenError, Kernel, KernelBuilder, as_expr
+from .language import KernelSpec, as_value, building
+from .symbolic import MV
+
+RESERVED = {"out", "row", "r", "hoisted", "math", "np", "njit"}
+
+
+@dataclass(frozen=True)
+class Compiled:
+    spec: KernelSpec
+    kernel: Kernel                    # the scalar form
+    stages: tuple | None              # (uniform Kernel, row Kernel) when the batch form is hoisted
+    uniform: tuple                    # names of the uniform inputs
+    out_size: int
+    dropped: tuple = ()               # blades dropped as zero for versor inputs (_versor_pruned)
+
+
+def load_catalogue(source):
+    """(kernels in definition order, file name) of a catalogue: a path to a .py file, a module, or a
+    dotted module name."""
+    if isinstance(source, (str, Path)) and (str(source).endswith(".py") or Path(source).is_file()):
+        path = Path(source).resolve()
+        name = f"_cgaskin_catalogue_{hashlib.sha256(str(path).encode()).hexdigest()[:12]}"
+        spec = importlib.util.spec_from_file_location(name, path)
+        if spec is None or not path.is_file():
+            raise CodegenError(f"catalogue {source}: no such file")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module                   # dataclasses and get_type_hints look it up
+        try:
+            spec.loader.exec_module(module)
+        except Exception as exc:
+            sys.modules.pop(name, None)
+            raise CodegenError(f"catalogue {source}: importing it failed: {type(exc).__name__}: {exc}") from exc
+        label = path.name
+    else:
+        module = importlib.import_module(source) if isinstance(source, str) else source
+        label = Path(getattr(module, "__file__", None) or module.__name__).name
+    kernels = [v for v in vars(module).values() if isinstance(v, KernelSpec)]
+    if not kernels:
+        raise CodegenError(f"catalogue {label}: defines no @kernel function")
+    names = [k.name for k in kernels]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise CodegenError(f"catalogue {label}: kernels {dup} are defined twice")
+    return kernels, label
+
+
+def _declare(k, params):
+    return [(name, typ, typ.declare(k, name)) for name, typ in params]
+
+
+def _check_names(spec, params):
+    for name, _ in params:
+        if name in RESERVED or name.startswith("_") or re.fullmatch(r"t\d+|l\d+_\d+|hoisted\d*|inv_weight", name):
+            raise CodegenError(f"kernel {spec.name!r}: argument name {name!r} is reserved by the generated code")
+    if spec.name.startswith("_") or spec.name in RESERVED:
+        raise CodegenError(f"kernel name {spec.name!r} is reserved by the generated code")
+
+
+def _divide(nums, den):
+    if den is None:
+        return [as_expr(n) for n in nums]
+    d = as_expr(den)
+    return [as_expr(n) if d == 1 else sympy.Mul(as_expr(n), sympy.Pow(d, -1)) for n in nums]
+
+
+def op_count(kernel: Kernel) -> int:
+    """Operations of the kernel after CSE (sympy's count_ops: +, −, ×, ÷, functions)."""
+    exprs = [e for _, e in kernel.lets] + list(kernel.outputs)
+    reps, reduced = sympy.cse(exprs, order="none")
+    return int(sympy.count_ops([e for _, e in reps] + list(reduced)))
+
+
+def compile_kernel(spec: KernelSpec) -> Compiled:
+    """Trace ``spec`` on symbolic inputs; the scalar Kernel and, for uniform inputs, the hoisted stages."""
+    params, ret = spec.signature()
+    _check_names(spec, params)
+    k = KernelBuilder(spec.name, spec.doc)
+    declared = _declare(k, params)
+    names = [str(s) for _, _, syms in declared for s in syms]
+    clash = sorted({n for n in names if names.count(n) > 1})
+    if clash:
+        raise CodegenError(f"kernel {spec.name!r}: arguments unpack into the same local names {clash}; rename one")
+    with building(k.ring):
+        args = [typ.value(k, syms) for _, typ, syms in declared]
+        try:
+            result = spec.fn(*args)
+        except CodegenError:
+            raise
+        except Exception as exc:                     # the catalogue's to fix: say which kernel, keep the cause
+            raise CodegenError(f"kernel {spec.name!r}: tracing it raised {type(exc).__name__}: {exc}") from exc
+        value = as_value(result)
+        if value is None:
+            raise CodegenError(f"kernel {spec.name!r}: returned {type(result).__name__}, not a cga value")
+        pruned = _versor_pruned(k, declared, value.mv, ret)
+        labels, nums, den = ret.outputs(spec.name, pruned)
+    dropped = tuple(algebra.blade_display(m) for m in value.mv.blades if m not in pruned.terms)
+    k.output(labels, _divide(nums, den))
+    kernel = k.build()
+    stages = _stage(spec, k, declared, nums, den) if spec.uniform else None
+    if stages is not None and op_count(stages[1]) >= op_count(kernel):
+        stages = None                                # hoisting would not save work per row
+    return Compiled(spec, kernel, stages, spec.uniform, len(labels), dropped)
+
+
+def _versor_pruned(k, declared, mv, ret):
+    """``mv`` without the blades outside ``ret`` whose coefficients vanish whenever the versor-typed
+    inputs are versors (V Ṽ scalar and V e Ṽ a vector for every basis vector e): the expansion treats
+    the coefficients as independent, so V x Ṽ of a symbolic 12-blade V has an e123∞0 part that is 0
+    for every actual versor. Decided exactly: the coefficient reduces to 0 modulo a Gröbner basis of
+    those conditions (grevlex, per input). Any other blade is left for ``ret`` to refuse."""
+    allowed = {algebra.mask_of(b) for b in ret.blades}
+    extra = [m for m in mv.terms if m not in allowed]
+    versors = [(typ, syms) for _, typ, syms in declared if typ.versor]
+    if not extra or not versors:
+        return mv
+    basis_ = [algebra.mask_of(b) for b in ("e1", "e2", "e3", "ei", "eo")]
+    gb = []
+    for typ, syms in versors:
+        V = k.mv(typ.blades, syms)
+        conditions = [c for m, c in (V * V.reverse()).terms.items() if m]
+        for e in basis_:
+            S = V * MV(k.ring, {e: k.ring.one}) * V.reverse()
+            conditions += [c for m, c in S.terms.items() if algebra.grade(m) != 1]
+        if conditions:
+            gb += sympy.groebner([as_expr(c) for c in conditions], *syms, order="grevlex").exprs
+    gens = k.ring.symbols
+    vanishing = [m for m in extra if sympy.reduced(as_expr(mv.terms[m]), gb, *gens, order="grevlex")[1] == 0]
+    return MV(k.ring, {m: c for m, c in mv.terms.items() if m not in vanishing})
+
+
+def _stage(spec, k, declared, nums, den):
+    """Split the outputs into coefficients over the uniform symbols and a row part (module docstring)."""
+    ring = k.ring
+    uniform = {s for name, _, syms in declared if name in spec.uniform for s in syms}
+    row_idx = [i for i, s in enumerate(ring.symbols) if s not in uniform]
+    if not row_idx:
+        return None
+    hoisted, index = [], {}
+
+    def split(p):
+        groups: dict = {}
+        for mon, c in p.terms():
+            rm = tuple(mon[i] for i in row_idx)
+            um = tuple(0 if i in row_idx else e for i, e in enumerate(mon))
+            groups[rm] = groups.get(rm, ring.zero) + ring.from_dict({um: c})
+        return groups
+
+    row_den = den is not None and any(rm != (0,) * len(row_idx) for rm in split(den))
+    scale = den if (den is not None and not row_den) else None
+
+    def row_poly(p):
+        terms = []
+        for rm, c in split(p).items():
+            mono = sympy.Mul(*(ring.symbols[i] ** e for i, e in zip(row_idx, rm)))
+            if c.is_ground and scale is None:
+                terms.append(as_expr(c) * mono)
+                continue
+            key = tuple(sorted(c.items()))
+            if key not in index:
+                index[key] = len(hoisted)
+                hoisted.append(c)
+            terms.append(sympy.Symbol(f"hoisted{index[key]}", real=True) * mono)
+        return sympy.Add(*terms)
+
+    rows = [row_poly(n) for n in nums]
+    if row_den:
+        d = row_poly(den)
+        rows = [sympy.Mul(r, sympy.Pow(d, -1)) for r in rows]
+    if not hoisted:
+        return None
+    params = [(name, typ) for name, typ, _ in declared]
+    u = KernelBuilder(f"_{spec.name}_uniform", f"The part of ``{spec.name}`` that depends only on "
+                      f"{', '.join(spec.uniform)}: computed once per batch call.")
+    _declare(u, [p for p in params if p[0] in spec.uniform])
+    values = [as_expr(c) for c in hoisted]
+    if scale is not None:
+        (inv,) = u.intermediate("inv_weight")
+        u.let(inv, 1 / as_expr(scale))
+        values = [v * inv for v in values]
+    u.output([f"hoisted[{j}]" for j in range(len(values))], values)
+    r = KernelBuilder(f"_{spec.name}_row", f"The per-row part of ``{spec.name}``, given ``_{spec.name}_uniform``.")
+    if len(hoisted) == 1:
+        r.scalar("hoisted0")
+    else:
+        r.array("hoisted", len(hoisted))
+    _declare(r, [p for p in params if p[0] not in spec.uniform])
+    r.output([f"out[{j}]" for j in range(len(rows))], rows)
+    return u.build(), r.build()
+
+
+def _shape(typ, batch: bool) -> str:
+    if typ.kind == "scalar":
+        return "(N,)" if batch else "float"
+    return f"(N, {typ.size})" if batch else f"({typ.size},)"
+
+
+def _documented(c: Compiled, source: str) -> Kernel:
+    """The scalar kernel with its docstring: the user's text, types, shapes and op counts."""
+    params, ret = c.spec.signature()
+    lines = [c.spec.doc or f"Kernel ``{c.spec.name}`` of {source}.", ""]
+    lines += [f"{name} : {_shape(typ, False)}  {typ.describe()}" for name, typ in params]
+    lines.append(f"returns : {'float' if c.out_size == 1 else f'tuple of {c.out_size} floats'}  {ret.describe()}")
+    if c.dropped:
+        lines.append(f"Dropped from the result: {', '.join(c.dropped)} (zero whenever the versor inputs are versors).")
+    lines.append(f"Operations after CSE: {op_count(c.kernel)}.")
+    if c.stages:
+        lines.append(f"Batch form: {op_count(c.stages[1])} per row, {op_count(c.stages[0])} once per call "
+                     f"({len(c.stages[0].outputs)} hoisted values).")
+    doc = "\n".join(("    " + ln if ln and i else ln) for i, ln in enumerate(lines))
+    doc = doc.replace("\\", "\\\\").replace('"""', '\\"\\"\\"')
+    return replace(c.kernel, doc=doc)
+
+
+def _batch(c: Compiled) -> str:
+    """``name_batch``: uniform inputs once, the others per row; hoisted stages when there are some."""
+    if not c.uniform:
+        return printer.print_batch(c.kernel)
+    params, _ = c.spec.signature()
+    names = [n for n, _ in params]
+    shapes = ", ".join(f"{n} {_shape(t, n not in c.uniform)}" for n, t in params)
+    what = (f"hoisted: ``_{c.spec.name}_uniform`` once, then ``_{c.spec.name}_row`` per row" if c.stages else
+            "passed once; nothing is hoisted (it would not save work per row): the scalar kernel per row")
+    lines = ["@njit(cache=True, error_model='numpy', nogil=True)",
+             f"def {c.spec.name}_batch({', '.join(names)}, out):",
+             f'    """``{c.spec.name}`` on every row: {shapes}; out (N, {c.out_size}).',
+             "",
+             f"    Uniform: {', '.join(c.uniform)}; {what}.",
+             '    """']
+    if c.stages:
+        lines.append(f"    hoisted = _{c.spec.name}_uniform({', '.join(n for n in names if n in c.uniform)})")
+        call = f"_{c.spec.name}_row(hoisted, {', '.join(f'{n}[row]' for n in names if n not in c.uniform)})"
+    else:
+        call = f"{c.spec.name}({', '.join(n if n in c.uniform else f'{n}[row]' for n in names)})"
+    lines.append("    for row in range(out.shape[0]):")
+    if c.out_size == 1:
+        lines.append(f"        out[row, 0] = {call}")
+    else:
+        lines.append(f"        r = {call}")
+        lines += [f"        out[row, {j}] = r[{j}]" for j in range(c.out_size)]
+    return "\n".join(lines) + "\n"
+
+
+def render(source) -> tuple[str, dict[str, str], str]:
+    """(module text, {kernel name: its block of the text}, catalogue file name) of a catalogue."""
+    specs, label = load_catalogue(source)
+    compiled = [compile_kernel(s) for s in specs]
+    chunks = {}
+    for c in compiled:
+        parts = [printer.print_kernel(_documented(c, label))]
+        if c.stages:
+            parts += [printer.print_kernel(s) for s in c.stages]
+        parts.append(_batch(c))
+        chunks[c.spec.name] = "\n\n".join(parts)
+    kernels = [c.kernel for c in compiled] + [s for c in compiled for s in (c.stages or ())]
+    spec_hash = build._digest("\n".join(k.spec_text for k in kernels))
+    names = ", ".join(repr(c.spec.name) for c in compiled)
+    body = "\n\n".join(["import math\n\nimport numpy as np\nfrom numba import njit\n", *chunks.values(),
+                        f"KERNEL_NAMES = ({names},)\n"])
+    header = "\n".join([f'"""CGA kernels of the catalogue {label} (scalar form and row loops).', "",
+                        f"GENERATED by `cgaskin build --catalogue {label}` — do not edit by hand.",
+                        f"generator: {build.GENERATOR_VERSION}", f"{build.SYMPY_LINE}{sympy.__version__}",
+                        f"algebra: {build.ALGEBRA}", f"spec hash: {spec_hash}"]) + build.HEADER_END
+    return header + "\n" + body, chunks, label
+
+
+def output_path(label: str, out) -> Path:
+    """``out`` itself when it names a .py file, else ``out/<catalogue stem>.py``."""
+    out = Path(out)
+    return out if out.suffix == ".py" else out / (Path(label).stem + ".py")
+
+
+def build_catalogue(source, out, check: bool = False, log=print) -> int:
+    """Write the module of a catalogue (or, with check=True, compare it). Returns the number of stale
+    kernels (1 when only the header or the file as a whole differs, 0 when up to date)."""
+    start = time.perf_counter()
+    text, chunks, label = render(source)
+    path = output_path(label, out)
+    if isinstance(source, (str, Path)) and Path(source).resolve() == path.resolve():
+        raise CodegenError(f"catalogue {source}: --out would overwrite the catalogue itself; choose another folder")
+    current = path.read_text(encoding="utf-8") if path.exists() else None
+    unchanged = current is not None and build._without_sympy_version(current) == build._without_sympy_version(text)
+    elapsed = time.perf_counter() - start
+    if not check:
+        if current != text:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding="utf-8")
+        log(f"wrote {path} ({len(chunks)} kernels, {elapsed:.1f} s)" if current != text else f"{path} is up to date")
+        return 0
+    if unchanged:
+        log(f"{path} is up to date ({len(chunks)} kernels, {elapsed:.1f} s)")
+        return 0
+    hint = f"run `cgaskin build --catalogue {label} --out {out}`"
+    if current is None:
+        log(f"stale: {path} does not exist; {hint}")
+        return 1
+    stale = [name for name, chunk in chunks.items() if chunk not in current]
+    for name in stale:
+        log(f"stale: {path}: kernel {name!r} differs from what {label} emits; {hint}")
+    if not stale:
+        log(f"stale: {path}: the header or the kernel list differs from what {label} emits; {hint}")
+    return max(1, len(stale))
