@@ -68,7 +68,8 @@ def _ring():
 
 
 class building:
-    """Context manager: values and constants made inside use ``ring`` (the kernel's symbols)."""
+    """Context manager: values and constants made inside use ``ring`` (the kernel's symbols), or a
+    numeric backend with ``scalar_mv``/``basis_mv`` (``codegen.verify``: clifford multivectors)."""
 
     def __init__(self, ring):
         self.ring = ring
@@ -88,9 +89,11 @@ def _number(x):
 
 
 def _scalar_mv(value: Fraction):
+    ring = _ring()
+    if hasattr(ring, "scalar_mv"):                   # a numeric backend (codegen.verify: clifford values)
+        return ring.scalar_mv(value)
     from sympy import QQ
     from .symbolic import MV
-    ring = _ring()
     return MV(ring, {0: ring(QQ(value.numerator, value.denominator))})
 
 
@@ -209,8 +212,11 @@ class Constant(Value):
 
     @property
     def mv(self):
+        ring = _ring()
+        if hasattr(ring, "basis_mv"):                   # a numeric backend (codegen.verify)
+            return ring.basis_mv(self.name)
         from .symbolic import basis
-        return basis(_ring(), self.name)
+        return basis(ring, self.name)
 
     def __repr__(self):
         return f"cga.{self.name}"

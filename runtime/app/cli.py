@@ -27,6 +27,26 @@ def _build(args) -> int:
     return 1 if (args.check and stale) else 0
 
 
+def _verify(args) -> int:
+    try:
+        from ..codegen import verify
+    except ImportError as exc:                        # sympy and clifford: the test extra
+        print(f"cgaskin verify: error: {exc}", file=sys.stderr)
+        return 2
+    from ..codegen.ir import CodegenError
+    try:
+        report = verify.verify_catalogue(args.catalogue, args.out, examples=args.examples)
+    except verify.VerificationError as exc:
+        print(exc.report.table() if exc.report else "")
+        print(f"cgaskin verify: FAIL: {exc}", file=sys.stderr)
+        return 1
+    except CodegenError as exc:                       # the user's catalogue: one line, no traceback
+        print(f"cgaskin verify: error: {exc}", file=sys.stderr)
+        return 2
+    print(report.table())
+    return 0
+
+
 def _bench(args) -> int:
     import importlib
     names = {"skinning": "benchmarks.bench_skinning", "frame": "benchmarks.bench_frame",
@@ -66,6 +86,15 @@ def main(argv=None) -> int:
     p.add_argument("--out", metavar="DIR", help="with --catalogue: the folder to write FILE's module into "
                                                 "(DIR/<FILE stem>.py), or the .py file itself")
     p.set_defaults(run=_build)
+
+    p = sub.add_parser("verify", help="run every kernel of a catalogue three ways (generated, clifford, the "
+                                      "float64 expansion) on drawn inputs; exit 1 on any disagreement")
+    p.add_argument("--catalogue", metavar="FILE", required=True, help="a Python file (or module name) of "
+                                                                      "@kernel functions")
+    p.add_argument("--examples", type=int, default=50, help="inputs per kernel and range (default 50)")
+    p.add_argument("--out", metavar="DIR", default=None, help="build the module here (default: a temporary "
+                                                              "folder)")
+    p.set_defaults(run=_verify)
 
     p = sub.add_parser("precompile", help="compile the numba kernels now, on every core (a fresh install "
                                           "otherwise compiles them at their first call, one at a time)")
