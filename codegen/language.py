@@ -30,9 +30,10 @@ Constants ``cga.e1, cga.e2, cga.e3, cga.einf, cga.eo``. Operators on values: ``*
 ``^`` outer, ``|`` inner = LEFT CONTRACTION a ⌋ b, ``~`` reverse, unary ``-``, ``+``, ``-``, scalar
 ``*`` and ``/`` by numbers; methods ``.dual()`` (X I⁻¹, I = e123∞0), ``.grade(k, ...)``, ``.reverse()``.
 Python's precedence applies: unary ``-``/``~`` bind tightest, then ``*`` ``/``, then ``+`` ``-``, then
-``^``, then ``|`` — so ``a ^ b + c`` is ``a ^ (b + c)``: parenthesise. Not in this language yet:
-``sqrt``, ``exp``/``log``, division by a multivector, conditionals (a value has no truth value; kernels
-are straight-line code), a value from several outputs (one return value per kernel).
+``^``, then ``|`` — so ``a ^ b + c`` is ``a ^ (b + c)``: parenthesise. On scalar values (numbers too):
+``cga.sqrt cos sin exp log abs atan2``, ``/``, and ``x > y`` (``<`` ``>=`` ``<=``), a condition for
+``cga.where(cond, a, b)`` (blade by blade; ``codegen.functions``). Not in this language yet: division by
+a multivector, ``if`` (kernels are straight-line code), a value from several outputs.
 
 Versor types (Rotor, Motor, Versor) are taken to hold versors. The expansion treats their coefficients
 as independent, so ``V * x * ~V`` of a symbolic 12-blade V has an e123∞0 part that is zero for every
@@ -125,6 +126,8 @@ class Value:
         if b is None:
             return NotImplemented
         a = self.mv
+        if hasattr(a, "ring") and hasattr(b, "ring") and a.ring != b.ring:
+            a, b = _functions().unify(a, b)          # one holds scalar-function atoms (codegen.functions)
         return Value(op(b, a) if swap else op(a, b))
 
     # products
@@ -162,9 +165,15 @@ class Value:
 
     def __truediv__(self, other):
         q = _number(other)
-        if q is None:
-            raise _error(f"only division by a number is in the kernel language, not by {type(other).__name__}")
-        return self * (1 / q)
+        return self * (1 / q) if q is not None else self * _apply("inv", other)
+
+    def __rtruediv__(self, other):
+        return _apply("inv", self) * other
+
+    def __abs__(self):
+        return _apply("abs", self)
+
+    __lt__, __le__, __gt__, __ge__ = (lambda a, b, op=op: _apply(op, a, b) for op in ("<", "<=", ">", ">="))
 
     def __neg__(self):
         return Value(-self.mv)
@@ -199,6 +208,21 @@ def as_value(x) -> Value | None:
         return x
     q = _number(x)
     return None if q is None else Value(_scalar_mv(q))
+
+
+def _functions():
+    from . import functions                         # sympy: only at build time
+    return _ring() if hasattr(_ring(), "function") else functions   # a numeric backend has its own
+
+
+def _apply(name, *args):
+    """``cga.sqrt(x)`` etc. (a scalar value), ``x > y`` (a condition), ``cga.where(condition, a, b)``:
+    a where the condition holds, else b, blade by blade (``codegen.functions``)."""
+    values = [a if name == "where" and not i else as_value(a) for i, a in enumerate(args)]
+    if None in values:
+        raise TypeError(f"cga.{name} takes cga values or numbers, not {[type(a).__name__ for a in args]}")
+    out = _functions().function(name, *(v.mv if isinstance(v, Value) else v for v in values))
+    return Value(out) if name[0].isalpha() else out
 
 
 class Constant(Value):
@@ -261,7 +285,7 @@ class Type:
         """(labels, numerator polynomials, denominator polynomial or None) of a result of this type."""
         self._check(kernel, mv, self.blades)
         return ([algebras.cga.blade_display(algebras.cga.mask_of(b)) for b in self.blades],
-                [mv[b] for b in self.blades], None)
+                _functions().final(_ring(), [mv[b] for b in self.blades]), None)
 
     def __repr__(self):
         return f"cga.{self.name}"
@@ -301,7 +325,8 @@ class PointType(Type):
         weight = mv["eo"]
         if not weight:
             raise _error(f"kernel {kernel!r}: the result has no e0 part, so it is not a point to down-project")
-        return ["x[0]", "x[1]", "x[2]"], [mv["e1"], mv["e2"], mv["e3"]], weight
+        *nums, weight = _functions().final(_ring(), [mv["e1"], mv["e2"], mv["e3"], weight])
+        return ["x[0]", "x[1]", "x[2]"], nums, weight
 
 
 class _MultivectorFactory:
@@ -334,6 +359,8 @@ class ConformalAlgebra(algebras.Algebra):
     Versor = Type("Versor", _VERSOR, versor=True)
     Multivector = _MultivectorFactory()
     e1, e2, e3, einf, eo = (Constant(n) for n in ("e1", "e2", "e3", "ei", "eo"))
+    sqrt, cos, sin, exp, log, abs, atan2, where = (staticmethod(functools.partial(_apply, n)) for n in
+                                                   ("sqrt", "cos", "sin", "exp", "log", "abs", "atan2", "where"))
 
     def __init__(self):
         super().__init__(signature=(4, 1, 0), basis="null")

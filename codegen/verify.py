@@ -40,6 +40,7 @@ except ImportError as exc:                                   # pragma: no cover 
 
 from . import algebras
 from .catalogue_build import build_catalogue, compile_kernel, load_catalogue, output_path
+from .functions import NUMERIC, OPERATORS, magnitude
 from .language import _VERSOR, Value, as_value, building
 
 TOL_EXPANSION = 1e-12
@@ -120,6 +121,12 @@ class CliffordBackend:
     def basis_mv(self, name: str):
         return CliffordMV(self.blades[_CGA.mask_of(name)])
 
+    def function(self, name, *args):           # language._apply: scalar functions, conditions, where
+        if name == "where":
+            return args[1] if args[0] else args[2]
+        xs = [float(a.x.value[0]) for a in args]
+        return OPERATORS[name](*xs) if name in OPERATORS else CliffordMV(NUMERIC[name](*xs) * self.one)
+
     def value(self, typ, arr) -> Value:
         if typ.kind == "scalar":
             return Value(CliffordMV(float(arr) * self.one))
@@ -198,9 +205,12 @@ class Expansion:
             outs = [o.xreplace({sym: value}) for o in outs]
         nums, dens = zip(*(sympy.fraction(o) for o in outs))
 
-        def bound(p):
+        def bound(p):                                       # evaluated at the inputs themselves
+            if not p.is_polynomial(*syms):                  # scalar functions: codegen.functions
+                return magnitude(p)
             poly = sympy.Poly(sympy.expand(p), *syms)
-            return sympy.Add(*(abs(c) * sympy.Mul(*(s ** e for s, e in zip(syms, mon))) for mon, c in poly.terms()))
+            return sympy.Add(*(abs(c) * sympy.Mul(*(abs(s) ** e for s, e in zip(syms, mon)))
+                               for mon, c in poly.terms()))
 
         self.value = sympy.lambdify(syms, list(outs), "math")
         self.num = sympy.lambdify(syms, list(nums), "math")
@@ -210,7 +220,7 @@ class Expansion:
 
     def __call__(self, flat):
         """(values, S): the outputs and the per-output magnitude bound of their terms."""
-        a = [abs(float(v)) for v in flat]
+        a = [float(v) for v in flat]
         num, den = np.array(self.num(*flat), float), np.array(self.den(*flat), float)
         val = num / den
         s = (np.array(self.bnum(*a), float) + np.abs(val) * np.array(self.bden(*a), float)) / np.abs(den)

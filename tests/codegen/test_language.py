@@ -226,3 +226,75 @@ def test_argument_names_that_would_clash_are_refused(tmp_path, args):
         ''')
     with pytest.raises(CodegenError, match="'clash'"):
         build_catalogue(source, tmp_path / "gen", log=lambda *_: None)
+
+
+FUNCTIONS = '''
+from cgaskin.codegen import cga, kernel
+
+@kernel
+def normalize_plane(p: cga.Plane) -> cga.Plane:
+    """The plane with a unit normal: (n + d e∞)² = |n|² since e∞² = 0."""
+    return p / cga.sqrt(p * p)
+
+@kernel
+def rotor(axis: cga.Vector, angle: cga.Scalar) -> cga.Rotor:
+    """cos(θ/2) − sin(θ/2) B/|axis|, B = axis e123 (the axis' dual in 3D)."""
+    B = axis * cga.e1 * cga.e2 * cga.e3
+    return cga.cos(angle / 2) - cga.sin(angle / 2) * B / cga.sqrt(axis * axis)
+
+@kernel
+def safe_inverse(s: cga.Scalar) -> cga.Scalar:
+    return cga.where(abs(s) > 1e-12, 1 / s, 0)
+
+@kernel
+def clamp_up(v: cga.Vector, s: cga.Scalar) -> cga.Vector:
+    """v, sign-flipped where s < 0, plus the log/exp round trip of s times pi v."""
+    return cga.where(s >= 0, 1, -1) * v + cga.log(cga.exp(s)) * cga.atan2(0, -1) * v
+'''
+
+
+def test_scalar_functions_and_where(tmp_path):
+    """sqrt, cos, sin, exp, log, atan2, abs, / by a scalar value and where: against numpy and versor."""
+    source = _write(tmp_path, "functions.py", FUNCTIONS)
+    build_catalogue(source, tmp_path / "gen", log=lambda *_: None)
+    m = _import(tmp_path / "gen" / "functions.py")
+    text = (tmp_path / "gen" / "functions.py").read_text(encoding="utf-8")
+    assert "math.sqrt(" in text and "math.cos(" in text and " if (" in text and "import math" in text
+    rng = np.random.default_rng(5)
+    planes = rng.normal(size=(10, 4)) * 10
+    out = np.empty((10, 4))
+    m.normalize_plane_batch(planes, out)
+    _close(out, planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True))
+    axes, angles = rng.normal(size=(10, 3)), rng.uniform(-4, 4, 10)
+    m.rotor_batch(axes, angles, out)
+    for i in range(10):
+        want = versor.motor(axes[i], angles[i], [0.0, 0.0, 0.0])[:4]
+        _close(np.array(m.rotor(axes[i], angles[i])), want)
+        _close(out[i], want)
+    s = np.array([4.0, -0.5, 0.0, 1e-13])
+    assert [m.safe_inverse(x) for x in s] == [0.25, -2.0, 0.0, 0.0]
+    col = np.empty((4, 1))
+    m.safe_inverse_batch(s, col)
+    assert col[:, 0].tolist() == [0.25, -2.0, 0.0, 0.0]
+    v = np.array([1.0, 2.0, 3.0])
+    _close(np.array(m.clamp_up(v, 0.5)), v + 0.5 * np.pi * v)
+    _close(np.array(m.clamp_up(v, -0.5)), -v - 0.5 * np.pi * v)
+
+
+@pytest.mark.parametrize("body, what", [("cga.sqrt(v)", "cga.sqrt of a multivector"),
+                                        ("1.0 / v", "division by a multivector"),
+                                        ("cga.where(v > 0, 1, 0)", "comparison > of a multivector"),
+                                        ("cga.where(cga.cos(v | v) > 0, 1, 0) if v | v > 0 else 0", "truth value"),
+                                        ("cga.where(1, v, v)", "cga.where needs a condition")])
+def test_scalar_functions_refuse_multivectors(tmp_path, body, what):
+    source = _write(tmp_path, "bad.py", f'''
+        from cgaskin.codegen import cga, kernel
+
+        @kernel
+        def bad(v: cga.Vector) -> cga.Vector:
+            return {body}
+        ''')
+    with pytest.raises(CodegenError, match=f"'bad'.*{what}") as info:
+        build_catalogue(source, tmp_path / "gen", log=lambda *_: None)
+    if "multivector" in what:
+        assert "e1, e2, e3" in str(info.value)
