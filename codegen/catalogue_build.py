@@ -130,7 +130,9 @@ def compile_kernel(spec: KernelSpec) -> Compiled:
     dropped = tuple(algebra.blade_display(m) for m in value.mv.blades if m not in pruned.terms)
     k.output(labels, _divide(nums, den))
     kernel = k.build()
-    stages = _stage(spec, k, declared, nums, den) if spec.uniform else None
+    # hoisting splits polynomials: outputs with roots, functions or branches run unstaged
+    polynomial = all(hasattr(x, "ring") for x in (*nums, den) if x is not None)
+    stages = _stage(spec, k, declared, nums, den) if spec.uniform and polynomial else None
     if stages is not None and op_count(stages[1]) >= op_count(kernel):
         stages = None                                # hoisting would not save work per row
     return Compiled(spec, kernel, stages, spec.uniform, len(labels), dropped)

@@ -75,6 +75,8 @@ def expr_code(e) -> str:
         if exp.is_Integer and exp < 0:
             return f"(1.0 / {expr_code(Pow(base, -exp))})"
         raise CodegenError(f"cannot print power {e}")
+    if isinstance(e, (sympy.core.relational.Relational, sympy.And, sympy.Or)):
+        return cond_code(e)                        # a condition CSE took out of a Piecewise
     if isinstance(e, Piecewise):
         (val, cond), *rest = e.args
         if cond is sympy.true:
@@ -95,6 +97,8 @@ def cond_code(c) -> str:
     for cls, op in ops.items():
         if isinstance(c, cls):
             return f"({expr_code(c.lhs)} {op} {expr_code(c.rhs)})"
+    if isinstance(c, Symbol):                       # a condition that CSE named
+        return c.name
     if isinstance(c, sympy.And):
         return "(" + " and ".join(cond_code(a) for a in c.args) + ")"
     if isinstance(c, sympy.Or):

@@ -298,3 +298,26 @@ def test_scalar_functions_refuse_multivectors(tmp_path, body, what):
         build_catalogue(source, tmp_path / "gen", log=lambda *_: None)
     if "multivector" in what:
         assert "e1, e2, e3" in str(info.value)
+
+
+def test_where_on_several_blades_and_functions_of_uniform_inputs(tmp_path):
+    """A where that picks between two vectors (one condition shared by three blades), and a uniform
+    input under a square root (its kernel runs unstaged: hoisting splits polynomials only)."""
+    source = _write(tmp_path, "more.py", '''
+from cgaskin.codegen import cga, kernel
+
+@kernel
+def sign_vector(s: cga.Scalar, v: cga.Vector) -> cga.Vector:
+    return cga.where(s >= 0, v, -v)
+
+@kernel(uniform=("s",))
+def scale_by(s: cga.Scalar, v: cga.Vector) -> cga.Vector:
+    return v * cga.sqrt(s)
+''')
+    build_catalogue(source, tmp_path / "gen", log=lambda *_: None)
+    m = _import(tmp_path / "gen" / "more.py")
+    v = np.array([1.0, -2.0, 3.0])
+    assert m.sign_vector(-2.0, v) == (-1.0, 2.0, -3.0) and m.sign_vector(0.0, v) == (1.0, -2.0, 3.0)
+    rows, out = np.array([[1.0, 2.0, 3.0], [0.0, 1.0, 0.0]]), np.empty((2, 3))
+    m.scale_by_batch(4.0, rows, out)
+    np.testing.assert_array_equal(out, 2.0 * rows)
