@@ -15,18 +15,7 @@ from cgaskin.app.cli import main as cli_main
 from cgaskin.codegen import KernelSpec, build_catalogue, cga, kernel
 from cgaskin.codegen.ir import CodegenError
 
-CATALOGUE = '''
-from cgaskin.codegen import cga, kernel
-
-@kernel
-def reflect(plane: cga.Plane, x: cga.Point) -> cga.Point:
-    """Reflect a point in a plane."""
-    return -plane * x * plane
-
-@kernel(uniform=("V",))
-def move(V: cga.Versor, x: cga.Point) -> cga.Point:
-    return V * x * ~V
-'''
+from tests.helpers.catalogues import README_CATALOGUE as CATALOGUE
 
 
 def _write(directory, name, text):
@@ -305,6 +294,7 @@ def test_where_on_several_blades_and_functions_of_uniform_inputs(tmp_path):
     input under a square root (its kernel runs unstaged: hoisting splits polynomials only)."""
     source = _write(tmp_path, "more.py", '''
 from cgaskin.codegen import cga, kernel
+
 
 @kernel
 def sign_vector(s: cga.Scalar, v: cga.Vector) -> cga.Vector:

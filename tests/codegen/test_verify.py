@@ -12,19 +12,8 @@ from cgaskin.codegen import verify_catalogue
 from cgaskin.codegen.ir import CodegenError
 from cgaskin.codegen.verify import TOL_CLIFFORD, TOL_EXPANSION, VerificationError
 
-README = '''
-from cgaskin.codegen import cga, kernel
+from tests.helpers.catalogues import README_CATALOGUE as README
 
-@kernel
-def reflect(plane: cga.Plane, x: cga.Point) -> cga.Point:
-    """Reflect a point in a plane."""
-    return -plane * x * plane
-
-@kernel(uniform=("V",))
-def move(V: cga.Versor, x: cga.Point) -> cga.Point:
-    """Move points by one versor."""
-    return V * x * ~V
-'''
 
 FRAGILE = '''
 from cgaskin.codegen import cga, kernel
@@ -50,6 +39,7 @@ def ops(a: MV, b: MV) -> ALL:
 
 FUNCTIONS = '''
 from cgaskin.codegen import cga, kernel
+
 
 @kernel
 def normalize_plane(p: cga.Plane) -> cga.Plane:
