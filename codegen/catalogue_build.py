@@ -32,7 +32,8 @@ import sympy
 
 from . import algebra, build, printer
 from .ir import CodegenError, Kernel, KernelBuilder, as_expr
-from .language import KernelSpec, as_value, building
+from .language import KernelSpec
+from .values import as_value, building
 from .symbolic import MV
 
 RESERVED = {"out", "row", "r", "hoisted", "math", "np", "njit"}

@@ -41,7 +41,8 @@ except ImportError as exc:                                   # pragma: no cover 
 from . import algebras
 from .catalogue_build import build_catalogue, compile_kernel, load_catalogue, output_path
 from .functions import magnitude
-from .language import _VERSOR, as_value, building
+from .language import _VERSOR
+from .values import as_value, building
 from .verify_clifford import CliffordMV, _backend
 
 TOL_EXPANSION = 1e-12

@@ -11,13 +11,13 @@ import numpy as np
 
 from . import algebras
 from .functions import NUMERIC, OPERATORS
-from .language import Value
+from .values import Value
 
 _CGA = algebras.cga
 
 
 class CliffordMV:
-    """A clifford MultiVector with ``symbolic.MV``'s interface, so ``language.Value`` can wrap it."""
+    """A clifford MultiVector with ``symbolic.MV``'s interface, so ``values.Value`` can wrap it."""
 
     __slots__ = ("x",)
 
@@ -71,14 +71,14 @@ class CliffordBackend:
         self.to_ours = np.linalg.inv(np.array([bl.value for bl in self.blades]).T)
         self.I_inv = self.blades[31].inv()
 
-    # the "ring" protocol of language._scalar_mv / Constant.mv
+    # the "ring" protocol of values._scalar_mv / Constant.mv
     def scalar_mv(self, q):
         return CliffordMV(float(q) * self.one)
 
     def basis_mv(self, name: str):
         return CliffordMV(self.blades[_CGA.mask_of(name)])
 
-    def function(self, name, *args):           # language._apply: scalar functions, conditions, where
+    def function(self, name, *args):           # values._apply: scalar functions, conditions, where
         if name == "where":
             return args[1] if args[0] else args[2]
         xs = [float(a.x.value[0]) for a in args]
