@@ -2,8 +2,10 @@
 are printed by ``codegen.expressions`` in its Python dialect (the rules every target shares)."""
 from __future__ import annotations
 
-from .expressions import kernel_body
+from .expressions import PYTHON, Dialect, kernel_body
 from .ir import CodegenError, Kernel
+
+NUMBA_DECORATOR = "@njit(cache=True, error_model='numpy', nogil=True)"
 
 
 def docstring(kernel: Kernel, width: int = 110) -> list[str]:
@@ -17,18 +19,20 @@ def docstring(kernel: Kernel, width: int = 110) -> list[str]:
     return lines
 
 
-def print_kernel(kernel: Kernel) -> str:
-    """Source of ``@njit def name(inputs...) -> tuple`` (the scalar kernel)."""
+def print_kernel(kernel: Kernel, decorator: str = NUMBA_DECORATOR, name: str | None = None,
+                 dialect: Dialect = PYTHON) -> str:
+    """Source of ``@njit def name(inputs...) -> tuple`` (the scalar kernel). ``decorator``, ``name``
+    and ``dialect`` let other Python targets (numba-cuda device functions) print the same body."""
     args = ", ".join(i.name for i in kernel.inputs)
-    lines = [f"@njit(cache=True, error_model='numpy', nogil=True)", f"def {kernel.name}({args}):"]
+    lines = [decorator, f"def {name or kernel.name}({args}):"]
     lines += docstring(kernel)
     for inp in kernel.inputs:
         if inp.kind == "scalar":
             continue
         for idx, sym in enumerate(inp.symbols):
             lines.append(f"    {sym.name} = {inp.name}[{idx}]")
-    assigns, values = kernel_body(kernel)
-    lines += [f"    {name} = {code}" for name, code, _ in assigns]
+    assigns, values = kernel_body(kernel, dialect)
+    lines += [f"    {var} = {code}" for var, code, _ in assigns]
     if len(values) == 1:
         lines.append(f"    return {values[0]}")
     else:
