@@ -1,0 +1,71 @@
+"""What the C and CUDA target tests share: skip-or-fail for a missing tool, the comparison of a
+target's rows with numba's, the C compiler, and the Fox model posed at a clip time."""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+#: the flags every generated C source must compile under without a diagnostic
+C_FLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-ffp-contract=off"]
+INSTALL = "bash scripts/install-test-deps.sh"
+
+
+def require(missing: list, what: str) -> None:
+    """Skip (fail under CGASKIN_CI=1) when anything in ``missing`` is absent."""
+    if not missing:
+        return
+    reason = f"{what} needs {', '.join(missing)}: run `{INSTALL}`"
+    if os.environ.get("CGASKIN_CI") == "1":
+        pytest.fail(f"CGASKIN_CI=1: {reason}", pytrace=False)
+    pytest.skip(reason)
+
+
+def c_compiler() -> str:
+    """The C compiler (env CC, else cc) and cffi, or skip/fail."""
+    cc = shutil.which(os.environ.get("CC", "cc"))
+    missing = [] if cc else ["a C compiler (cc)"]
+    try:
+        import cffi  # noqa: F401
+    except ImportError:
+        missing.append("cffi (PyPI)")
+    require(missing, "the C target test")
+    return cc
+
+
+def compile_c(cc: str, source: Path, output: Path, extra=()) -> None:
+    """Compile ``source`` with ``C_FLAGS`` (+ ``extra``); any diagnostic fails the test."""
+    result = subprocess.run([cc, *C_FLAGS, *extra, str(source), "-o", str(output), "-lm"],
+                            capture_output=True, text=True)
+    assert result.returncode == 0 and not result.stderr.strip() and not result.stdout.strip(), \
+        f"{' '.join([cc, *C_FLAGS, *extra, source.name])}:\n{result.stdout}{result.stderr}"
+
+
+def assert_rows_close(what: str, got, ref, tol: float, inputs=None) -> None:
+    """|got - ref| <= tol * max(1, max_j |ref[row, j]|) in every row (the row's scale: a kernel's
+    outputs share units, so an output that cancels to ~0 is judged against its row's magnitude);
+    NaN where numba gives NaN, and the same infinities, count as equal."""
+    got, ref = np.asarray(got, np.float64), np.asarray(ref, np.float64)
+    assert got.shape == ref.shape, f"{what}: shape {got.shape} != {ref.shape}"
+    finite = np.isfinite(ref)
+    same_special = (np.isnan(ref) & np.isnan(got)) | (np.isinf(ref) & (got == ref))
+    scale = np.maximum(1.0, np.max(np.where(finite, np.abs(ref), 0.0), axis=-1, keepdims=True))
+    with np.errstate(invalid="ignore"):
+        ok = same_special | (finite & (np.abs(got - ref) <= tol * scale))
+    if not ok.all():
+        row = int(np.argwhere(~ok)[0][0])
+        detail = "" if inputs is None else f"\ninputs of row {row}: {[np.asarray(a)[row].tolist() for a in inputs]}"
+        err = np.nanmax(np.where(finite, np.abs(got - ref) / scale, np.inf))
+        raise AssertionError(f"{what}: {int((~ok).sum())} outputs differ (worst scaled error {err:.3g} > {tol}); "
+                             f"row {row}: got {got[row].tolist()}, numba {ref[row].tolist()}{detail}")
+
+
+def fox_posed(models_dir: Path, clip: str = "Run", time: float = 0.37):
+    """(rig, pose) of the shared Fox.glb at ``time`` seconds into ``clip``."""
+    import cgaskin
+    rig = cgaskin.load(models_dir / "Fox.glb")
+    return rig, rig.pose(clip, time)
