@@ -3,13 +3,14 @@
 Importing this package is cheap (no sympy): it re-exports the algebras, whose product tables are
 computed on first use, and the kernel language. ``cga`` is the conformal algebra G(4,1) in the null
 basis carrying the language's types (Point, Plane, Versor, ...) and constants; it equals
-``algebras.cga`` and shares its tables. ``build_catalogue`` needs sympy and is imported on first use;
+``algebras.cga`` and shares its tables; ``pga`` is G(3,0,1) with its types (``codegen.language_pga``). ``build_catalogue`` needs sympy and is imported on first use;
 ``verify_catalogue`` (``codegen.verify``) needs sympy and clifford.
 """
-from .algebras import Algebra, InvalidAlgebraError, pga
+from .algebras import Algebra, InvalidAlgebraError
 from .language import ConformalAlgebra, KernelSpec, cga, kernel
+from .language_pga import ProjectiveAlgebra, pga
 
-__all__ = ["Algebra", "InvalidAlgebraError", "cga", "pga", "ConformalAlgebra", "KernelSpec", "kernel",
+__all__ = ["Algebra", "InvalidAlgebraError", "cga", "pga", "ConformalAlgebra", "ProjectiveAlgebra", "KernelSpec", "kernel",
            "build_catalogue", "verify_catalogue"]
 
 

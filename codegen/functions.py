@@ -17,7 +17,6 @@ import sympy
 from sympy import QQ, Symbol
 from sympy.polys.rings import PolyRing
 
-from . import algebra
 from .symbolic import MV
 
 SYMBOLIC = {"sqrt": sympy.sqrt, "cos": sympy.cos, "sin": sympy.sin, "exp": sympy.exp, "log": sympy.log,
@@ -41,7 +40,8 @@ def _union(*rings):
 def unify(*mvs):
     """The multivectors over one ring (the union of their generators)."""
     ring = _union(*(m.ring for m in mvs))
-    return [m if m.ring == ring else MV(ring, {k: c.set_ring(ring) for k, c in m.terms.items()}) for m in mvs]
+    return [m if m.ring == ring else MV(ring, {k: c.set_ring(ring) for k, c in m.terms.items()}, m.algebra)
+            for m in mvs]
 
 
 def _poly(expr, ring):
@@ -63,7 +63,7 @@ def _poly(expr, ring):
 
 
 def _scalar(name, mv):
-    blades = [algebra.blade_display(m) for m in mv.blades if m]
+    blades = [mv.algebra.blade_display(m) for m in mv.blades if m]
     if blades:
         what = ("division by a multivector" if name == "inv" else f"cga.{name} of a multivector" if name[0].isalpha()
                 else f"comparison {name} of a multivector")
@@ -92,7 +92,7 @@ def where(condition, a, b):
     for m in set(a.terms) | set(b.terms):
         ea, eb = a[m].as_expr(), b[m].as_expr()
         ring, terms[m] = _poly(ea if ea == eb else sympy.Piecewise((ea, condition), (eb, True)), ring)
-    return MV(ring, {m: c.set_ring(ring) for m, c in terms.items()})
+    return MV(ring, {m: c.set_ring(ring) for m, c in terms.items()}, a._algebra_with(b))
 
 
 def final(base, polys):

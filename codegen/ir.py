@@ -112,10 +112,10 @@ class KernelBuilder:
     def poly(self, sym):
         return self.ring(sym)
 
-    def mv(self, blades, values) -> MV:
-        """A symbolic multivector with ``values`` (symbols, numbers or polynomials) on ``blades``."""
+    def mv(self, blades, values, alg=algebra.cga) -> MV:
+        """A symbolic multivector of ``alg`` with ``values`` (symbols, numbers or polynomials) on ``blades``."""
         return MV.from_coefficients(self.ring, blades, [self.ring(v) if not hasattr(v, "ring") else v
-                                                        for v in values])
+                                                        for v in values], alg)
 
     def let(self, sym: Symbol, value):
         """Define an intermediate symbol (in the order the kernel computes it)."""

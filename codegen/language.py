@@ -56,14 +56,15 @@ from .values import Constant, Value, _apply, _error, _functions, _ring
 
 
 class Type:
-    """A blade set: inputs of this type are (len(blades),) arrays of coefficients in that order."""
+    """A blade set of ``algebra``: inputs of this type are (len(blades),) arrays of coefficients in that
+    order. ``space`` is the name the algebra goes by in kernels (``cga``, ``pga``)."""
 
     kind = "multivector"
 
-    def __init__(self, name: str, blades, versor: bool = False):
-        self.name = name
+    def __init__(self, name: str, blades, versor: bool = False, algebra=algebras.cga, space="cga"):
+        self.name, self.algebra, self.space = name, algebra, space
         self.versor = versor          # values are versors: V Ṽ is a scalar, V e Ṽ a vector
-        self.blades = tuple(algebras.cga.blade_name(algebras.cga.mask_of(b)) for b in blades)
+        self.blades = tuple(algebra.blade_name(algebra.mask_of(b)) for b in blades)
         if len(set(self.blades)) != len(self.blades):
             raise algebras.InvalidAlgebraError(f"{name}: a blade is repeated in {self.blades}")
 
@@ -71,33 +72,38 @@ class Type:
     def size(self) -> int:
         return len(self.blades)
 
+    def _shown(self, blades) -> str:
+        return ", ".join(self.algebra.blade_display(self.algebra.mask_of(b)) for b in blades)
+
     def describe(self) -> str:
-        shown = ", ".join(algebras.cga.blade_display(algebras.cga.mask_of(b)) for b in self.blades)
-        return f"{self.name} ({shown})"
+        return f"{self.name} ({self._shown(self.blades)})"
 
     def declare(self, k, arg: str):
         """Declare the input ``arg`` on ``ir.KernelBuilder`` k; returns its symbols."""
         return k.multivector(arg, self.blades)
 
     def value(self, k, symbols) -> Value:
-        return Value(k.mv(self.blades, symbols))
+        return Value(k.mv(self.blades, symbols, self.algebra))
 
     def _check(self, kernel: str, mv, allowed):
-        masks = {algebras.cga.mask_of(b) for b in allowed}
+        if set(mv.terms) - {0} and mv.algebra != self.algebra:
+            raise _error(f"kernel {kernel!r}: the result is a value of {mv.algebra}, its return type "
+                         f"{self!r} is of {self.algebra}")
+        masks = {self.algebra.mask_of(b) for b in allowed}
         extra = [m for m in mv.blades if m not in masks]
         if extra:
-            names = ", ".join(algebras.cga.blade_display(m) for m in extra)
+            names = ", ".join(self.algebra.blade_display(m) for m in extra)
             raise _error(f"kernel {kernel!r}: the result has blades {names} outside its return type "
                          f"{self.describe()}")
 
     def outputs(self, kernel: str, mv):
         """(labels, numerator polynomials, denominator polynomial or None) of a result of this type."""
         self._check(kernel, mv, self.blades)
-        return ([algebras.cga.blade_display(algebras.cga.mask_of(b)) for b in self.blades],
+        return ([self.algebra.blade_display(self.algebra.mask_of(b)) for b in self.blades],
                 _functions().final(_ring(), [mv[b] for b in self.blades]), None)
 
     def __repr__(self):
-        return f"cga.{self.name}"
+        return f"{self.space}.{self.name}"
 
 
 class ScalarType(Type):
@@ -108,72 +114,95 @@ class ScalarType(Type):
 
 
 class PointType(Type):
-    """A point passed as its Euclidean (3,) coordinates; the algebra sees up(x)."""
+    """A point passed as its Euclidean (3,) coordinates x. The algebra sees Σ_b coordinate_b · b over
+    ``embedding`` {blade: (sign, axis or None)} (None: the weight blade, coefficient 1; a blade named
+    ``"norm"`` instead of an axis gets ½|x|², as CGA's e∞); a result is down-projected to
+    x_axis = sign · coefficient / weight."""
 
     kind = "point"
 
-    def __init__(self):
-        super().__init__("Point", ("e1", "e2", "e3", "ei", "eo"))
+    def __init__(self, embedding: dict, algebra=algebras.cga, space="cga"):
+        self.embedding = embedding
+        super().__init__("Point", tuple(embedding), algebra=algebra, space=space)
 
     @property
     def size(self) -> int:
         return 3
 
     def describe(self) -> str:
-        return "Point (e1, e2, e3, e∞, e0: up-projected from / down-projected to (3,))"
+        return f"Point ({self._shown(self.blades)}: up-projected from / down-projected to (3,))"
 
     def declare(self, k, arg):
         return k.array(arg, 3)
 
     def value(self, k, symbols):
-        from .symbolic import up
-        return Value(up(k.ring, [k.poly(s) for s in symbols]))
+        from sympy import QQ
+        x = [k.poly(s) for s in symbols]
+        coefficients = [k.ring.one if axis is None else
+                        (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) * QQ(sign, 2) if axis == "norm" else x[axis] * sign
+                        for sign, axis in self.embedding.values()]
+        return Value(k.mv(self.blades, coefficients, self.algebra))
 
     def outputs(self, kernel, mv):
         self._check(kernel, mv, self.blades)
-        weight = mv["eo"]
+        axes = {axis: (blade, sign) for blade, (sign, axis) in self.embedding.items() if axis not in ("norm", None)}
+        weight_blade = next(b for b, (_, axis) in self.embedding.items() if axis is None)
+        weight = mv[weight_blade]
         if not weight:
-            raise _error(f"kernel {kernel!r}: the result has no e0 part, so it is not a point to down-project")
-        *nums, weight = _functions().final(_ring(), [mv["e1"], mv["e2"], mv["e3"], weight])
+            raise _error(f"kernel {kernel!r}: the result has no {self._shown([weight_blade])} part, so it is not "
+                         f"a point to down-project")
+        *nums, weight = _functions().final(_ring(), [mv[axes[i][0]] * axes[i][1] for i in range(3)] + [weight])
         return ["x[0]", "x[1]", "x[2]"], nums, weight
 
 
 class _MultivectorFactory:
     """``cga.Multivector["e1", "e2", "ei"]``: the type of any blade set, in the order given."""
 
+    def __init__(self, algebra, space):
+        self.algebra, self.space = algebra, space
+
     def __getitem__(self, blades):
         blades = (blades,) if isinstance(blades, str) else tuple(blades)
-        shown = ", ".join(algebras.cga.blade_display(algebras.cga.mask_of(b)) for b in blades)
-        return Type(f"Multivector[{shown}]", blades)
+        shown = ", ".join(self.algebra.blade_display(self.algebra.mask_of(b)) for b in blades)
+        return Type(f"Multivector[{shown}]", blades, algebra=self.algebra, space=self.space)
 
     def __repr__(self):
-        return "cga.Multivector"
+        return f"{self.space}.Multivector"
 
 
 _VERSOR = ("s", "e12", "e13", "e23", "e1i", "e2i", "e3i", "e123i", "eio", "e12io", "e13io", "e23io")
 
 
-class ConformalAlgebra(algebras.Algebra):
-    """G(4,1) in the null basis (equal to ``codegen.algebras.cga``, sharing its tables) with the kernel
-    language's types and constants as attributes."""
+class KernelAlgebra(algebras.Algebra):
+    """An ``Algebra`` with the language's types, constants and scalar functions as attributes; equal to
+    the plain algebra ``base`` and sharing its tables. Subclasses declare the types."""
+
+    sqrt, cos, sin, exp, log, abs, atan2, where = (staticmethod(functools.partial(_apply, n)) for n in
+                                                   ("sqrt", "cos", "sin", "exp", "log", "abs", "atan2", "where"))
+
+    def __init__(self, base: algebras.Algebra, space: str):
+        super().__init__(signature=base.signature, basis=base.basis)
+        self._tables = base._tables
+        self.space = space
+        self.Multivector = _MultivectorFactory(base, space)
+
+
+class ConformalAlgebra(KernelAlgebra):
+    """G(4,1) in the null basis (equal to ``codegen.algebras.cga``) with the kernel language's types."""
 
     Scalar = ScalarType("Scalar", ("s",))
     Vector = Type("Vector", ("e1", "e2", "e3"))
-    Point = PointType()
+    Point = PointType({"e1": (1, 0), "e2": (1, 1), "e3": (1, 2), "ei": (1, "norm"), "eo": (1, None)})
     Plane = Type("Plane", ("e1", "e2", "e3", "ei"))
     Sphere = Type("Sphere", ("e1", "e2", "e3", "ei", "eo"))
     Line = Type("Line", ("e12", "e13", "e23", "e1i", "e2i", "e3i"))
     Rotor = Type("Rotor", _VERSOR[:4], versor=True)
     Motor = Type("Motor", _VERSOR[:8], versor=True)
     Versor = Type("Versor", _VERSOR, versor=True)
-    Multivector = _MultivectorFactory()
     e1, e2, e3, einf, eo = (Constant(n) for n in ("e1", "e2", "e3", "ei", "eo"))
-    sqrt, cos, sin, exp, log, abs, atan2, where = (staticmethod(functools.partial(_apply, n)) for n in
-                                                   ("sqrt", "cos", "sin", "exp", "log", "abs", "atan2", "where"))
 
     def __init__(self):
-        super().__init__(signature=(4, 1, 0), basis="null")
-        self._tables = algebras.cga._tables
+        super().__init__(algebras.cga, "cga")
 
 
 cga = ConformalAlgebra()

@@ -1,4 +1,5 @@
-"""Symbolic multivectors: {blade mask: polynomial} over a sympy sparse polynomial ring.
+"""Symbolic multivectors: {blade mask: polynomial} over a sympy sparse polynomial ring, in any
+``codegen.algebras.Algebra`` (G(4,1) in the null basis unless told otherwise).
 
 Products expand through the numeric tables of ``algebra`` and drop every coefficient that is
 identically zero, so the blade set of a result *is* its type (the prune pass happens as we go).
@@ -11,7 +12,7 @@ from fractions import Fraction
 
 from sympy import QQ, Rational
 
-from . import algebra
+from . import algebra, algebras
 
 
 def _qq(c):
@@ -19,31 +20,44 @@ def _qq(c):
 
 
 class MV:
-    """A symbolic multivector of G(4,1) in the null basis."""
+    """A symbolic multivector of ``algebra`` (default: G(4,1) in the null basis).
 
-    __slots__ = ("ring", "terms")
+    A multivector with only a scalar part is the same in every algebra: it takes the algebra of the
+    other operand of a sum or product, so numbers and scalar functions need no algebra of their own."""
 
-    def __init__(self, ring, terms=None):
+    __slots__ = ("ring", "terms", "algebra")
+
+    def __init__(self, ring, terms=None, algebra=algebras.cga):
         self.ring = ring
         self.terms = {m: c for m, c in (terms or {}).items() if c}
+        self.algebra = algebra
 
     # -- construction -------------------------------------------------------------------------
     @classmethod
-    def from_coefficients(cls, ring, blades, coefficients):
+    def from_coefficients(cls, ring, blades, coefficients, algebra=algebras.cga):
         return cls(ring, {algebra.mask_of(b) if isinstance(b, str) else b: ring(c)
-                          for b, c in zip(blades, coefficients)})
+                          for b, c in zip(blades, coefficients)}, algebra)
 
     @classmethod
     def scalar(cls, ring, value):
         return cls(ring, {0: ring(value)})
 
     def __getitem__(self, blade):
-        mask = algebra.mask_of(blade) if isinstance(blade, str) else blade
+        mask = self.algebra.mask_of(blade) if isinstance(blade, str) else blade
         return self.terms.get(mask, self.ring.zero)
 
     @property
     def blades(self) -> tuple[int, ...]:
-        return tuple(sorted(self.terms, key=lambda m: (algebra.grade(m), algebra.vectors_of(m))))
+        return tuple(sorted(self.terms, key=lambda m: (algebras.grade(m), self.algebra.vectors_of(m))))
+
+    def _algebra_with(self, other):
+        """The algebra of a sum or product with ``other`` (a scalar-only operand adopts the other's)."""
+        if self.algebra == other.algebra or not set(other.terms) - {0}:
+            return self.algebra
+        if not set(self.terms) - {0}:
+            return other.algebra
+        from .ir import CodegenError
+        raise CodegenError(f"a value of {self.algebra} meets one of {other.algebra}: one kernel, one algebra")
 
     # -- linear structure ---------------------------------------------------------------------
     def __add__(self, other):
@@ -51,12 +65,12 @@ class MV:
         terms = dict(self.terms)
         for m, c in other.terms.items():
             terms[m] = terms.get(m, self.ring.zero) + c
-        return MV(self.ring, terms)
+        return MV(self.ring, terms, self._algebra_with(other))
 
     __radd__ = __add__
 
     def __neg__(self):
-        return MV(self.ring, {m: -c for m, c in self.terms.items()})
+        return MV(self.ring, {m: -c for m, c in self.terms.items()}, self.algebra)
 
     def __sub__(self, other):
         return self + (-self._coerce(other))
@@ -66,7 +80,7 @@ class MV:
 
     def scale(self, factor):
         factor = self.ring(_qq(factor)) if not hasattr(factor, "ring") else factor
-        return MV(self.ring, {m: c * factor for m, c in self.terms.items()})
+        return MV(self.ring, {m: c * factor for m, c in self.terms.items()}, self.algebra)
 
     def _coerce(self, other):
         if isinstance(other, MV):
@@ -76,7 +90,8 @@ class MV:
     # -- products -----------------------------------------------------------------------------
     def _product(self, other, kind):
         other = self._coerce(other)
-        table = algebra.product_table(kind)
+        alg = self._algebra_with(other)
+        table = alg.product_table(kind)
         zero = self.ring.zero
         out: dict[int, object] = {}
         for a, ca in self.terms.items():
@@ -87,7 +102,7 @@ class MV:
                 ab = ca * cb
                 for m, k in entry:
                     out[m] = out.get(m, zero) + ab * _qq(k)
-        return MV(self.ring, out)
+        return MV(self.ring, out, alg)
 
     def __mul__(self, other):
         if isinstance(other, MV):
@@ -106,25 +121,30 @@ class MV:
 
     # -- involutions and projections ----------------------------------------------------------
     def reverse(self):
-        return MV(self.ring, {m: c * algebra.reverse_sign(m) for m, c in self.terms.items()})
+        return MV(self.ring, {m: c * algebras.reverse_sign(m) for m, c in self.terms.items()}, self.algebra)
 
     def grade(self, *grades):
-        return MV(self.ring, {m: c for m, c in self.terms.items() if algebra.grade(m) in grades})
+        return MV(self.ring, {m: c for m, c in self.terms.items() if algebras.grade(m) in grades}, self.algebra)
 
     def dual(self):
-        """X I⁻¹ with I = e123∞0 (= e1 e2 e3 e+ e−, I² = −1, so I⁻¹ = −I)."""
-        return -(self * MV.scalar(self.ring, 1)._with_mask(algebra.PSEUDOSCALAR))
-
-    def _with_mask(self, mask):
-        return MV(self.ring, {mask: self.ring.one})
+        """X I⁻¹ with I the pseudoscalar (in CGA e123∞0 = e1 e2 e3 e+ e−, I² = −1, so I⁻¹ = −I)."""
+        alg = self.algebra
+        square = MV(self.ring, {alg.pseudoscalar: self.ring.one}, alg)
+        square = (square * square)[0]
+        if not square:
+            from .ir import CodegenError
+            raise CodegenError(f"dual(): the pseudoscalar of {alg} squares to 0 (a degenerate metric), so "
+                               f"X I⁻¹ does not exist; write the complement you mean with explicit blades")
+        return self * MV(self.ring, {alg.pseudoscalar: self.ring.one / square}, alg)
 
     def __repr__(self):
-        return " + ".join(f"({c.as_expr()})*{algebra.blade_display(m)}" for m, c in sorted(self.terms.items())) or "0"
+        return " + ".join(f"({c.as_expr()})*{self.algebra.blade_display(m)}"
+                          for m, c in sorted(self.terms.items())) or "0"
 
 
-def basis(ring, name):
-    """The basis blade ``name`` (e.g. 'e1', 'ei', 'eio') as a multivector with coefficient 1."""
-    return MV(ring, {algebra.mask_of(name): ring.one})
+def basis(ring, name, alg=algebras.cga):
+    """The basis blade ``name`` (e.g. 'e1', 'ei', 'eio') of ``alg`` as a multivector with coefficient 1."""
+    return MV(ring, {alg.mask_of(name): ring.one}, alg)
 
 
 def up(ring, x):

@@ -72,7 +72,7 @@ class Value:
     @property
     def blades(self) -> tuple[str, ...]:
         """Display names of the blades with a nonzero coefficient (the value's type)."""
-        return tuple(algebras.cga.blade_display(m) for m in self.mv.blades)
+        return tuple(self.mv.algebra.blade_display(m) for m in self.mv.blades)
 
     def _as_mv(self, other):
         if isinstance(other, Value):
@@ -185,21 +185,22 @@ def _apply(name, *args):
 
 
 class Constant(Value):
-    """A basis blade (``cga.e1``, ``cga.einf`` ...), made in the ring of the kernel being traced."""
+    """A basis blade (``cga.e1``, ``cga.einf``, ``pga.e0`` ...) of ``algebra``, made in the ring of the
+    kernel being traced."""
 
-    __slots__ = ("name",)
+    __slots__ = ("name", "algebra", "space")
 
-    def __init__(self, name: str):
+    def __init__(self, name: str, algebra=algebras.cga, space: str = "cga"):
         super().__init__(None)
-        self.name = name
+        self.name, self.algebra, self.space = name, algebra, space
 
     @property
     def mv(self):
         ring = _ring()
         if hasattr(ring, "basis_mv"):                   # a numeric backend (codegen.verify)
-            return ring.basis_mv(self.name)
+            return ring.basis_mv(self.name, self.algebra)
         from .symbolic import basis
-        return basis(ring, self.name)
+        return basis(ring, self.name, self.algebra)
 
     def __repr__(self):
-        return f"cga.{self.name}"
+        return f"{self.space}.{self.name}"

@@ -43,7 +43,7 @@ from .catalogue_build import build_catalogue, compile_kernel, load_catalogue, ou
 from .functions import magnitude
 from .language import _VERSOR
 from .values import as_value, building
-from .verify_clifford import CliffordMV, _backend
+from .verify_clifford import CliffordMV, backend
 
 TOL_EXPANSION = 1e-12
 TOL_CLIFFORD = 1e-9
@@ -78,6 +78,8 @@ def draw(typ, rng, cap: float, index: int = 0):
         return float(_signed_log(rng, 0.01, 100.0))
     if typ.kind == "point" or typ.name == "Vector":
         return _signed_log(rng, 1e-3, cap, 3)
+    if typ.space == "pga":
+        return _draw_pga(typ, rng, cap, index)
     if typ.name == "Plane":
         return np.concatenate([_unit(rng), [_signed_log(rng, 1e-3, cap)]])
     if typ.name == "Sphere":
@@ -85,9 +87,7 @@ def draw(typ, rng, cap: float, index: int = 0):
         return np.concatenate([c, [0.5 * (c @ c - r * r), 1.0]])
     if typ.name == "Line":
         from .language import cga
-        be = _backend()
-        p, q = (be.value(cga.Plane, draw(cga.Plane, rng, cap)).mv for _ in range(2))
-        return be.result(typ, p ^ q)
+        return _meet(cga.Plane, typ, rng, cap)
     if typ.versor:
         angle = np.pi if index == 0 else rng.uniform(0.0, np.pi)
         t = (0.0, 0.0, 0.0) if typ.name == "Rotor" else _signed_log(rng, 1e-3, cap, 3)
@@ -97,6 +97,33 @@ def draw(typ, rng, cap: float, index: int = 0):
         names = [_CGA.blade_name(_CGA.mask_of(n)) for n in _VERSOR]
         return np.array([v[names.index(n)] for n in typ.blades])
     return rng.normal(size=typ.size) * 10.0 ** rng.uniform(-1, 1, typ.size)
+
+
+def _meet(plane, line, rng, cap):
+    """A line: the meet (outer product) of two drawn planes."""
+    be = backend(plane.algebra)
+    p, q = (be.value(plane, draw(plane, rng, cap)).mv for _ in range(2))
+    return be.result(line, p ^ q)
+
+
+def _draw_pga(typ, rng, cap, index):
+    """PGA inputs: planes (unit normal, |d| ≤ cap), lines as meets, unit rotors cos(θ/2) + sin(θ/2) n·(e12,
+    e13, e23) (θ ∈ [0, π], π itself at index 0), translators 1 + ½ t·(e01, e02, e03), motors T R."""
+    from .language_pga import pga
+    if typ.name == "Plane":
+        return np.concatenate([_unit(rng), [_signed_log(rng, 1e-3, cap)]])
+    if typ.name == "Line":
+        return _meet(pga.Plane, typ, rng, cap)
+    if not typ.versor:
+        return rng.normal(size=typ.size) * 10.0 ** rng.uniform(-1, 1, typ.size)
+    angle = np.pi if index == 0 else rng.uniform(0.0, np.pi)
+    rotor = np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * _unit(rng)])
+    translator = np.concatenate([[1.0], 0.5 * _signed_log(rng, 1e-3, cap, 3)])
+    if typ.name in ("Rotor", "Translator"):
+        return rotor if typ.name == "Rotor" else translator
+    be = backend(typ.algebra)
+    motor = be.value(pga.Translator, translator).mv * be.value(pga.Rotor, rotor).mv
+    return be.result(typ, motor)
 
 
 # -- the symbolic expansion in float64 --------------------------------------------------------------
@@ -211,7 +238,7 @@ def _verify_kernel(spec, module, examples: int, seed: int) -> KernelReport:
         rep.failures.append((float("inf"), f"setting up raised {type(exc).__name__}: {exc}"))
         return rep
     uniform = set(spec.uniform)
-    be = _backend()
+    be = backend(ret.algebra)
     rng = np.random.default_rng([seed, zlib.crc32(spec.name.encode())])
 
     def flat(args):

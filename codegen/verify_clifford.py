@@ -1,8 +1,10 @@
 """The clifford side of ``cgaskin verify``: the language's values wrapping ``clifford`` multivectors.
 
-G(4,1) of ``clifford.conformalize(Cl(3))``, with e∞ = e− + e+ and e0 = ½(e− − e+) as in
-``codegen.algebras.cga``; ``|`` is the left contraction ``<<``, ``.dual()`` is X I⁻¹ with
-I = e1∧e2∧e3∧e∞∧e0, and scalar functions are evaluated in floats.
+Any ``codegen.algebras.Algebra`` G(p,q,r) is ``clifford.Cl(p, q, r)`` (the same order of orthonormal
+vectors: degenerate, positive, negative); our basis vector k is Σ_j to_orthonormal[k][j] · clifford's
+e(j+1) (for CGA: e∞ = e− + e+, e0 = ½(e− − e+)), our blade of mask m the outer product of its vectors.
+``|`` is the left contraction ``<<``, ``.dual()`` is X I⁻¹ with I our pseudoscalar, and scalar
+functions are evaluated in floats.
 """
 from __future__ import annotations
 
@@ -13,7 +15,6 @@ from . import algebras
 from .functions import NUMERIC, OPERATORS
 from .values import Value
 
-_CGA = algebras.cga
 
 
 class CliffordMV:
@@ -49,34 +50,36 @@ class CliffordMV:
         return CliffordMV(sum((self.x(g) for g in grades), 0 * self.x))
 
     def dual(self):
-        return CliffordMV(self.x * _backend().I_inv)
+        return CliffordMV(self.x * _BACKENDS[id(self.x.layout)].I_inv)
 
 
 class CliffordBackend:
-    """The conformal layout of clifford, our null-basis blades in it, and the coefficient change."""
+    """The clifford layout of an algebra, our blades in it, and the change of coefficients."""
 
-    def __init__(self):
-        layout, _, stuff = clifford.conformalize(clifford.Cl(3)[0])
-        self.layout = layout
-        b = layout.blades
-        vectors = [b["e1"], b["e2"], b["e3"], stuff["einf"], stuff["eo"]]   # bit order of algebras.cga
-        self.one = layout.scalar
+    def __init__(self, alg: algebras.Algebra):
+        self.algebra = alg
+        p, q, r = alg.signature
+        self.layout, blades = clifford.Cl(p, q, r)
+        ortho = [blades[f"e{j + 1}"] for j in range(alg.dimension)]
+        vectors = [sum((float(c) * ortho[j] for j, c in alg.to_orthonormal[k].items()), 0 * ortho[0])
+                   for k in range(alg.dimension)]
+        self.one = self.layout.scalar
         self.blades = []
-        for mask in range(32):
+        for mask in range(alg.n_blades):
             blade = self.one
-            for k in range(5):
-                if mask >> k & 1:
-                    blade = blade ^ vectors[k]
+            for k in alg.vectors_of(mask):
+                blade = blade ^ vectors[k]
             self.blades.append(blade)
         self.to_ours = np.linalg.inv(np.array([bl.value for bl in self.blades]).T)
-        self.I_inv = self.blades[31].inv()
+        top = self.blades[alg.pseudoscalar]
+        self.I_inv = top.inv() if (top * top).value[0] else None
 
     # the "ring" protocol of values._scalar_mv / Constant.mv
     def scalar_mv(self, q):
         return CliffordMV(float(q) * self.one)
 
-    def basis_mv(self, name: str):
-        return CliffordMV(self.blades[_CGA.mask_of(name)])
+    def basis_mv(self, name: str, alg=None):
+        return CliffordMV(self.blades[self.algebra.mask_of(name)])
 
     def function(self, name, *args):           # values._apply: scalar functions, conditions, where
         if name == "where":
@@ -84,30 +87,40 @@ class CliffordBackend:
         xs = [float(a.x.value[0]) for a in args]
         return OPERATORS[name](*xs) if name in OPERATORS else CliffordMV(NUMERIC[name](*xs) * self.one)
 
+    def _on(self, blades, coefficients):
+        return CliffordMV(sum((float(c) * self.blades[self.algebra.mask_of(n)] for n, c in zip(blades, coefficients)),
+                              0 * self.one))
+
     def value(self, typ, arr) -> Value:
         if typ.kind == "scalar":
             return Value(CliffordMV(float(arr) * self.one))
-        if typ.kind == "point":
+        if typ.kind == "point":                 # up-projection (language.PointType's embedding)
             x = np.asarray(arr, float)
-            mv = sum(x[i] * self.blades[1 << i] for i in range(3)) + 0.5 * float(x @ x) * self.blades[8] + self.blades[16]
-            return Value(CliffordMV(mv))
-        return Value(CliffordMV(sum((float(c) * self.blades[_CGA.mask_of(n)] for n, c in zip(typ.blades, arr)),
-                                    0 * self.one)))
+            coefficients = [1.0 if axis is None else 0.5 * sign * float(x @ x) if axis == "norm" else sign * x[axis]
+                            for sign, axis in typ.embedding.values()]
+            return Value(self._on(typ.blades, coefficients))
+        return Value(self._on(typ.blades, arr))
 
     def coefficients(self, mv) -> np.ndarray:
         return self.to_ours @ mv.x.value
 
     def result(self, typ, mv) -> np.ndarray:
         c = self.coefficients(mv)
-        if typ.kind == "point":
-            return c[[1, 2, 4]] / c[16]
-        return c[[_CGA.mask_of(n) for n in typ.blades]]
+        if typ.kind == "point":                 # down-projection: sign · coefficient / weight per axis
+            by_axis = {axis: (self.algebra.mask_of(b), sign) for b, (sign, axis) in typ.embedding.items()}
+            weight = c[by_axis[None][0]]
+            return np.array([by_axis[i][1] * c[by_axis[i][0]] / weight for i in range(3)])
+        return c[[self.algebra.mask_of(n) for n in typ.blades]]
 
 
-_BACKEND: list = []
+_BACKENDS: dict = {}                           # id(clifford layout) -> its backend (for dual)
 
 
-def _backend() -> CliffordBackend:
-    if not _BACKEND:
-        _BACKEND.append(CliffordBackend())
-    return _BACKEND[0]
+def backend(alg: algebras.Algebra = algebras.cga) -> CliffordBackend:
+    """The (cached) clifford backend of ``alg``."""
+    for be in _BACKENDS.values():
+        if be.algebra == alg:
+            return be
+    be = CliffordBackend(alg)
+    _BACKENDS[id(be.layout)] = be
+    return be
