@@ -164,10 +164,19 @@ def render() -> dict[str, str]:
     return files
 
 
-def build(check: bool = False, directory: Path = GENERATED_DIR, log=print) -> int:
-    """Write generated/ (or, with check=True, compare it). Returns the number of stale files."""
+def report_table() -> str:
+    """The op-count table of the built-in kernels (``cgaskin build --report``)."""
+    from . import opcount
+    return opcount.table([(k.name, opcount.op_counts(k), "") for k in (make() for make in catalogue.KERNELS)])
+
+
+def build(check: bool = False, directory: Path = GENERATED_DIR, log=print, report: bool = False) -> int:
+    """Write generated/ (or, with check=True, compare it). Returns the number of stale files. ``report``:
+    log the op-count table too."""
     start = time.perf_counter()
     files = render()
+    if report:
+        log(report_table())
     stale = []
     for name, text in files.items():
         path = directory / name

@@ -13,12 +13,16 @@ from __future__ import annotations
 
 from .kernel_parts import AFFINE_LABELS, LOG, MOTOR, PLANE, VERSOR
 from .kernels_exp_log import versor_exp, versor_log
-from .kernels_geometry import (barycentric, plane_from_normal_distance, plane_from_points, plane_transform,
-                               point_plane_distance, segment_plane)
+from . import kernels_language as language
+from .kernels_geometry import barycentric, plane_from_points, plane_transform, segment_plane
 from .kernels_skinning import affine_point, sandwich_versor_point, versor_to_affine
-from .kernels_versor import (gp_motor_motor, gp_versor_versor, inverse_versor, reverse_versor, versor_dilator,
-                             versor_from_matrix, versor_normalise, versor_residual, versor_rotor,
-                             versor_rotor_quaternion, versor_translator)
+from .kernels_versor import (versor_dilator, versor_from_matrix, versor_normalise, versor_residual, versor_rotor,
+                             versor_rotor_quaternion)
+
+versor_translator, gp_motor_motor, gp_versor_versor, reverse_versor, inverse_versor, plane_from_normal_distance, \
+    point_plane_distance = map(language.built, (
+        language.versor_translator, language.gp_motor_motor, language.gp_versor_versor, language.reverse_versor,
+        language.inverse_versor, language.plane_from_normal_distance, language.point_plane_distance))
 
 # the order of the kernels in generated/kernels.py
 KERNELS = (versor_translator, versor_rotor, versor_rotor_quaternion, versor_dilator, versor_from_matrix,

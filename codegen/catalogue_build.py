@@ -30,11 +30,10 @@ from pathlib import Path
 
 import sympy
 
-from . import algebras, build, printer
+from . import algebras, build, hoist, opcount, printer
 from .ir import CodegenError, Kernel, KernelBuilder, as_expr
 from .language import KernelSpec
 from .values import as_value, building
-from .symbolic import MV
 
 RESERVED = {"out", "row", "r", "hoisted", "math", "np", "njit"}
 
@@ -79,10 +78,6 @@ def load_catalogue(source):
     return kernels, label
 
 
-def _declare(k, params):
-    return [(name, typ, typ.declare(k, name)) for name, typ in params]
-
-
 def _check_names(spec, params):
     for name, _ in params:
         if name in RESERVED or name.startswith("_") or re.fullmatch(r"t\d+|l\d+_\d+|hoisted\d*|inv_weight", name):
@@ -98,19 +93,12 @@ def _divide(nums, den):
     return [as_expr(n) if d == 1 else sympy.Mul(as_expr(n), sympy.Pow(d, -1)) for n in nums]
 
 
-def op_count(kernel: Kernel) -> int:
-    """Operations of the kernel after CSE (sympy's count_ops: +, −, ×, ÷, functions)."""
-    exprs = [e for _, e in kernel.lets] + list(kernel.outputs)
-    reps, reduced = sympy.cse(exprs, order="none")
-    return int(sympy.count_ops([e for _, e in reps] + list(reduced)))
-
-
 def compile_kernel(spec: KernelSpec) -> Compiled:
     """Trace ``spec`` on symbolic inputs; the scalar Kernel and, for uniform inputs, the hoisted stages."""
     params, ret = spec.signature()
     _check_names(spec, params)
     k = KernelBuilder(spec.name, spec.doc)
-    declared = _declare(k, params)
+    declared = hoist.declare(k, params)
     names = [str(s) for _, _, syms in declared for s in syms]
     clash = sorted({n for n in names if names.count(n) > 1})
     if clash:
@@ -126,102 +114,17 @@ def compile_kernel(spec: KernelSpec) -> Compiled:
         value = as_value(result)
         if value is None:
             raise CodegenError(f"kernel {spec.name!r}: returned {type(result).__name__}, not a cga value")
-        pruned = _versor_pruned(k, declared, value.mv, ret)
+        pruned = hoist.versor_pruned(k, declared, value.mv, ret)
         labels, nums, den = ret.outputs(spec.name, pruned)
     dropped = tuple(ret.algebra.blade_display(m) for m in value.mv.blades if m not in pruned.terms)
     k.output(labels, _divide(nums, den))
     kernel = k.build()
     # hoisting splits polynomials: outputs with roots, functions or branches run unstaged
     polynomial = all(hasattr(x, "ring") for x in (*nums, den) if x is not None)
-    stages = _stage(spec, k, declared, nums, den) if spec.uniform and polynomial else None
-    if stages is not None and op_count(stages[1]) >= op_count(kernel):
+    stages = hoist.stage(spec, k, declared, nums, den) if spec.uniform and polynomial else None
+    if stages is not None and opcount.total(opcount.op_counts(stages[1])) >= opcount.total(opcount.op_counts(kernel)):
         stages = None                                # hoisting would not save work per row
     return Compiled(spec, kernel, stages, spec.uniform, len(labels), dropped)
-
-
-def _versor_pruned(k, declared, mv, ret):
-    """``mv`` without the blades outside ``ret`` whose coefficients vanish whenever the versor-typed
-    inputs are versors (V Ṽ scalar and V e Ṽ a vector for every basis vector e): the expansion treats
-    the coefficients as independent, so V x Ṽ of a symbolic 12-blade V has an e123∞0 part that is 0
-    for every actual versor. Decided exactly: the coefficient reduces to 0 modulo a Gröbner basis of
-    those conditions (grevlex, per input). Any other blade is left for ``ret`` to refuse."""
-    allowed = {ret.algebra.mask_of(b) for b in ret.blades}
-    extra = [m for m in mv.terms if m not in allowed]
-    versors = [(typ, syms) for _, typ, syms in declared if typ.versor]
-    if not extra or not versors:
-        return mv
-    gb = []
-    for typ, syms in versors:
-        V = k.mv(typ.blades, syms, typ.algebra)
-        conditions = [c for m, c in (V * V.reverse()).terms.items() if m]
-        for e in range(typ.algebra.dimension):
-            S = V * MV(k.ring, {1 << e: k.ring.one}, typ.algebra) * V.reverse()
-            conditions += [c for m, c in S.terms.items() if algebras.grade(m) != 1]
-        if conditions:
-            gb += sympy.groebner([as_expr(c) for c in conditions], *syms, order="grevlex").exprs
-    gens = k.ring.symbols
-    vanishing = [m for m in extra if sympy.reduced(as_expr(mv.terms[m]), gb, *gens, order="grevlex")[1] == 0]
-    return MV(k.ring, {m: c for m, c in mv.terms.items() if m not in vanishing}, mv.algebra)
-
-
-def _stage(spec, k, declared, nums, den):
-    """Split the outputs into coefficients over the uniform symbols and a row part (module docstring)."""
-    ring = k.ring
-    uniform = {s for name, _, syms in declared if name in spec.uniform for s in syms}
-    row_idx = [i for i, s in enumerate(ring.symbols) if s not in uniform]
-    if not row_idx:
-        return None
-    hoisted, index = [], {}
-
-    def split(p):
-        groups: dict = {}
-        for mon, c in p.terms():
-            rm = tuple(mon[i] for i in row_idx)
-            um = tuple(0 if i in row_idx else e for i, e in enumerate(mon))
-            groups[rm] = groups.get(rm, ring.zero) + ring.from_dict({um: c})
-        return groups
-
-    row_den = den is not None and any(rm != (0,) * len(row_idx) for rm in split(den))
-    scale = den if (den is not None and not row_den) else None
-
-    def row_poly(p):
-        terms = []
-        for rm, c in split(p).items():
-            mono = sympy.Mul(*(ring.symbols[i] ** e for i, e in zip(row_idx, rm)))
-            if c.is_ground and scale is None:
-                terms.append(as_expr(c) * mono)
-                continue
-            key = tuple(sorted(c.items()))
-            if key not in index:
-                index[key] = len(hoisted)
-                hoisted.append(c)
-            terms.append(sympy.Symbol(f"hoisted{index[key]}", real=True) * mono)
-        return sympy.Add(*terms)
-
-    rows = [row_poly(n) for n in nums]
-    if row_den:
-        d = row_poly(den)
-        rows = [sympy.Mul(r, sympy.Pow(d, -1)) for r in rows]
-    if not hoisted:
-        return None
-    params = [(name, typ) for name, typ, _ in declared]
-    u = KernelBuilder(f"_{spec.name}_uniform", f"The part of ``{spec.name}`` that depends only on "
-                      f"{', '.join(spec.uniform)}: computed once per batch call.")
-    _declare(u, [p for p in params if p[0] in spec.uniform])
-    values = [as_expr(c) for c in hoisted]
-    if scale is not None:
-        (inv,) = u.intermediate("inv_weight")
-        u.let(inv, 1 / as_expr(scale))
-        values = [v * inv for v in values]
-    u.output([f"hoisted[{j}]" for j in range(len(values))], values)
-    r = KernelBuilder(f"_{spec.name}_row", f"The per-row part of ``{spec.name}``, given ``_{spec.name}_uniform``.")
-    if len(hoisted) == 1:
-        r.scalar("hoisted0")
-    else:
-        r.array("hoisted", len(hoisted))
-    _declare(r, [p for p in params if p[0] not in spec.uniform])
-    r.output([f"out[{j}]" for j in range(len(rows))], rows)
-    return u.build(), r.build()
 
 
 def _shape(typ, batch: bool) -> str:
@@ -238,10 +141,10 @@ def _documented(c: Compiled, source: str) -> Kernel:
     lines.append(f"returns : {'float' if c.out_size == 1 else f'tuple of {c.out_size} floats'}  {ret.describe()}")
     if c.dropped:
         lines.append(f"Dropped from the result: {', '.join(c.dropped)} (zero whenever the versor inputs are versors).")
-    lines.append(f"Operations after CSE: {op_count(c.kernel)}.")
+    lines.append(f"Operations after CSE: {opcount.describe(opcount.op_counts(c.kernel))}.")
     if c.stages:
-        lines.append(f"Batch form: {op_count(c.stages[1])} per row, {op_count(c.stages[0])} once per call "
-                     f"({len(c.stages[0].outputs)} hoisted values).")
+        lines.append(f"Batch form per row: {opcount.describe(opcount.op_counts(c.stages[1]))}; once per call: "
+                     f"{opcount.describe(opcount.op_counts(c.stages[0]))} ({len(c.stages[0].outputs)} hoisted values).")
     doc = "\n".join(("    " + ln if ln and i else ln) for i, ln in enumerate(lines))
     doc = doc.replace("\\", "\\\\").replace('"""', '\\"\\"\\"')
     return replace(c.kernel, doc=doc)
@@ -287,8 +190,20 @@ def _algebras_line(compiled) -> str:
     return "; ".join(build.ALGEBRA if alg == algebras.cga else str(alg) for alg in used)
 
 
-def render(source) -> tuple[str, dict[str, str], str]:
-    """(module text, {kernel name: its block of the text}, catalogue file name) of a catalogue."""
+def report_table(compiled) -> str:
+    """The op-count table of compiled kernels (``--report``): the scalar form, and for hoisted batch forms
+    the per-row and once-per-call parts."""
+    rows = []
+    for c in compiled:
+        rows.append((c.spec.name, opcount.op_counts(c.kernel), "scalar form"))
+        if c.stages:
+            rows.append(("  per row", opcount.op_counts(c.stages[1]), "batch form, hoisted"))
+            rows.append(("  per call", opcount.op_counts(c.stages[0]), f"{len(c.stages[0].outputs)} hoisted values"))
+    return opcount.table(rows)
+
+
+def render(source) -> tuple[str, dict[str, str], str, list]:
+    """(module text, {kernel name: its block of the text}, catalogue file name, compiled kernels)."""
     specs, label = load_catalogue(source)
     compiled = [compile_kernel(s) for s in specs]
     chunks = {}
@@ -307,7 +222,7 @@ def render(source) -> tuple[str, dict[str, str], str]:
                         f"GENERATED by `cgaskin build --catalogue {label}` — do not edit by hand.",
                         f"generator: {build.GENERATOR_VERSION}", f"{build.SYMPY_LINE}{sympy.__version__}",
                         f"algebra: {_algebras_line(compiled)}", f"spec hash: {spec_hash}"]) + build.HEADER_END
-    return header + "\n" + body, chunks, label
+    return header + "\n" + body, chunks, label, compiled
 
 
 def output_path(label: str, out) -> Path:
@@ -316,11 +231,14 @@ def output_path(label: str, out) -> Path:
     return out if out.suffix == ".py" else out / (Path(label).stem + ".py")
 
 
-def build_catalogue(source, out, check: bool = False, log=print) -> int:
+def build_catalogue(source, out, check: bool = False, log=print, report: bool = False) -> int:
     """Write the module of a catalogue (or, with check=True, compare it). Returns the number of stale
-    kernels (1 when only the header or the file as a whole differs, 0 when up to date)."""
+    kernels (1 when only the header or the file as a whole differs, 0 when up to date). ``report``: log
+    the op-count table too."""
     start = time.perf_counter()
-    text, chunks, label = render(source)
+    text, chunks, label, compiled = render(source)
+    if report:
+        log(report_table(compiled))
     path = output_path(label, out)
     if isinstance(source, (str, Path)) and Path(source).resolve() == path.resolve():
         raise CodegenError(f"catalogue {source}: --out would overwrite the catalogue itself; choose another folder")

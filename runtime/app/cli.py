@@ -16,11 +16,11 @@ def _build(args) -> int:
         print(f"cgaskin build needs sympy: pip install 'cgaskin[build]' ({exc})", file=sys.stderr)
         return 2
     if args.catalogue is None:
-        stale = build.build(check=args.check)
+        stale = build.build(check=args.check, report=args.report)
     else:
         from ..codegen.ir import CodegenError
         try:
-            stale = catalogue_build.build_catalogue(args.catalogue, args.out, check=args.check)
+            stale = catalogue_build.build_catalogue(args.catalogue, args.out, check=args.check, report=args.report)
         except CodegenError as exc:                   # the user's catalogue: one line, no traceback
             print(f"cgaskin build: error: {exc}", file=sys.stderr)
             return 2
@@ -85,6 +85,8 @@ def main(argv=None) -> int:
                                                        "(cgaskin.codegen.kernel)")
     p.add_argument("--out", metavar="DIR", help="with --catalogue: the folder to write FILE's module into "
                                                 "(DIR/<FILE stem>.py), or the .py file itself")
+    p.add_argument("--report", action="store_true", help="print each kernel's operation counts after CSE "
+                                                         "(mul, add, div, sqrt, other; hoisted parts apart)")
     p.set_defaults(run=_build)
 
     p = sub.add_parser("verify", help="run every kernel of a catalogue three ways (generated, clifford, the "

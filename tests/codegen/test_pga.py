@@ -52,7 +52,7 @@ def test_the_pga_catalogue_verifies_against_clifford(pga_module):
 
 def test_the_motor_sandwich_is_hoisted_into_an_affine_map(pga_module):
     _, module = pga_module
-    assert "Batch form: " in module.move.__doc__ and "(12 hoisted values)" in module.move.__doc__
+    assert "Batch form per row: " in module.move.__doc__ and "(12 hoisted values)" in module.move.__doc__
     assert "algebra: G(3,0,1)" in module.__doc__
 
 
