@@ -231,10 +231,29 @@ def output_path(label: str, out) -> Path:
     return out if out.suffix == ".py" else out / (Path(label).stem + ".py")
 
 
-def build_catalogue(source, out, check: bool = False, log=print, report: bool = False) -> int:
-    """Write the module of a catalogue (or, with check=True, compare it). Returns the number of stale
-    kernels (1 when only the header or the file as a whole differs, 0 when up to date). ``report``: log
-    the op-count table too."""
+def _target_files(compiled, label: str, targets, folder: Path) -> dict[Path, str]:
+    """{path: text} of the catalogue's files for the targets other than numba (``codegen.targets``)."""
+    from . import targets as printers
+    kernels = [c.kernel for c in compiled]
+    uniform = {c.spec.name: c.uniform for c in compiled if c.uniform}
+    spec_hash = build._digest("\n".join(k.spec_text for k in kernels))
+    files = {}
+    for target in targets:
+        if target != "numba":
+            header = build.target_header(f"cgaskin build --catalogue {label} --target {target}", spec_hash,
+                                         _algebras_line(compiled))
+            for name, text in printers.render(target, kernels, prefix=Path(label).stem, header=header,
+                                              uniform=uniform).items():
+                files[folder / name] = text
+    return files
+
+
+def build_catalogue(source, out, check: bool = False, log=print, report: bool = False,
+                    targets=("numba",)) -> int:
+    """Write the files of a catalogue (or, with check=True, compare them): the numba module, and for
+    each other target in ``targets`` its files beside it (``<stem>.h``, ``<stem>.glsl``, ...). Returns
+    the number of stale kernels and files (a stale numba module counts its stale kernels, at least 1;
+    0 when up to date). ``report``: log the op-count table too."""
     start = time.perf_counter()
     text, chunks, label, compiled = render(source)
     if report:
@@ -242,25 +261,37 @@ def build_catalogue(source, out, check: bool = False, log=print, report: bool = 
     path = output_path(label, out)
     if isinstance(source, (str, Path)) and Path(source).resolve() == path.resolve():
         raise CodegenError(f"catalogue {source}: --out would overwrite the catalogue itself; choose another folder")
-    current = path.read_text(encoding="utf-8") if path.exists() else None
-    unchanged = current is not None and build._without_sympy_version(current) == build._without_sympy_version(text)
-    elapsed = time.perf_counter() - start
-    if not check:
-        if current != text:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text, encoding="utf-8")
-        log(f"wrote {path} ({len(chunks)} kernels, {elapsed:.1f} s)" if current != text else f"{path} is up to date")
-        return 0
-    if unchanged:
-        log(f"{path} is up to date ({len(chunks)} kernels, {elapsed:.1f} s)")
-        return 0
-    hint = f"run `cgaskin build --catalogue {label} --out {out}`"
-    if current is None:
-        log(f"stale: {path} does not exist; {hint}")
-        return 1
-    stale = [name for name, chunk in chunks.items() if chunk not in current]
-    for name in stale:
-        log(f"stale: {path}: kernel {name!r} differs from what {label} emits; {hint}")
-    if not stale:
-        log(f"stale: {path}: the header or the kernel list differs from what {label} emits; {hint}")
-    return max(1, len(stale))
+    files = {path: text} if "numba" in targets else {}
+    files.update(_target_files(compiled, label, targets, path.parent))
+    hint = f"run `cgaskin build --catalogue {label} --out {out}" + \
+        (f" --target {','.join(targets)}`" if tuple(targets) != ("numba",) else "`")
+    stale, written = 0, []
+    for file, wanted in files.items():
+        current = file.read_text(encoding="utf-8") if file.exists() else None
+        if current is not None and build._without_sympy_version(current) == build._without_sympy_version(wanted):
+            if not check and current != wanted:
+                file.write_text(wanted, encoding="utf-8")
+            continue
+        if not check:
+            file.parent.mkdir(parents=True, exist_ok=True)
+            file.write_text(wanted, encoding="utf-8")
+            written.append(file)
+        elif current is None:
+            log(f"stale: {file} does not exist; {hint}")
+            stale += 1
+        elif file == path:
+            names = [name for name, chunk in chunks.items() if chunk not in current]
+            for name in names:
+                log(f"stale: {file}: kernel {name!r} differs from what {label} emits; {hint}")
+            if not names:
+                log(f"stale: {file}: the header or the kernel list differs from what {label} emits; {hint}")
+            stale += max(1, len(names))
+        else:
+            log(f"stale: {file} differs from what {label} emits; {hint}")
+            stale += 1
+    timing = f"({len(chunks)} kernels, {time.perf_counter() - start:.1f} s)"
+    if written:
+        log(f"wrote {', '.join(map(str, written))} {timing}")
+    elif not stale:
+        log(f"{', '.join(map(str, files))} {'is' if len(files) == 1 else 'are'} up to date {timing}")
+    return stale

@@ -14,3 +14,26 @@ skinning  also emit the skinning loop/shader (needs ``versor_to_affine`` and ``a
 Layouts are the numba kernels' (flat arrays in the blade order of generated/layout.py); expressions are
 printed by ``codegen.expressions`` in each target's ``Dialect``.
 """
+from __future__ import annotations
+
+import importlib
+
+from ..ir import CodegenError
+
+#: every target ``cgaskin build --target`` knows; numba is the default (``codegen.printer``)
+TARGETS = ("numba", "c", "glsl", "wgsl", "cuda")
+
+
+def parse_targets(text: str) -> tuple[str, ...]:
+    """('numba', 'c', ...) of a comma-separated ``--target`` value; CodegenError naming an unknown one."""
+    names = tuple(dict.fromkeys(t.strip() for t in text.split(",") if t.strip()))
+    unknown = [t for t in names if t not in TARGETS]
+    if unknown or not names:
+        raise CodegenError(f"--target {text!r}: unknown target {unknown or text!r}; choose from {', '.join(TARGETS)}")
+    return names
+
+
+def render(target: str, kernels, *, prefix: str, header, uniform=None, skinning: bool = False) -> dict[str, str]:
+    """{file name: text} of one target other than numba (the contract above)."""
+    module = importlib.import_module(f"{__name__}.{target}")
+    return module.render(kernels, prefix=prefix, header=list(header), uniform=uniform or {}, skinning=skinning)

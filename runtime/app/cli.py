@@ -15,15 +15,18 @@ def _build(args) -> int:
     except ImportError as exc:                        # sympy is a build-time extra
         print(f"cgaskin build needs sympy: pip install 'cgaskin[build]' ({exc})", file=sys.stderr)
         return 2
-    if args.catalogue is None:
-        stale = build.build(check=args.check, report=args.report)
-    else:
-        from ..codegen.ir import CodegenError
-        try:
-            stale = catalogue_build.build_catalogue(args.catalogue, args.out, check=args.check, report=args.report)
-        except CodegenError as exc:                   # the user's catalogue: one line, no traceback
-            print(f"cgaskin build: error: {exc}", file=sys.stderr)
-            return 2
+    from ..codegen.ir import CodegenError
+    from ..codegen.targets import parse_targets
+    try:
+        targets = None if args.target is None else parse_targets(args.target)
+        if args.catalogue is None:
+            stale = build.build(check=args.check, report=args.report, targets=targets)
+        else:
+            stale = catalogue_build.build_catalogue(args.catalogue, args.out, check=args.check, report=args.report,
+                                                    targets=targets or ("numba",))
+    except CodegenError as exc:                       # the user's catalogue or arguments: one line, no traceback
+        print(f"cgaskin build: error: {exc}", file=sys.stderr)
+        return 2
     return 1 if (args.check and stale) else 0
 
 
@@ -85,6 +88,9 @@ def main(argv=None) -> int:
                                                        "(cgaskin.codegen.kernel)")
     p.add_argument("--out", metavar="DIR", help="with --catalogue: the folder to write FILE's module into "
                                                 "(DIR/<FILE stem>.py), or the .py file itself")
+    p.add_argument("--target", metavar="LIST", help="comma-separated printers: numba (the default), c, glsl, "
+                                                    "wgsl, cuda; generated/<target>/ for the built-in catalogue "
+                                                    "(kept fresh once there), beside the module for --catalogue")
     p.add_argument("--report", action="store_true", help="print each kernel's operation counts after CSE "
                                                          "(mul, add, div, sqrt, other; hoisted parts apart)")
     p.set_defaults(run=_build)
