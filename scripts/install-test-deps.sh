@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Install what the tests need beyond pip: the assimp command line (FBX/DAE), and the real clients
-# that tests/clients open cgaskin's files in: three.js in headless Chromium (Debian chromium, npm
-# three + puppeteer-core, no browser download) and Blender as a module (bpy, Python 3.11 only).
+# Install what the tests need beyond pip: the assimp command line (FBX/DAE), the real clients that
+# tests/clients open cgaskin's files in: three.js in headless Chromium (Debian chromium, npm three +
+# puppeteer-core, no browser download) and Blender as a module (bpy, Python 3.11 only), and what
+# tests/targets runs the generated C, GLSL and WGSL with, all on the CPU: a C compiler, glslang's
+# validator, Mesa's EGL/llvmpipe OpenGL 4.5 (GLSL compute with fp64) and lavapipe Vulkan (WebGPU).
 # Idempotent: when everything is there it only checks (a few seconds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,6 +16,12 @@ command -v assimp >/dev/null 2>&1 || missing+=(assimp-utils)
 command -v chromium >/dev/null 2>&1 || missing+=(chromium)
 command -v node >/dev/null 2>&1 || missing+=(nodejs)
 command -v npm >/dev/null 2>&1 || missing+=(npm)
+command -v cc >/dev/null 2>&1 || missing+=(gcc libc6-dev)
+command -v glslangValidator >/dev/null 2>&1 || missing+=(glslang-tools)
+# Mesa: EGL + llvmpipe (moderngl's headless GL 4.5) and lavapipe (wgpu's Vulkan adapter)
+for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri mesa-vulkan-drivers libvulkan1; do
+    dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+done
 if [ ${#missing[@]} -gt 0 ]; then
     echo "install-test-deps: apt-get install ${missing[*]}"
     sudo=""
@@ -44,4 +52,4 @@ else
     echo "install-test-deps: bpy 5.0.1 needs Python 3.11, this is $("$PYTHON" -V 2>&1):" \
          "the Blender tests cannot run here (they skip, and fail under CGASKIN_CI=1)" >&2
 fi
-echo "install-test-deps: assimp, chromium, three, puppeteer-core$("$PYTHON" -c 'import sys; print(", bpy" if sys.version_info[:2] == (3, 11) else "")') ready"
+echo "install-test-deps: assimp, chromium, three, puppeteer-core, cc, glslang, Mesa EGL/lavapipe$("$PYTHON" -c 'import sys; print(", bpy" if sys.version_info[:2] == (3, 11) else "")') ready"
