@@ -59,8 +59,9 @@ def assert_rows_close(what: str, got, ref, tol: float, inputs=None) -> None:
     if not ok.all():
         row = int(np.argwhere(~ok)[0][0])
         detail = "" if inputs is None else f"\ninputs of row {row}: {[np.asarray(a)[row].tolist() for a in inputs]}"
-        err = np.nanmax(np.where(finite, np.abs(got - ref) / scale, np.inf))
-        raise AssertionError(f"{what}: {int((~ok).sum())} outputs differ (worst scaled error {err:.3g} > {tol}); "
+        with np.errstate(invalid="ignore"):
+            err = np.nanmax(np.where(finite & ~ok, np.abs(got - ref) / scale, 0.0))
+        raise AssertionError(f"{what}: {int((~ok).sum())} outputs differ (worst finite scaled error {err:.3g}, tolerance {tol}; NaN/inf mismatches count as differences); "
                              f"row {row}: got {got[row].tolist()}, numba {ref[row].tolist()}{detail}")
 
 
