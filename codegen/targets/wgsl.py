@@ -10,7 +10,7 @@ Conventions of the written files (``<prefix>.wgsl``, ``<prefix>_skin.wgsl``):
   Both values are computed and one is picked, so a division by zero in the untaken branch only makes
   a value that is thrown away.
 - WGSL has no ``cbrt``: ``<prefix>_cbrt`` (exp2/log2 plus one Newton step: within 1 ulp of f32 in the
-  tests), and no NaN literal: ``<prefix>_nan()`` bitcasts a private variable (a constant expression
+  tests; subnormal inputs as the implementation treats them), and no NaN literal: ``<prefix>_nan()`` bitcasts a private variable (a constant expression
   that evaluates to NaN is a shader-creation error in WGSL). Only a Piecewise without a final
   ``True`` branch reaches it (the numba side's ``math.nan``).
 - Literals are f32 (suffix ``f``). A literal outside f32's range keeps its intent: a magnitude above
@@ -19,8 +19,12 @@ Conventions of the written files (``<prefix>.wgsl``, ``<prefix>_skin.wgsl``):
   ``x > 0``); the kernel's comment lists every such replacement.
 - Names that WGSL reserves (``filter``, ``target``, ``move``, ...) or that would shadow a builtin the
   kernels call (``sin``, ``select``, ...) get a trailing ``_``.
-- No f64 variant: wgpu-native's ``shader-f64`` computes exp/sin on f64 wrongly on lavapipe, and WebGPU
-  itself has no f64.
+- ``<prefix>_f64.wgsl``: the same functions (same names, include one file or the other) in f64 for
+  wgpu-native's ``shader-f64`` feature (WebGPU itself has no f64), literals suffixed ``lf``, for the
+  kernels that need no function but sqrt, abs, sign, max, min (``F64_FUNCTIONS``): SPIR-V's
+  GLSL.std.450 defines sin, cos, exp, log, atan2, acos, the hyperbolic functions (and the exp2/log2
+  of the cbrt helper) for 16- and 32-bit floats only, and on lavapipe they silently return garbage
+  on f64. The file's leading comment lists the kernels left out.
 
 The skinning file is self-contained (WGSL has no #include): it repeats the two kernels it calls.
 """
@@ -70,14 +74,38 @@ def _shortest(x: np.float32) -> str:
     return text if any(c in text for c in ".e") else text + ".0"
 
 
-def dialect(prefix: str, replaced: list) -> Dialect:
-    """The WGSL dialect for kernels named ``<prefix>_*``; replaced literals are appended to
-    ``replaced``."""
+def f64_literal(value) -> str:
+    """``value`` as a WGSL f64 literal (``lf``: naga's f64 suffix)."""
+    v = float(value)
+    if not np.isfinite(v):
+        raise ValueError(f"no WGSL literal for {v}")
+    text = repr(v)
+    return (text if any(c in text for c in ".e") else text + ".0") + "lf"
+
+
+#: the functions a kernel may call to have an f64 variant (see the module docstring)
+F64_FUNCTIONS = frozenset({sympy.Abs, sympy.sign, sympy.Max, sympy.Min, sympy.Piecewise})
+
+
+def f64_ready(kernel) -> bool:
+    """Whether ``kernel`` calls nothing but ``F64_FUNCTIONS`` and sqrt (no cbrt, no transcendental)."""
+    exprs = [e for _, e in kernel.lets] + list(kernel.outputs)
+    for e in exprs:
+        if any(type(f) not in F64_FUNCTIONS for f in e.atoms(sympy.Function)):
+            return False
+        if any(p.exp.is_Rational and p.exp.q == 3 for p in e.atoms(sympy.Pow)):
+            return False
+    return True
+
+
+def dialect(prefix: str, replaced: list, real: str = "f32") -> Dialect:
+    """The WGSL dialect for kernels named ``<prefix>_*`` in ``real`` (f32 or f64); replaced f32
+    literals are appended to ``replaced``."""
     return Dialect(
-        "wgsl", FUNCTIONS,
-        literal=lambda v: f32_literal(v, replaced),
+        "wgsl" if real == "f32" else "wgsl-f64", FUNCTIONS,
+        literal=(lambda v: f32_literal(v, replaced)) if real == "f32" else f64_literal,
         select=lambda cond, a, b: f"select({b}, {a}, {cond})",
-        conjunction=(" && ", " || "), true="true", nan=f"{prefix}_nan()",
+        conjunction=(" && ", " || "), true="true", nan=f"{prefix}_nan()" if real == "f32" else f"f64({prefix}_nan())",
         sqrt="sqrt({})", cbrt=f"{prefix}_cbrt({{}})")
 
 
@@ -86,7 +114,8 @@ def helpers(prefix: str) -> dict[str, str]:
     return {
         f"{prefix}_cbrt": f"""\
 // Real cube root (WGSL has none): exp2(log2|x| / 3), then one Newton step y -= (y - |x| / y^2) / 3,
-// which takes the result to within 1 ulp; 0 and infinities pass through.
+// which takes the result to within about 1 ulp (tested); 0 and infinities pass through; subnormal
+// inputs follow the implementation (WGSL may flush them to zero).
 fn {prefix}_cbrt(x: f32) -> f32 {{
     let ax = abs(x);
     let y0 = exp2(log2(ax) * (1.0f / 3.0f));
@@ -120,31 +149,31 @@ def safe_kernel(kernel):
                    outputs=tuple(e.xreplace(renames) for e in kernel.outputs))
 
 
-def param_type(inp) -> str:
-    return "f32" if inp.kind == "scalar" else f"array<f32, {len(inp.symbols)}>"
+def param_type(inp, real: str = "f32") -> str:
+    return real if inp.kind == "scalar" else f"array<{real}, {len(inp.symbols)}>"
 
 
-def kernel_function(kernel, prefix: str, uniform=()) -> str:
-    """WGSL source of ``fn <prefix>_<name>(...) -> array<f32, N>`` with a leading comment."""
+def kernel_function(kernel, prefix: str, uniform=(), real: str = "f32") -> str:
+    """WGSL source of ``fn <prefix>_<name>(...) -> array<real, N>`` with a leading comment."""
     original = kernel
     kernel = safe_kernel(kernel)
     replaced: list = []
-    assigns, values = kernel_body(kernel, dialect(prefix, replaced))
+    assigns, values = kernel_body(kernel, dialect(prefix, replaced, real))
     lines = [f"// {line}".rstrip() for line in original.doc.strip().splitlines()]
     for inp, orig in zip(kernel.inputs, original.inputs):
         role = " (uniform: the same for every row of a batch)" if orig.name in uniform else ""
         layout = "" if inp.kind != "multivector" else " = (" + ", ".join(map(str, inp.labels)) + ")"
-        lines.append(f"//   {inp.name}: {param_type(inp)}{layout}{role}")
-    lines.append(f"//   returns array<f32, {len(values)}> = ({', '.join(original.output_labels)})"
+        lines.append(f"//   {inp.name}: {param_type(inp, real)}{layout}{role}")
+    lines.append(f"//   returns array<{real}, {len(values)}> = ({', '.join(original.output_labels)})"
                  + (f", shape {original.output_shape} row-major" if len(original.output_shape) > 1 else ""))
     lines += [f"//   f32 literal out of range: {r}" for r in dict.fromkeys(replaced)]
-    params = ", ".join(f"{i.name}: {param_type(i)}" for i in kernel.inputs)
-    lines.append(f"fn {prefix}_{kernel.name}({params}) -> array<f32, {len(values)}> {{")
+    params = ", ".join(f"{i.name}: {param_type(i, real)}" for i in kernel.inputs)
+    lines.append(f"fn {prefix}_{kernel.name}({params}) -> array<{real}, {len(values)}> {{")
     for inp in kernel.inputs:
         if inp.kind != "scalar":
             lines += [f"    let {s.name} = {inp.name}[{j}];" for j, s in enumerate(inp.symbols)]
     lines += [f"    let {name} = {code};" for name, code, _ in assigns]
-    lines.append(f"    return array<f32, {len(values)}>(")
+    lines.append(f"    return array<{real}, {len(values)}>(")
     lines += [f"        {v}," for v in values]
     lines.append("    );")
     lines.append("}")
@@ -162,14 +191,25 @@ def library(functions: list[str], prefix: str) -> str:
 
 
 def render(kernels, *, prefix, header, uniform=None, skinning=False) -> dict[str, str]:
-    """{``<prefix>.wgsl``: every kernel as an f32 function, ``<prefix>_skin.wgsl`` (with
-    ``skinning``): the skinning compute shader}. See the module docstring for the conventions."""
+    """{``<prefix>.wgsl``: every kernel as an f32 function, ``<prefix>_f64.wgsl``: the kernels
+    that f64 can run (``f64_ready``) as f64 functions, ``<prefix>_skin.wgsl`` (with ``skinning``):
+    the skinning compute shader}. See the module docstring for the conventions."""
     from .wgsl_skin import skin_shader
     uniform = uniform or {}
     functions = [kernel_function(k, prefix, uniform.get(k.name, ())) for k in kernels]
     intro = (f"// Kernels as WGSL functions (f32): fn {prefix}_<kernel>(inputs) -> array<f32, N>.\n"
              "// Inputs are flat arrays (multivectors in the blade order listed per kernel) or f32 scalars.\n")
     files = {f"{prefix}.wgsl": comment(header) + intro + "\n" + library(functions, prefix)}
+    ready = [k for k in kernels if f64_ready(k)]
+    if ready:
+        left_out = [k.name for k in kernels if not f64_ready(k)]
+        intro = (f"// The kernels in f64, for wgpu-native's shader-f64 feature (WebGPU has no f64): the same\n"
+                 f"// functions as {prefix}.wgsl (include one file or the other), f64 values and inputs.\n"
+                 "// Only kernels that need no function but sqrt, abs, sign, max, min: SPIR-V defines the\n"
+                 "// transcendental functions for 16/32-bit floats only.\n"
+                 + (f"// Left out (f32 only): {', '.join(left_out)}\n" if left_out else ""))
+        functions = [kernel_function(k, prefix, uniform.get(k.name, ()), "f64") for k in ready]
+        files[f"{prefix}_f64.wgsl"] = comment(header) + intro + "\n" + library(functions, prefix)
     if skinning:
         by_name = {k.name: k for k in kernels}
         missing = [n for n in ("versor_to_affine", "affine_point") if n not in by_name]

@@ -24,8 +24,6 @@ LAYOUT = """\
 // Dispatch ceil(count / {wg}) workgroups; above 65535 workgroups use a 2D dispatch (x, y): the
 // index is global_invocation_id.x + global_invocation_id.y * num_workgroups.x * {wg}.
 // A blend may also take affines computed elsewhere (e.g. on the CPU): the bones pass is optional.
-// Note: WGSL lets an implementation assume values are finite, so a driver may drop the NaN/inf
-// checks of the bad counts; the skinned positions do not depend on them.
 """
 
 
@@ -50,6 +48,16 @@ struct {p}SkinParams {{
 @group(0) @binding(5) var<storage, read> {p}_weights: array<f32>;
 @group(0) @binding(6) var<storage, read_write> {p}_skinned: array<f32>;
 @group(0) @binding(7) var<storage, read_write> {p}_bad: array<atomic<u32>, 3>;
+
+// WGSL lets an implementation assume floats are finite (lavapipe folds x * 0.0 == 0.0 to true), so
+// NaN and infinities are recognised from their bits.
+fn {p}_is_nan(x: f32) -> bool {{
+    return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u;
+}}
+
+fn {p}_is_finite(x: f32) -> bool {{
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}}
 """
     load_versor = ", ".join(f"{p}_versors[v + {j}u]" for j in range(12))
     store_affine = "\n".join(f"    {p}_affines[v + {j}u] = a[{j}];" for j in range(12))
@@ -78,7 +86,7 @@ fn {p}_skin_blend(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     for (var k = 0u; k < n_influences; k = k + 1u) {{
         let slot = i * n_influences + k;
         let w = {p}_weights[slot];
-        if (!(w >= 0.0f)) {{
+        if (w < 0.0f || {p}_is_nan(w)) {{
             atomicAdd(&{p}_bad[1], 1u);
         }}
         let b = {p}_joints[slot];
@@ -95,7 +103,7 @@ fn {p}_skin_blend(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     {p}_skinned[3u * i] = x[0];
     {p}_skinned[3u * i + 1u] = x[1];
     {p}_skinned[3u * i + 2u] = x[2];
-    if (!(x[0] * 0.0f + x[1] * 0.0f + x[2] * 0.0f == 0.0f)) {{   // false for NaN and inf
+    if (!({p}_is_finite(x[0]) && {p}_is_finite(x[1]) && {p}_is_finite(x[2]))) {{
         atomicAdd(&{p}_bad[2], 1u);
     }}
 }}

@@ -17,7 +17,8 @@ class Unavailable(Exception):
 @functools.lru_cache(maxsize=None)
 def device():
     """(the wgpu device, the adapter's description): lavapipe (llvmpipe) if present, else the first
-    Vulkan adapter. Raises ``Unavailable``."""
+    Vulkan adapter, with the ``shader-f64`` feature where the adapter has it (``has_f64``). Raises
+    ``Unavailable``."""
     # Mesa's Vulkan drivers complain on stderr without a runtime dir (headless CI has none)
     os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="cgaskin-xdg-"))
     try:
@@ -32,7 +33,14 @@ def device():
         raise Unavailable("wgpu found no Vulkan adapter (Debian packages mesa-vulkan-drivers libvulkan1 "
                           "give lavapipe)")
     adapter = next((a for a in adapters if "llvmpipe" in a.info["device"]), adapters[0])
-    return adapter.request_device_sync(), f"{adapter.info['device']} ({adapter.info['description']})"
+    features = ["shader-f64"] if "shader-f64" in adapter.features else []
+    return (adapter.request_device_sync(required_features=features),
+            f"{adapter.info['device']} ({adapter.info['description']})")
+
+
+def has_f64() -> bool:
+    """Whether the device runs f64 shaders (wgpu-native's ``shader-f64``)."""
+    return "shader-f64" in device()[0].features
 
 
 def compile_shader(source: str):
@@ -88,14 +96,14 @@ def dispatch(module, entry: str, bindings: dict, count: int, workgroup: int = 64
     return out
 
 
-def kernel_harness(kernels, prefix: str, library_source: str) -> str:
+def kernel_harness(kernels, prefix: str, library_source: str, real: str = "f32") -> str:
     """A compute shader with one entry point ``run_<kernel>`` per kernel: row r of the flat input
-    buffer (binding 0, f32, the kernel's inputs side by side) through ``<prefix>_<kernel>`` into row r
-    of the output buffer (binding 1, f32, N per row). ``library_source`` is the rendered
-    ``<prefix>.wgsl``."""
+    buffer (binding 0, ``real``, the kernel's inputs side by side) through ``<prefix>_<kernel>`` into
+    row r of the output buffer (binding 1, ``real``, N per row). ``library_source`` is the rendered
+    ``<prefix>.wgsl`` (or ``<prefix>_f64.wgsl`` with real="f64")."""
     lines = [library_source,
-             "@group(0) @binding(0) var<storage, read> harness_in: array<f32>;",
-             "@group(0) @binding(1) var<storage, read_write> harness_out: array<f32>;"]
+             f"@group(0) @binding(0) var<storage, read> harness_in: array<{real}>;",
+             f"@group(0) @binding(1) var<storage, read_write> harness_out: array<{real}>;"]
     for k in kernels:
         width = sum(1 if i.kind == "scalar" else len(i.symbols) for i in k.inputs)
         n = len(k.outputs)
@@ -106,7 +114,7 @@ def kernel_harness(kernels, prefix: str, library_source: str) -> str:
                 at += 1
             else:
                 size = len(inp.symbols)
-                args.append(f"array<f32, {size}>(" + ", ".join(f"harness_in[base + {at + j}u]"
+                args.append(f"array<{real}, {size}>(" + ", ".join(f"harness_in[base + {at + j}u]"
                                                                  for j in range(size)) + ")")
                 at += size
         lines += ["@compute @workgroup_size(64)",
@@ -120,12 +128,12 @@ def kernel_harness(kernels, prefix: str, library_source: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def run_kernel(module, kernel, inputs) -> np.ndarray:
+def run_kernel(module, kernel, inputs, dtype=np.float32) -> np.ndarray:
     """(rows, N) float64: the shader's ``run_<kernel>`` on ``inputs`` (one float64 array per kernel
-    input, (rows, size) or (rows,); sent as f32)."""
+    input, (rows, size) or (rows,); sent as ``dtype``, the harness's real type)."""
     rows = len(inputs[0])
     flat = np.concatenate([np.asarray(a, np.float64).reshape(rows, -1) for a in inputs], axis=1)
-    out = np.zeros((rows, len(kernel.outputs)), np.float32)
+    out = np.zeros((rows, len(kernel.outputs)), dtype)
     result = dispatch(module, f"run_{kernel.name}",
-                      {0: (flat.astype(np.float32), "read"), 1: (out, "read_write")}, rows)
+                      {0: (flat.astype(dtype), "read"), 1: (out, "read_write")}, rows)
     return result[1].astype(np.float64)

@@ -29,7 +29,7 @@ from hypothesis.extra import numpy as hnp
 from tests.helpers.target_cases import builtin_kernels
 
 #: rows of every drawn array that hypothesis draws element by element (the rest: numpy, seeded by it)
-HYPOTHESIS_ROWS = 8
+HYPOTHESIS_ROWS = 2
 
 
 def _uniform(src, rows, width, lo, hi):
