@@ -157,3 +157,29 @@ def test_headers_compile_clean_as_static_inline(c_libs, tmp_path, catalogue, pre
     pointers = ", ".join(f"(void (*)(void)){prefix}_{k.name}_batch" for k in kernels)
     (tmp_path / "use.c").write_text(f'#include "{include}"\n\nvoid (*const {prefix}_table[])(void) = {{{pointers}}};\n')
     compile_c(c_libs["cc"], tmp_path / "use.c", tmp_path / "use.o", ["-c"])
+
+
+def test_example_program_skins_fox(c_libs, models_dir, tmp_path):
+    """examples/c_skinning end to end: export.py writes the model and the headers, cc builds
+    skin_model.c, the program skins Fox and its positions equal cgaskin.skin."""
+    import importlib.util
+    import subprocess
+    from pathlib import Path
+
+    import cgaskin
+    example = Path(__file__).resolve().parents[2] / "examples" / "c_skinning"
+    spec = importlib.util.spec_from_file_location("c_skinning_export", example / "export.py")
+    export = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(export)
+    # its command line, in this process (a second Python would import cgaskin and numba again)
+    export.main([str(models_dir / "Fox.glb"), str(tmp_path / "fox.bin"), "--clip", "Run", "--time", "0.37",
+                 "--headers", str(tmp_path / "build")])
+    compile_c(c_libs["cc"], example / "skin_model.c", tmp_path / "skin_model", [f"-I{tmp_path / 'build'}"])
+    run = subprocess.run([str(tmp_path / "skin_model"), str(tmp_path / "fox.bin"), str(tmp_path / "skinned.bin")],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "bad joints 0, bad weights 0, non-finite 0" in run.stdout
+    rig, pose = fox_posed(models_dir)
+    ref = cgaskin.skin(rig, pose)
+    out = np.fromfile(tmp_path / "skinned.bin", "<f8").reshape(ref.shape)
+    assert np.abs(out - ref).max() <= TOL * np.abs(ref).max()
