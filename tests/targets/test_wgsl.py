@@ -324,3 +324,33 @@ def test_cbrt_within_an_ulp(harness):
     xs = xs[np.abs(xs) >= np.finfo(np.float32).tiny].astype(np.float64)
     got = wgpu_compute.run_kernel(module, kernel, [xs])[:, 0]
     assert np.max(np.abs(got - np.cbrt(xs)) / np.abs(np.cbrt(xs))) <= 1.5 * 2.0 ** -24
+
+
+def test_untaken_branches_do_not_leak(catalogues, harness):
+    """WGSL's select computes both values: the kernels' guarded divisions (versor_log's θ / sin(θ/2)
+    at θ = 0, versor_exp's series switch, Shepperd's four branches in versor_from_matrix, whose
+    untaken ones divide by √0 for a half-turn) must still give numba's finite results."""
+    kernels, module, _ = catalogues["cgaskin"]
+    axes = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [1.0, 2.0, -2.0]])
+    angles = np.array([0.0, 1e-6, 1e-3, 0.1, np.pi / 2, np.pi])
+    rotors = np.empty((len(axes) * len(angles), 12))
+    module.versor_rotor_batch(np.repeat(axes, len(angles), axis=0), np.tile(angles, len(axes)), rotors)
+    others = np.empty((3, 12))
+    module.versor_translator_batch(np.array([[0.0, 0, 0], [1.0, -2.0, 3.0], [0, 0, 1e-6]]), others)
+    versors = np.concatenate([rotors, others])
+    affines = np.empty((len(versors), 12))
+    module.versor_to_affine_batch(versors, affines)
+    matrices = np.zeros((len(versors), 4, 4))
+    matrices[:, :3] = affines.reshape(-1, 3, 4)
+    matrices[:, 3, 3] = 1.0
+    # angle π is versor_log's singular point (the rotation axis is undetermined there)
+    regular = versors[np.concatenate([np.tile(angles < 3, len(axes)), [True] * len(others)])]
+    logs = np.empty((len(regular), 7))
+    module.versor_log_batch(regular, logs)
+    for name, inputs in (("versor_log", [regular]), ("versor_exp", [logs]),
+                         ("versor_from_matrix", [matrices.reshape(-1, 16)]), ("versor_normalise", [versors])):
+        inputs = [np.asarray(a, np.float32).astype(np.float64) for a in inputs]
+        want = reference(module, kernels[name], inputs)
+        assert np.isfinite(want).all(), name
+        got = wgpu_compute.run_kernel(harness["cgaskin", "f32"], kernels[name], inputs)
+        compare(got, want, inputs, TOL, name)
