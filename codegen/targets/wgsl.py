@@ -1,18 +1,20 @@
 """WGSL (WebGPU) printer of the kernel IR: every kernel as an f32 WGSL function, and the skinning
 compute shader (per-bone ``versor_to_affine``, per-vertex blend).
 
-Conventions of the written files (``<prefix>.wgsl``, ``<prefix>_skin.wgsl``):
+Conventions of the written files (``<prefix>.wgsl``, ``<prefix>_f64.wgsl``, ``<prefix>_skin.wgsl``):
 
-- Kernel ``k`` is ``fn <prefix>_k(<input>: array<f32, size>, <scalar input>: f32, ...) -> array<f32, N>``:
+- Kernel ``k`` is ``fn <prefix>_k(<input>: array<f32, size>, <scalar>: f32, ...) -> array<f32, N>``:
   multivector inputs in the blade order of generated/layout.py, arrays flat (a 3x4 matrix row-major
   as 12), N the number of outputs (1 for a scalar result: take ``[0]``). Every value is f32.
 - WGSL has no conditional expression: a Piecewise prints as ``select(false_value, true_value, cond)``.
   Both values are computed and one is picked, so a division by zero in the untaken branch only makes
   a value that is thrown away.
-- WGSL has no ``cbrt``: ``<prefix>_cbrt`` (exp2/log2 plus one Newton step: within 1 ulp of f32 in the
-  tests; subnormal inputs as the implementation treats them), and no NaN literal: ``<prefix>_nan()`` bitcasts a private variable (a constant expression
-  that evaluates to NaN is a shader-creation error in WGSL). Only a Piecewise without a final
-  ``True`` branch reaches it (the numba side's ``math.nan``).
+- WGSL has no ``cbrt``: ``<prefix>_cbrt`` (exp2/log2 plus one Newton step: within about 1 ulp of
+  f32 in the tests; subnormal inputs as the implementation treats them), and no NaN literal:
+  ``<prefix>_nan()`` bitcasts a private variable (a constant expression that evaluates to NaN is a
+  shader-creation error in WGSL). Only a Piecewise without a final ``True`` branch reaches it (the
+  numba side's ``math.nan``). WGSL lets an implementation assume values are finite, so NaN/inf
+  results are not guaranteed to propagate as in numba (on lavapipe they do in the tests).
 - Literals are f32 (suffix ``f``). A literal outside f32's range keeps its intent: a magnitude above
   the largest f32 prints as ±3.4028235e38f, a nonzero magnitude below the smallest normal f32 as
   ±1.1754944e-38f (GPUs may flush subnormals to zero, which would turn ``x > 1e-300`` into
@@ -37,6 +39,7 @@ import sympy
 
 from ..expressions import Dialect, kernel_body
 from .wgsl_names import safe_name
+from .wgsl_skin import skin_shader
 
 #: f32 limits for literals (see the module docstring)
 F32_MAX = float(np.finfo(np.float32).max)
@@ -105,7 +108,8 @@ def dialect(prefix: str, replaced: list, real: str = "f32") -> Dialect:
         "wgsl" if real == "f32" else "wgsl-f64", FUNCTIONS,
         literal=(lambda v: f32_literal(v, replaced)) if real == "f32" else f64_literal,
         select=lambda cond, a, b: f"select({b}, {a}, {cond})",
-        conjunction=(" && ", " || "), true="true", nan=f"{prefix}_nan()" if real == "f32" else f"f64({prefix}_nan())",
+        conjunction=(" && ", " || "), true="true",
+        nan=f"{prefix}_nan()" if real == "f32" else f"f64({prefix}_nan())",
         sqrt="sqrt({})", cbrt=f"{prefix}_cbrt({{}})")
 
 
@@ -194,7 +198,6 @@ def render(kernels, *, prefix, header, uniform=None, skinning=False) -> dict[str
     """{``<prefix>.wgsl``: every kernel as an f32 function, ``<prefix>_f64.wgsl``: the kernels
     that f64 can run (``f64_ready``) as f64 functions, ``<prefix>_skin.wgsl`` (with ``skinning``):
     the skinning compute shader}. See the module docstring for the conventions."""
-    from .wgsl_skin import skin_shader
     uniform = uniform or {}
     functions = [kernel_function(k, prefix, uniform.get(k.name, ())) for k in kernels]
     intro = (f"// Kernels as WGSL functions (f32): fn {prefix}_<kernel>(inputs) -> array<f32, N>.\n"
