@@ -65,6 +65,13 @@ def assert_rows_close(what: str, got, ref, tol: float, inputs=None) -> None:
                              f"row {row}: got {got[row].tolist()}, numba {ref[row].tolist()}{detail}")
 
 
+def user_catalogue(tmp_path_factory):
+    """``user_kernels`` built once per session for both the C and the CUDA tests (one folder, so its
+    cache hits): (Kernel IRs, uniform dict, numba module)."""
+    from tests.helpers.target_cases import user_kernels
+    return user_kernels(str(tmp_path_factory.getbasetemp() / "c_cuda_user_catalogue"))
+
+
 def fox_posed(models_dir: Path, clip: str = "Run", time: float = 0.37):
     """(rig, pose) of the shared Fox.glb at ``time`` seconds into ``clip``."""
     import cgaskin

@@ -11,9 +11,9 @@ import pytest
 from hypothesis import given, strategies as st
 
 from cgaskin.codegen.targets import c as c_target
-from tests.helpers.target_cases import builtin_kernels, input_arrays, reference, user_kernels
+from tests.helpers.target_cases import builtin_kernels, input_arrays, reference
 
-from ._c_cuda_common import assert_rows_close, c_compiler, compile_c, fox_posed
+from ._c_cuda_common import assert_rows_close, c_compiler, compile_c, fox_posed, user_catalogue
 
 ROWS = 6
 TOL = 1e-12
@@ -49,7 +49,7 @@ def build_library(cc, directory, kernels, prefix, uniform, skinning):
 def c_libs(tmp_path_factory):
     cc = c_compiler()
     kernels, module = builtin_kernels()
-    user, user_uniform, user_module = user_kernels(str(tmp_path_factory.mktemp("user_catalogue")))
+    user, user_uniform, user_module = user_catalogue(tmp_path_factory)
     return {
         "builtin": (*build_library(cc, tmp_path_factory.mktemp("c_builtin"), kernels, "cgaskin", {}, True),
                     kernels, module, {}),

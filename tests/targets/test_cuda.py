@@ -20,9 +20,9 @@ import pytest
 from hypothesis import given, strategies as st
 
 from cgaskin.codegen.targets import cuda as cuda_target
-from tests.helpers.target_cases import builtin_kernels, input_arrays, reference, user_kernels
+from tests.helpers.target_cases import builtin_kernels, input_arrays, reference
 
-from ._c_cuda_common import assert_rows_close, fox_posed, require
+from ._c_cuda_common import assert_rows_close, fox_posed, require, user_catalogue
 from ._cuda_sim_runner import read_message, write_message
 
 ROWS = 5
@@ -58,7 +58,7 @@ def sim(tmp_path_factory):
     require([] if importlib.util.find_spec("numba_cuda") else ["numba-cuda (PyPI)"], "the CUDA simulator test")
     directory = tmp_path_factory.mktemp("cuda_sim")
     kernels, module = builtin_kernels()
-    user, user_uniform, user_module = user_kernels(str(tmp_path_factory.mktemp("user_catalogue")))
+    user, user_uniform, user_module = user_catalogue(tmp_path_factory)
     catalogues = {"builtin": (kernels, module, {}, "cgaskin", True),
                   "user": (user, user_module, user_uniform, "userkernels", False)}
     paths = {}
@@ -144,7 +144,7 @@ def nvrtc_compile(source: str, name: str, headers: dict) -> tuple[bool, str]:
 
 
 @pytest.mark.parametrize("catalogue", ["builtin", "user"])
-def test_cuda_c_compiles_clean_with_nvrtc(catalogue, tmp_path):
+def test_cuda_c_compiles_clean_with_nvrtc(catalogue, tmp_path_factory):
     try:
         from cuda.bindings import nvrtc
         nvrtc.nvrtcVersion()
@@ -157,7 +157,7 @@ def test_cuda_c_compiles_clean_with_nvrtc(catalogue, tmp_path):
         files = cuda_target.render(kernels, prefix="cgaskin", header=HEADER, skinning=True)
         main = "cgaskin_skin.cuh"
     else:
-        kernels, uniform, _ = user_kernels(str(tmp_path / "user_catalogue"))
+        kernels, uniform, _ = user_catalogue(tmp_path_factory)
         files = cuda_target.render(kernels, prefix="userkernels", header=HEADER, uniform=uniform)
         main = "userkernels.cuh"
     ok, log = nvrtc_compile(f'#include "{main}"\n', "check.cu", {n: t for n, t in files.items() if n.endswith(".cuh")})
