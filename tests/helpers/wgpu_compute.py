@@ -58,9 +58,9 @@ def _pipeline(module, entry: str):
     return dev.create_compute_pipeline(layout="auto", compute={"module": module, "entry_point": entry})
 
 
-def dispatch(module, entry: str, bindings: dict, count: int, workgroup: int = 64) -> dict:
-    """Run ``entry`` of ``module`` for ``count`` invocations (ceil(count / workgroup) workgroups)
-    on group 0.
+def dispatch(module, entry: str, bindings: dict, count: int, workgroup: int = 64, groups=None) -> dict:
+    """Run ``entry`` of ``module`` for ``count`` invocations (ceil(count / workgroup) workgroups,
+    or the (x, y) workgroups ``groups``) on group 0.
 
     bindings : {binding: (array, kind)} with kind "uniform", "read" or "read_write"; the arrays are
                sent as they are (give them the shader's dtype, e.g. float32, uint32)
@@ -85,7 +85,7 @@ def dispatch(module, entry: str, bindings: dict, count: int, workgroup: int = 64
     compute = encoder.begin_compute_pass()
     compute.set_pipeline(pipeline)
     compute.set_bind_group(0, group)
-    compute.dispatch_workgroups(max(1, -(-count // workgroup)), 1, 1)
+    compute.dispatch_workgroups(*(groups or (max(1, -(-count // workgroup)), 1)), 1)
     compute.end()
     dev.queue.submit([encoder.finish()])
     out = {}

@@ -249,22 +249,22 @@ def skin_shader(catalogues):
     return wgpu_compute.compile_shader(catalogues["cgaskin"][2]["cgaskin_skin.wgsl"])[0]
 
 
-def gpu_blend(shader, rest, joints, weights, affines):
-    """(skinned (n, 3) float64, bad counts (3,)) of the blend pass."""
+def gpu_blend(shader, rest, joints, weights, affines, groups=None):
+    """(skinned (n, 3) float64, bad counts (3,)) of the blend pass (``groups``: a 2D dispatch)."""
     n, k = joints.shape
     params = np.array([len(affines), n, k, 0], np.uint32)
     out = wgpu_compute.dispatch(shader, "cgaskin_skin_blend", {
         0: (params, "uniform"), 2: (np.asarray(affines, np.float32), "read_write"),
         3: (np.asarray(rest, np.float32), "read"), 4: (np.asarray(joints).astype(np.uint32), "read"),
         5: (np.asarray(weights, np.float32), "read"), 6: (np.zeros((n, 3), np.float32), "read_write"),
-        7: (np.zeros(3, np.uint32), "read_write")}, n)
+        7: (np.zeros(3, np.uint32), "read_write")}, n, groups=groups)
     return out[6].astype(np.float64), out[7]
 
 
 def test_skinning_shader_skins_fox(models_dir, skin_shader):
     """Fox posed in its Walk clip: the bones pass against numba's versor_to_affine on the pose's
     versors, the blend pass (fed pose.bone_affines()) against cgaskin.skin, ≤ 1e-5 of the model's
-    size (the diagonal of its skinned bounding box)."""
+    size (the diagonal of its skinned bounding box), in a 1D and a 2D dispatch."""
     import cgaskin
     rig = cgaskin.load(models_dir / "Fox.glb")
     pose = rig.pose("Walk", 0.37)
@@ -284,6 +284,11 @@ def test_skinning_shader_skins_fox(models_dir, skin_shader):
     size = np.linalg.norm(want.max(axis=0) - want.min(axis=0))
     assert np.abs(skinned - want).max() <= TOL * size, np.abs(skinned - want).max() / size
     assert bad.tolist() == [0, 0, 0]
+    # the 2D dispatch a mesh of more than 65535 x 64 vertices needs: index x + y * groups_x * 64
+    columns = 4
+    again, _ = gpu_blend(skin_shader, rig.vertices, rig.joints, rig.weights, pose.bone_affines(),
+                         groups=(columns, -(-rig.n_vertices // (64 * columns))))
+    assert np.array_equal(again, skinned)
 
 
 def test_skinning_shader_skips_bad_influences(skin_shader):
