@@ -172,6 +172,7 @@ double P_lib_atanh(double x) {
     double ax = abs(x);
     if (!(ax <= 1.0lf)) return P_lib_nan();
     if (ax == 1.0lf) return x * P_lib_inf();
+    if (x == 0.0lf) return x;                             // keeps the sign of zero
     // on |x|: for x < 0 the 1 + u inside log1p would cancel
     double v = 0.5lf * P_lib_log1p(2.0lf * ax / (1.0lf - ax));
     return x < 0.0lf ? -v : v;

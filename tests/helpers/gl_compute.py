@@ -14,6 +14,18 @@ import numpy as np
 LOCAL_SIZE = 64
 
 
+def require(missing: str | None, what: str) -> None:
+    """Skip the test (fail it under CGASKIN_CI=1, where nothing may be skipped) when ``missing`` says
+    what is absent."""
+    if missing is None:
+        return
+    import pytest
+    reason = f"{what}: {missing}"
+    if os.environ.get("CGASKIN_CI") == "1":
+        pytest.fail(f"CGASKIN_CI=1: {reason}", pytrace=False)
+    pytest.skip(reason)
+
+
 def open_context():
     """(moderngl context, None) or (None, why it cannot be had)."""
     os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="cgaskin-xdg-"))  # silences Mesa
@@ -29,8 +41,8 @@ def open_context():
     return ctx, None
 
 
-def kernel_shader(include: str, prefix: str, kernel, real: str, call: str | None = None) -> str:
-    """A compute shader that runs ``<prefix>_<kernel.name>`` (or the function ``call``) on row
+def kernel_shader(include: str, prefix: str, kernel, real: str) -> str:
+    """A compute shader that runs ``<prefix>_<kernel.name>`` on row
     gl_GlobalInvocationID.x: input n from binding n (rows x its size, flat), the outputs to the next
     binding (rows x outputs, flat), the row count in uniform ``rows``."""
     lines = ["#version 430", f"layout(local_size_x = {LOCAL_SIZE}) in;"]
@@ -51,7 +63,7 @@ def kernel_shader(include: str, prefix: str, kernel, real: str, call: str | None
         lines.append(f"    for (uint j = 0u; j < {size}u; j++) a{n}[j] = in{n}[row * {size}u + j];")
         args.append(f"a{n}")
     lines.append(f"    {real} r[{n_out}];")
-    lines.append(f"    {call or prefix + '_' + kernel.name}({', '.join(args + ['r'])});")
+    lines.append(f"    {prefix}_{kernel.name}({', '.join(args + ['r'])});")
     lines.append(f"    for (uint j = 0u; j < {n_out}u; j++) outputs[row * {n_out}u + j] = r[j];")
     lines.append("}")
     return "\n".join(lines) + "\n"
@@ -99,15 +111,45 @@ class Runner:
             b.release()
         return result
 
-    def run(self, source: str, buffers: dict, uniforms: dict, groups: int) -> None:
-        """Dispatch ``source`` with ``buffers`` {binding: moderngl buffer} bound as storage buffers."""
+    def dispatch(self, source: str, arrays: dict, block: bytes, groups) -> dict:
+        """Run ``source`` on ``arrays`` {binding: numpy array (its dtype as stored)} bound as storage
+        buffers, ``block`` as the uniform block at binding 0, ``groups`` = (x, y) work groups; returns
+        {binding: bytes read back}."""
+        buffers = {n: self.ctx.buffer(np.ascontiguousarray(a).tobytes()) for n, a in arrays.items()}
+        ubo = self.ctx.buffer(block)
         for n, b in buffers.items():
             b.bind_to_storage_buffer(n)
-        cs = self.shader(source)
-        for name, value in uniforms.items():
-            cs[name] = value
-        cs.run(group_x=groups)
+        ubo.bind_to_uniform_block(0)
+        self.shader(source).run(group_x=groups[0], group_y=groups[1])
         self.ctx.finish()
+        out = {n: b.read() for n, b in buffers.items()}
+        for b in [*buffers.values(), ubo]:
+            b.release()
+        return out
+
+    def transform(self, vertex_source: str, varying: str, attributes, n: int, arrays: dict, block: bytes):
+        """Transform feedback of ``varying`` (vec3) of a vertex shader over ``n`` points: attributes
+        [(numpy array, moderngl format, name)], storage ``arrays`` {binding: array}, uniform block 0;
+        returns (n, 3) float32."""
+        import moderngl
+        program = self.ctx.program(vertex_shader=vertex_source, varyings=[varying])
+        vbos = [(self.ctx.buffer(np.ascontiguousarray(a).tobytes()), fmt, name) for a, fmt, name in attributes]
+        vao = self.ctx.vertex_array(program, vbos)
+        buffers = {k: self.ctx.buffer(np.ascontiguousarray(a).tobytes()) for k, a in arrays.items()}
+        for k, b in buffers.items():
+            b.bind_to_storage_buffer(k)
+        ubo = self.ctx.buffer(block)
+        ubo.bind_to_uniform_block(0)
+        out = self.ctx.buffer(reserve=n * 12)
+        framebuffer = self.ctx.simple_framebuffer((1, 1))     # a standalone context has no default one,
+        framebuffer.use()                                   # and drawing without one is an error
+        vao.transform(out, mode=moderngl.POINTS, vertices=n)
+        self.ctx.finish()
+        result = np.frombuffer(out.read(), dtype=np.float32).reshape(n, 3).copy()
+        assert self.ctx.error == "GL_NO_ERROR", self.ctx.error
+        for obj in [framebuffer, out, ubo, vao, program, *buffers.values(), *(v[0] for v in vbos)]:
+            obj.release()
+        return result
 
 
 def validator() -> str | None:
