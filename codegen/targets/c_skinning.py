@@ -56,8 +56,7 @@ def skin_functions(prefix: str, qualifier: str, joint: str, real: str = "double"
         }}
     }}
     {prefix}_affine_point(a, rest3, out3);
-    /* false for NaN and inf */
-    if (!(out3[0] * 0.0 + out3[1] * 0.0 + out3[2] * 0.0 == 0.0))
+    if (!(isfinite(out3[0]) && isfinite(out3[1]) && isfinite(out3[2])))
         counts[2] += 1;
 }}
 """

@@ -6,6 +6,9 @@ compile without a diagnostic under -std=c99 -pedantic -Wall -Wextra -Werror. One
 per session; the library is opened with cffi's ``dlopen`` and called on numpy buffers (no copies)."""
 from __future__ import annotations
 
+import shutil
+import subprocess
+
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
@@ -157,13 +160,17 @@ def test_headers_compile_clean_as_static_inline(c_libs, tmp_path, catalogue, pre
     pointers = ", ".join(f"(void (*)(void)){prefix}_{k.name}_batch" for k in kernels)
     (tmp_path / "use.c").write_text(f'#include "{include}"\n\nvoid (*const {prefix}_table[])(void) = {{{pointers}}};\n')
     compile_c(c_libs["cc"], tmp_path / "use.c", tmp_path / "use.o", ["-c"])
+    cxx = shutil.which("c++")
+    if cxx:   # C++ programs include it too (a C++ compiler is optional here: cc is what the issue names)
+        result = subprocess.run([cxx, "-x", "c++", "-std=c++11", "-pedantic", "-Wall", "-Wextra", "-Werror", "-c",
+                                 str(tmp_path / "use.c"), "-o", str(tmp_path / "use_cxx.o")], capture_output=True, text=True)
+        assert result.returncode == 0 and not result.stderr.strip(), result.stderr
 
 
 def test_example_program_skins_fox(c_libs, models_dir, tmp_path):
     """examples/c_skinning end to end: export.py writes the model and the headers, cc builds
     skin_model.c, the program skins Fox and its positions equal cgaskin.skin."""
     import importlib.util
-    import subprocess
     from pathlib import Path
 
     import cgaskin
