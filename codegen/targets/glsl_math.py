@@ -73,8 +73,7 @@ double P_lib_log(double x) {
     precise double f = m - 1.0lf;
     double s = f / (2.0lf + f);
     double s2 = s * s;
-    double p = 1.0lf / 23.0lf;
-    for (int n = 21; n >= 1; n -= 2) p = p * s2 + 1.0lf / double(n);
+    double p = LOG_SERIES;                               // sum of s2^n / (2n + 1), n <= 11
     double de = double(e);
     precise double lo = de * 1.90821492927058770002e-10lf + 2.0lf * s * p;
     return de * 6.93147180369123816490e-01lf + lo;
@@ -145,8 +144,7 @@ double P_lib_atan01(double t) {
     bool upper = t > 0.41421356237309505lf;
     double u = upper ? (t - 1.0lf) / (t + 1.0lf) : t;
     double u2 = u * u;
-    double p = 1.0lf / 45.0lf;                           // atan u = u + u^3 p(u^2), to u^45
-    for (int n = 21; n >= 1; n--) p = p * u2 + ((n % 2 == 0) ? 1.0lf : -1.0lf) / double(2 * n + 1);
+    double p = ATAN_SERIES;                              // atan u = u + u^3 p(u^2), to u^45
     double a = u + u * u2 * p;
     precise double shifted = 7.85398163397448278999e-01lf + (a + 3.06161699786838301793e-17lf);
     return upper ? shifted : a;
@@ -239,6 +237,21 @@ float P_lib_cbrt(float x) {
 """
 
 
+def _horner(var: str, coefficients) -> str:
+    """c0 + var (c1 + var (c2 + ...)) with double literals (no division left to the shader)."""
+    text = f"{coefficients[-1]!r}lf"
+    for c in reversed(coefficients[:-1]):
+        text = f"({c!r}lf + {var} * {text})"
+    return text
+
+
+_SERIES = {"LOG_SERIES": _horner("s2", [1.0 / (2 * n + 1) for n in range(12)]),
+           "ATAN_SERIES": _horner("u2", [(-1.0) ** n / (2 * n + 1) for n in range(1, 23)])}
+
+
 def library(prefix: str, double: bool) -> str:
     """The helper functions of one include, named ``<prefix>_lib_*``."""
-    return (_DOUBLE if double else _FLOAT).replace("P_lib_", f"{prefix}_lib_")
+    text = _DOUBLE if double else _FLOAT
+    for name, series in _SERIES.items():
+        text = text.replace(name, series)
+    return text.replace("P_lib_", f"{prefix}_lib_")
