@@ -20,11 +20,8 @@ from sympy import QQ, Symbol
 from sympy.polys.rings import PolyRing
 
 from . import algebra
+from .errors import CodegenError  # noqa: F401 (re-exported: codegen.ir.CodegenError)
 from .symbolic import MV
-
-
-class CodegenError(Exception):
-    """A kernel spec is inconsistent (e.g. its result has blades outside the declared type)."""
 
 
 @dataclass(frozen=True)

@@ -48,10 +48,10 @@ def print_batch(kernel: Kernel) -> str:
     if "row" in args:
         raise CodegenError(f"{kernel.name}: an input named 'row' would shadow the batch loop index")
     n_out = len(kernel.outputs)
-    lines = [f"@njit(cache=True, error_model='numpy', nogil=True)",
+    lines = ["@njit(cache=True, error_model='numpy', nogil=True)",
              f"def {kernel.name}_batch({', '.join(args)}, out):",
              f'    """``{kernel.name}`` on every row: inputs (N, ...) or (N,), out (N, {n_out})."""',
-             f"    for row in range(out.shape[0]):"]
+             "    for row in range(out.shape[0]):"]
     call = f"{kernel.name}({', '.join(a + '[row]' for a in args)})"
     if n_out == 1:
         lines.append(f"        out[row, 0] = {call}")

@@ -13,6 +13,7 @@ from fractions import Fraction
 from sympy import QQ, Rational
 
 from . import algebra, algebras
+from .errors import CodegenError
 
 
 def _qq(c):
@@ -56,7 +57,6 @@ class MV:
             return self.algebra
         if not set(self.terms) - {0}:
             return other.algebra
-        from .ir import CodegenError
         raise CodegenError(f"a value of {self.algebra} meets one of {other.algebra}: one kernel, one algebra")
 
     # -- linear structure ---------------------------------------------------------------------
@@ -132,8 +132,7 @@ class MV:
         square = MV(self.ring, {alg.pseudoscalar: self.ring.one}, alg)
         square = (square * square)[0]
         if not square:
-            from .ir import CodegenError
-            raise CodegenError(f"dual(): the pseudoscalar of {alg} squares to 0 (a degenerate metric), so "
+                raise CodegenError(f"dual(): the pseudoscalar of {alg} squares to 0 (a degenerate metric), so "
                                f"X I⁻¹ does not exist; write the complement you mean with explicit blades")
         return self * MV(self.ring, {alg.pseudoscalar: self.ring.one / square}, alg)
 
