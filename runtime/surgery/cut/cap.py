@@ -33,11 +33,21 @@ def _is_ear(xy, ids, nxt, p, i, q, min_sine):
     while v != p:
         if ids[v] != ids[p] and ids[v] != ids[i] and ids[v] != ids[q]:
             px, py = xy[v, 0], xy[v, 1]
-            if (_orient(ax, ay, bx, by, px, py) >= 0.0 and _orient(bx, by, cx, cy, px, py) >= 0.0
-                    and _orient(cx, cy, ax, ay, px, py) >= 0.0):
+            if (_left_or_on(ax, ay, bx, by, px, py, min_sine) and _left_or_on(bx, by, cx, cy, px, py, min_sine)
+                    and _left_or_on(cx, cy, ax, ay, px, py, min_sine)):
                 return False
         v = nxt[v]
     return True
+
+
+@helper
+def _left_or_on(ax, ay, bx, by, px, py, min_sine):
+    """Whether p lies left of the line a -> b or on it, up to rounding (the sine of the angle at a
+    between b and p at most ``min_sine`` to the right): a loop vertex that the plane's section puts on
+    a triangle's side, where the plane runs along a flat part of the mesh, is on it even when its 2D
+    coordinates put it a rounding error outside (clipping that ear would leave a zero-area triangle)."""
+    return _orient(ax, ay, bx, by, px, py) >= -min_sine * math.sqrt(
+        ((bx - ax) ** 2 + (by - ay) ** 2) * ((px - ax) ** 2 + (py - ay) ** 2))
 
 
 @kernel((F2, I1, f8), cost=0.5)

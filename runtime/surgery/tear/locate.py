@@ -45,10 +45,25 @@ def _hit_node(face, hit, wfaces, wpos, tol):
 @helper
 def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plane, tol):
     """A point inside a face within ``tol`` of where the plane crosses one of the face's edges is that
-    crossing (an EDGE node), so that a scalpel through an edge splits both faces on it instead of
-    leaving a zero-area sliver."""
+    crossing (an EDGE node), and one within ``tol`` of an edge of the face that lies in the plane (both
+    ends on it) is the nearest point of that edge (an EDGE node too), so that a scalpel through an edge
+    splits both faces on it instead of leaving a zero-area sliver beside it (and a point on an edge in
+    the plane, where the section is the edge itself, is where the walk runs along it)."""
     if kind != FACE:
         return kind, ident, point
+    for k in range(3):
+        if cls[wfaces[ident, k]] == 0 and cls[wfaces[ident, (k + 1) % 3]] == 0:
+            e = face_edges[ident, k]
+            lo, hi = wpos[edges[e, 0]], wpos[edges[e, 1]]
+            d = _sub(hi, lo)
+            dd = _dot(d, d)
+            if dd > 0.0:
+                t = min(max(_dot(_sub(point, lo), d) / dd, 0.0), 1.0)
+                nearest = np.empty(3)
+                for c in range(3):
+                    nearest[c] = lo[c] + t * d[c]
+                if _distance(nearest, point) <= tol:
+                    return EDGE, e, nearest
     for k in range(3):
         if cls[wfaces[ident, k]] * cls[wfaces[ident, (k + 1) % 3]] < 0:
             e = face_edges[ident, k]
@@ -164,7 +179,11 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
         ends_int[i, 0], ends_int[i, 1] = kind, ident
         _set_row(ends_pos, i, point)          # may be ends_pos[i] itself: a row copied onto itself
     if ends_int[0, 0] == ends_int[1, 0] and ends_int[0, 1] == ends_int[1, 1] and ends_int[0, 0] != FACE:
-        return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
+        # one vertex, or one crossing; two points of one edge that lies in the plane differ
+        e = ends_int[0, 1]
+        in_plane = ends_int[0, 0] == EDGE and cls[edges[e, 0]] == 0 and cls[edges[e, 1]] == 0
+        if not in_plane or _distance(ends_pos[0], ends_pos[1]) <= tol:
+            return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
     return OK, ends_int, ends_pos, hits, hit_faces, plane, cls
 
 

@@ -20,6 +20,25 @@ def _position(code, f, wfaces, wpos, path_float):
 
 
 @helper
+def _widest_apex(sub, count, f, wfaces, wpos, path_float):
+    """The element of the convex polygon ``sub[:count]`` whose fan has the largest smallest triangle."""
+    best, best_area = 0, -1.0
+    for p in range(count):
+        a = _position(sub[p], f, wfaces, wpos, path_float)
+        smallest = np.inf
+        for i in range(1, count - 1):
+            b = _position(sub[(p + i) % count], f, wfaces, wpos, path_float)
+            c = _position(sub[(p + i + 1) % count], f, wfaces, wpos, path_float)
+            u0, u1, u2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+            v0, v1, v2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+            area = math.sqrt((u1 * v2 - u2 * v1) ** 2 + (u2 * v0 - u0 * v2) ** 2 + (u0 * v1 - u1 * v0) ** 2)
+            smallest = min(smallest, area)
+        if smallest > best_area:
+            best, best_area = p, smallest
+    return best
+
+
+@helper
 def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
     """Triangulate a convex polygon (elements ``sub[:count]`` in the face's winding) whose ``flat``
     elements lie inside one of its sides (edge crossings that are not chord ends): a fan from a flat
@@ -31,6 +50,13 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
     for i in range(count):
         if flat[i]:
             p = i
+            break
+    for i in range(count):
+        if flat[i] and flat[(i + 1) % count]:
+            # several path nodes on one side (points of an edge that lies in the plane): a fan from a
+            # flat element would join collinear ones; fan from the element whose smallest fan triangle
+            # is largest (the corner across that side)
+            p = _widest_apex(sub, count, f, wfaces, wpos, path_float)
             break
     if p < 0 and count == 4:
         d02 = _distance(_position(sub[0], f, wfaces, wpos, path_float), _position(sub[2], f, wfaces, wpos, path_float))
@@ -45,7 +71,7 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
 
 
 @helper
-def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out, on_edge):
+def _triangulate_face(f, path_int, wfaces, face_edges, edges, wpos, path_float, out, on_edge):
     """Split face ``f`` so that the path's pieces in it become edges.
 
     The face's boundary becomes a polygon: its corners (a path node where the corner is one) with the
@@ -59,8 +85,9 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out, on
     Rows of ``out`` get element codes: -1-k for corner k, j >= 0 for path node j. Returns the row count.
     """
     k_nodes = path_int.shape[0]
-    poly = np.empty(6, np.int64)
-    flat = np.zeros(6, np.bool_)
+    poly = np.empty(k_nodes + 3, np.int64)
+    flat = np.zeros(k_nodes + 3, np.bool_)
+    along = np.empty(k_nodes + 3)
     count = np.int64(0)
     for k in range(3):
         code = -1 - k
@@ -69,9 +96,17 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out, on
                 code = j
         poly[count], flat[count] = code, False
         count += 1
+        first = count
         for j in range(k_nodes):
             if path_int[j, 0] == EDGE and path_int[j, 1] == face_edges[f, k]:
-                poly[count], flat[count] = j, True
+                # in order along the side (several nodes lie on an edge in the plane)
+                e = face_edges[f, k]
+                s = path_float[j, 0] if wfaces[f, k] == edges[e, 0] else 1.0 - path_float[j, 0]
+                i = count
+                while i > first and along[i - 1] > s:
+                    poly[i], along[i] = poly[i - 1], along[i - 1]
+                    i -= 1
+                poly[i], flat[count], along[i] = j, True, s
                 count += 1
     inner = np.empty(3, np.int64)
     n_inner = np.int64(0)
@@ -98,8 +133,8 @@ def _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, out, on
         gap = (ib - ia) % count if ia >= 0 and ib >= 0 else 0
         if gap < 2 or gap > count - 2:
             return _convex_fan(poly, flat, count, f, wfaces, wpos, path_float, out, np.int64(0))
-        sub = np.empty(6, np.int64)
-        subflat = np.zeros(6, np.bool_)
+        sub = np.empty(count, np.int64)
+        subflat = np.zeros(count, np.bool_)
         for start, stop in ((ia, ib), (ib, ia)):
             size = (stop - start) % count + 1
             for i in range(size):
@@ -265,16 +300,16 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
                 affected, n_aff = _add_unique(affected, n_aff, ef_faces[r])
     affected = affected[:n_aff]
 
-    tris = np.empty((12 * n_aff, 3), np.int64)
+    tris = np.empty(((k_nodes + 12) * n_aff, 3), np.int64)
     n_tris = np.int64(0)
     new_node = np.empty(4 * k_nodes + 4, np.int64)
     new_src = np.zeros((4 * k_nodes + 4, 3), np.int64)
     new_coef = np.zeros((4 * k_nodes + 4, 3))
     n_new = np.int64(0)
-    local = np.empty((16, 3), np.int64)
+    local = np.empty((k_nodes + 16, 3), np.int64)
     for a in range(n_aff):
         f = affected[a]
-        n_local = _triangulate_face(f, path_int, wfaces, face_edges, wpos, path_float, local, on_edge)
+        n_local = _triangulate_face(f, path_int, wfaces, face_edges, edges, wpos, path_float, local, on_edge)
         for i in range(n_local):
             for c in range(3):
                 code = local[i, c]

@@ -1,188 +1,16 @@
 """Step 4 of a tear stroke: the path along the tear plane's section of the surface."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ..._shared.jit import F1, I1, S1, f8, helper, i8, kernel, record
-from ...algebra.vec3 import _dot, _norm, _sub
-from ...generated.kernels import segment_plane
+from ..._shared.jit import F1, I1, S1, f8, i8, kernel, record
 from ...tolerances import tol
-from ..bvh import BVH_ARRAYS, _first_hit
+from ..bvh import BVH_ARRAYS
 from ..surface import WELDED_MESH
+from .elements import _along_edge, _edge_parameter, _elements, _in_plane, _push, _push_element
+from .junctions import _boundary_vertex, _jumps, _openings
 from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CARRIER, VERTEX, Ends, Path
-from .region import _margin, _outside
-
-
-@helper
-def _elements(g, wfaces, face_edges, cls, kinds, ids):
-    """Where the plane meets face ``g``'s boundary: its corners on the plane (VERTEX, welded id) and
-    its edges whose ends lie on opposite sides (EDGE, edge id). Returns how many (<= 3)."""
-    count = 0
-    for k in range(3):
-        w = wfaces[g, k]
-        if cls[w] == 0:
-            kinds[count], ids[count] = VERTEX, w
-            count += 1
-    for k in range(3):
-        if cls[wfaces[g, k]] * cls[wfaces[g, (k + 1) % 3]] < 0:
-            kinds[count], ids[count] = EDGE, face_edges[g, k]
-            count += 1
-    return count
-
-
-@helper
-def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target):
-    """Append a node of the search tree; its length is its parent's plus the step."""
-    ni[n, 0], ni[n, 1], ni[n, 2], ni[n, 3], ni[n, 4] = kind, ident, parent, carrier_kind, carrier
-    nf[n, 0], nf[n, 1], nf[n, 2], nf[n, 3] = t, x, y, z
-    step = math.sqrt((x - nf[parent, 1]) ** 2 + (y - nf[parent, 2]) ** 2 + (z - nf[parent, 3]) ** 2)
-    nf[n, 4] = nf[parent, 4] + step
-    target[n] = is_target
-    return n + 1
-
-
-@helper
-def _element_point(kind, ident, plane, wpos, edges):
-    """(t, x, y, z) of a boundary element: a vertex on the plane (t = 0), or the crossing of an edge,
-    computed by the generated ``segment_plane`` on the edge's welded ends in canonical order so that
-    every copy of a seam edge gets the same point."""
-    if kind == VERTEX:
-        p = wpos[ident]
-        return 0.0, p[0], p[1], p[2]
-    return segment_plane(plane, wpos[edges[ident, 0]], wpos[edges[ident, 1]])
-
-
-@helper
-def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges,
-                  t_kind, t_id, vertex_used, region, margin):
-    """Append the node for a boundary element (``_element_point``). Returns the new count, unchanged
-    when the element lies outside the swept region (``region.py``: the front dies there, no detour)
-    or is a vertex the path already went through (no self-crossing path)."""
-    is_target = t_kind == kind and ident == t_id
-    if kind == VERTEX and vertex_used[ident] and not is_target:
-        return n
-    t, x, y, z = _element_point(kind, ident, plane, wpos, edges)
-    if not is_target:
-        # within the margin of S_i (the root: in the hull) is within the region; else measure
-        near = (x - nf[0, 1]) ** 2 + (y - nf[0, 2]) ** 2 + (z - nf[0, 3]) ** 2 <= margin * margin
-        if not near and _outside((x, y, z), region) > margin:
-            return n
-    if kind == VERTEX:
-        vertex_used[ident] = True
-    return _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
-
-
-@helper
-def _openings(cls, edges, ef_offsets, plane, wpos, region, margin):
-    """Where the plane meets the surface's boundary inside the swept region: (c, 2) int64 (kind, id)
-    of the boundary edges it crosses (EDGE) and the boundary vertices on it (VERTEX)."""
-    found = np.empty((16, 2), np.int64)
-    count = 0
-    for e in range(edges.shape[0]):
-        if ef_offsets[e + 1] - ef_offsets[e] != 1:
-            continue
-        for kind, ident in ((EDGE, e), (VERTEX, edges[e, 0]), (VERTEX, edges[e, 1])):
-            if kind == EDGE and cls[edges[e, 0]] * cls[edges[e, 1]] >= 0:
-                continue
-            if kind == VERTEX and cls[ident] != 0:
-                continue
-            seen = False
-            for c in range(count):
-                seen = seen or (found[c, 0] == kind and found[c, 1] == ident)
-            if seen or _outside(_element_point(kind, ident, plane, wpos, edges)[1:], region) > margin:
-                continue
-            if count == found.shape[0]:
-                found = np.concatenate((found, np.empty_like(found)))
-            found[count, 0], found[count, 1] = kind, ident
-            count += 1
-    return found[:count]
-
-
-@helper
-def _unit(u):
-    length = _norm(u)
-    for k in range(3):
-        u[k] /= max(length, 1e-300)
-    return u
-
-
-@helper
-def _jump(bvh, mesh, cls, plane, p_kind, p_id, p, before, q_kind, q_id, q, snap):
-    """Whether the path may jump from boundary point p (reached from ``before``; p itself when it is
-    the start) to boundary point q through an opening of the surface: the two sides of a closed slit
-    (within ``snap`` of each other), or two boundary edges' crossings with no face between them, the
-    jump going on the way the section arrives at p and leaves q into its face (so never back, nor
-    along a slit, nor over the skin from one slit to another)."""
-    (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
-    d = _sub(q, p)
-    length = _norm(d)
-    if length <= snap:
-        # across a closed slit, unless the slit runs along the plane there (a jump between its two
-        # sides would then follow the slit, not cross it)
-        for kind, w in ((p_kind, p_id), (q_kind, q_id)):
-            if kind == VERTEX and _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cls,
-                                                   True):
-                return False
-        return True
-    if p_kind != EDGE or q_kind != EDGE:
-        return False
-    d = _unit(d)
-    if _dot(d, _sub(p, before)) < 0.0:
-        return False
-    # where the section leaves q's face (its one face: q lies on a boundary edge)
-    g = ef_faces[ef_offsets[q_id]]
-    kinds, ids = np.empty(3, np.int64), np.empty(3, np.int64)
-    count = _elements(g, wfaces, face_edges, cls, kinds, ids)
-    for c in range(count):
-        if not (kinds[c] == EDGE and ids[c] == q_id):
-            _, x, y, z = _element_point(kinds[c], ids[c], plane, wpos, edges)
-            if (x - q[0]) * d[0] + (y - q[1]) * d[1] + (z - q[2]) * d[2] <= 0.0:
-                return False
-    s = min(0.25, snap / length + 1e-7)      # the ends lie on faces: leave them out
-    a, b = np.empty(3), np.empty(3)
-    for k in range(3):
-        a[k] = p[k] + s * length * d[k]
-        b[k] = q[k] - s * length * d[k]
-    return _first_hit(bvh, a, b)[0] < 0
-
-
-@helper
-def _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cls, in_plane):
-    """Whether welded vertex w lies on the boundary (an edge from it has one face); with ``in_plane``,
-    on a boundary edge that lies in the plane (its other end on the plane too)."""
-    for r in range(vf_offsets[w], vf_offsets[w + 1]):
-        g = vf_faces[r]
-        for k in range(3):
-            if wfaces[g, k] == w:
-                for side in range(2):
-                    e = face_edges[g, k] if side == 0 else face_edges[g, (k + 2) % 3]
-                    other = wfaces[g, (k + 1) % 3] if side == 0 else wfaces[g, (k + 2) % 3]
-                    if ef_offsets[e + 1] - ef_offsets[e] == 1 and (not in_plane or cls[other] == 0):
-                        return True
-    return False
-
-
-@helper
-def _jumps(node, ni, nf, target, n, cap, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id, vertex_used,
-           region, margin, snap):
-    """Push the jumps from boundary node ``node`` to the ``openings`` (``_openings``) not yet jumped
-    to that ``_jump`` allows; returns the new node count."""
-    wpos, edges = mesh[0], mesh[3]
-    kind, ident = ni[node, 0], ni[node, 1]
-    came_from = nf[max(ni[node, 2], 0), 1:4]
-    to = np.empty(3)
-    for c in range(openings.shape[0]):
-        ok, oid = openings[c, 0], openings[c, 1]
-        if jumped[c] or (ok == kind and oid == ident) or n + 8 > cap:
-            continue
-        _, to[0], to[1], to[2] = _element_point(ok, oid, plane, wpos, edges)
-        if _jump(bvh, mesh, cls, plane, kind, ident, nf[node, 1:4], came_from, ok, oid, to, snap):
-            jumped[c] = True
-            n = _push_element(ni, nf, target, n, ok, oid, node, JUMP_CARRIER, np.int64(-1), plane, wpos, edges,
-                              t_kind, t_id, vertex_used, region, margin)
-    return n
+from .region import _margin
 
 
 @kernel((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=2.6)
@@ -227,7 +55,8 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     ni[0, 0], ni[0, 1], ni[0, 2], ni[0, 3], ni[0, 4] = s_kind, s_id, -1, NO_CARRIER, -1
     nf[0, 0], nf[0, 1], nf[0, 2], nf[0, 3], nf[0, 4] = 0.0, s_pos[0], s_pos[1], s_pos[2], 0.0
     if s_kind == EDGE:
-        nf[0, 0] = segment_plane(plane, wpos[edges[s_id, 0]], wpos[edges[s_id, 1]])[0]
+        nf[0, 0] = _edge_parameter(s_id, s_pos, cls, plane, wpos, edges)
+    t_param = _edge_parameter(t_id, t_pos, cls, plane, wpos, edges) if t_kind == EDGE else 0.0
     if s_kind == VERTEX:
         vertex_used[s_id] = True
     n = np.int64(1)
@@ -258,6 +87,13 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
             for q in range(count):
                 n = _push_element(ni, nf, target, n, kinds[q], ids[q], node, FACE_CARRIER, g, plane,
                                   wpos, edges, t_kind, t_id, vertex_used, region, margin)
+        elif kind == EDGE and _in_plane(ident, edges, cls):
+            # a point of an edge lying in the plane (an end of the stroke): along the edge, unless it
+            # is a boundary edge (the surface is already open there)
+            if ef_offsets[ident + 1] - ef_offsets[ident] >= 2 and not edge_used[ident]:
+                edge_used[ident] = True
+                n = _along_edge(ni, nf, target, n, node, ident, plane, wpos, edges, t_kind, t_id, t_param, t_pos,
+                                vertex_used, region, margin)
         elif kind == EDGE:
             # across the edge into each other face on it (one on a manifold edge)
             for r in range(ef_offsets[ident], ef_offsets[ident + 1]):
@@ -308,6 +144,10 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
                     if ef_offsets[e + 1] - ef_offsets[e] < 2:
                         continue     # a boundary edge: the surface is already open there
                     edge_used[e] = True
+                    if t_kind == EDGE and t_id == e:      # the target lies on this edge: it ends there
+                        n = _push(ni, nf, target, n, EDGE, e, t_param, t_pos[0], t_pos[1], t_pos[2], node,
+                                  EDGE_CARRIER, e, np.bool_(True))
+                        continue
                     n = _push_element(ni, nf, target, n, VERTEX, z, node, EDGE_CARRIER, e, plane,
                                       wpos, edges, t_kind, t_id, vertex_used, region, margin)
         at_boundary = ((kind == EDGE and ef_offsets[ident + 1] - ef_offsets[ident] == 1)
@@ -389,9 +229,19 @@ def _insert_midpoint(path, mesh) -> Path:
     if kind == FACE_CARRIER:
         mid_int = [FACE, carrier, FACE_CARRIER, carrier]
         mid_float = [0.0, *(0.5 * (p0 + p1))]
-    else:                                      # along an edge in the plane: its midpoint
+    elif path_int[0, 0] == VERTEX and path_int[1, 0] == VERTEX:
+        # along a whole edge in the plane: its midpoint
         lo, hi = mesh.positions[mesh.edges[carrier]]
         mid_int = [EDGE, carrier, EDGE_CARRIER, carrier]
         mid_float = [0.5, *(0.5 * (lo + hi))]
+    else:
+        # along part of an edge in the plane (an end is a point of it): the middle of that part, at the
+        # mean of the two ends' parameters on the edge (a corner's is 0 or 1)
+        ts = [path_float[r, 0] if path_int[r, 0] == EDGE else
+              float(mesh.edges[carrier, 1] == path_int[r, 1]) for r in (0, 1)]
+        lo, hi = mesh.positions[mesh.edges[carrier]]
+        t = 0.5 * (ts[0] + ts[1])
+        mid_int = [EDGE, carrier, EDGE_CARRIER, carrier]
+        mid_float = [t, *(lo + t * (hi - lo))]
     return Path(np.array([path_int[0], mid_int, path_int[1]], np.int64),
                 np.array([path_float[0], mid_float, path_float[1]]))

@@ -1,0 +1,105 @@
+"""Step 4 of a tear stroke, the elements of the walk: where the tear plane meets a face's boundary, and
+the nodes of the search tree."""
+import math
+
+import numpy as np
+
+from ..._shared.jit import helper
+from ...generated.kernels import segment_plane
+from .records import EDGE, EDGE_CARRIER, VERTEX
+from .region import _outside
+
+
+@helper
+def _elements(g, wfaces, face_edges, cls, kinds, ids):
+    """Where the plane meets face ``g``'s boundary: its corners on the plane (VERTEX, welded id) and
+    its edges whose ends lie on opposite sides (EDGE, edge id). Returns how many (<= 3)."""
+    count = 0
+    for k in range(3):
+        w = wfaces[g, k]
+        if cls[w] == 0:
+            kinds[count], ids[count] = VERTEX, w
+            count += 1
+    for k in range(3):
+        if cls[wfaces[g, k]] * cls[wfaces[g, (k + 1) % 3]] < 0:
+            kinds[count], ids[count] = EDGE, face_edges[g, k]
+            count += 1
+    return count
+
+
+@helper
+def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target):
+    """Append a node of the search tree; its length is its parent's plus the step."""
+    ni[n, 0], ni[n, 1], ni[n, 2], ni[n, 3], ni[n, 4] = kind, ident, parent, carrier_kind, carrier
+    nf[n, 0], nf[n, 1], nf[n, 2], nf[n, 3] = t, x, y, z
+    step = math.sqrt((x - nf[parent, 1]) ** 2 + (y - nf[parent, 2]) ** 2 + (z - nf[parent, 3]) ** 2)
+    nf[n, 4] = nf[parent, 4] + step
+    target[n] = is_target
+    return n + 1
+
+
+@helper
+def _element_point(kind, ident, plane, wpos, edges):
+    """(t, x, y, z) of a boundary element: a vertex on the plane (t = 0), or the crossing of an edge,
+    computed by the generated ``segment_plane`` on the edge's welded ends in canonical order so that
+    every copy of a seam edge gets the same point."""
+    if kind == VERTEX:
+        p = wpos[ident]
+        return 0.0, p[0], p[1], p[2]
+    return segment_plane(plane, wpos[edges[ident, 0]], wpos[edges[ident, 1]])
+
+
+@helper
+def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges,
+                  t_kind, t_id, vertex_used, region, margin):
+    """Append the node for a boundary element (``_element_point``). Returns the new count, unchanged
+    when the element lies outside the swept region (``region.py``: the front dies there, no detour)
+    or is a vertex the path already went through (no self-crossing path)."""
+    is_target = t_kind == kind and ident == t_id
+    if kind == VERTEX and vertex_used[ident] and not is_target:
+        return n
+    t, x, y, z = _element_point(kind, ident, plane, wpos, edges)
+    if not is_target:
+        # within the margin of S_i (the root: in the hull) is within the region; else measure
+        near = (x - nf[0, 1]) ** 2 + (y - nf[0, 2]) ** 2 + (z - nf[0, 3]) ** 2 <= margin * margin
+        if not near and _outside((x, y, z), region) > margin:
+            return n
+    if kind == VERTEX:
+        vertex_used[ident] = True
+    return _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
+
+
+@helper
+def _in_plane(e, edges, cls):
+    """Whether edge e lies in the plane (both its welded ends on it)."""
+    return cls[edges[e, 0]] == 0 and cls[edges[e, 1]] == 0
+
+
+@helper
+def _edge_parameter(e, point, cls, plane, wpos, edges):
+    """Parameter t (from ``edges[e, 0]``) of a path node on edge e at ``point``: the crossing's, by the
+    generated ``segment_plane``, for an edge whose ends lie on opposite sides; for an edge lying in the
+    plane (where that crossing is undefined), the point's projection onto the edge."""
+    lo, hi = wpos[edges[e, 0]], wpos[edges[e, 1]]
+    if not _in_plane(e, edges, cls):
+        return segment_plane(plane, lo, hi)[0]
+    num, den = 0.0, 0.0
+    for k in range(3):
+        num += (point[k] - lo[k]) * (hi[k] - lo[k])
+        den += (hi[k] - lo[k]) ** 2
+    return min(max(num / den, 0.0), 1.0) if den > 0.0 else 0.5
+
+
+@helper
+def _along_edge(ni, nf, target, n, node, e, plane, wpos, edges, t_kind, t_id, t_param, t_pos, vertex_used,
+                region, margin):
+    """From a path node on edge e lying in the plane (a point of it, not a corner): along the edge, to
+    the target when it lies on the same edge, else to both ends of the edge (the section there is the
+    edge itself: the faces on it lie on either side, or in the plane, whose own edges go on)."""
+    if t_kind == EDGE and t_id == e:
+        return _push(ni, nf, target, n, EDGE, e, t_param, t_pos[0], t_pos[1], t_pos[2], node, EDGE_CARRIER, e,
+                     np.bool_(True))
+    for side in range(2):
+        n = _push_element(ni, nf, target, n, VERTEX, edges[e, side], node, EDGE_CARRIER, e, plane, wpos, edges,
+                          t_kind, t_id, vertex_used, region, margin)
+    return n

@@ -1,0 +1,121 @@
+"""Step 4 of a tear stroke, where the section meets an opening of the surface: the boundary points on
+the plane across it, and whether the path may jump there (an X junction across an existing slit, or a T
+junction onto it)."""
+import numpy as np
+
+from ..._shared.jit import helper
+from ...algebra.vec3 import _dot, _norm, _sub
+from ..bvh import _first_hit
+from .elements import _element_point, _elements, _push_element
+from .records import EDGE, JUMP_CARRIER, VERTEX
+from .region import _outside
+
+@helper
+def _openings(cls, edges, ef_offsets, plane, wpos, region, margin):
+    """Where the plane meets the surface's boundary inside the swept region: (c, 2) int64 (kind, id)
+    of the boundary edges it crosses (EDGE) and the boundary vertices on it (VERTEX)."""
+    found = np.empty((16, 2), np.int64)
+    count = 0
+    for e in range(edges.shape[0]):
+        if ef_offsets[e + 1] - ef_offsets[e] != 1:
+            continue
+        for kind, ident in ((EDGE, e), (VERTEX, edges[e, 0]), (VERTEX, edges[e, 1])):
+            if kind == EDGE and cls[edges[e, 0]] * cls[edges[e, 1]] >= 0:
+                continue
+            if kind == VERTEX and cls[ident] != 0:
+                continue
+            seen = False
+            for c in range(count):
+                seen = seen or (found[c, 0] == kind and found[c, 1] == ident)
+            if seen or _outside(_element_point(kind, ident, plane, wpos, edges)[1:], region) > margin:
+                continue
+            if count == found.shape[0]:
+                found = np.concatenate((found, np.empty_like(found)))
+            found[count, 0], found[count, 1] = kind, ident
+            count += 1
+    return found[:count]
+
+
+@helper
+def _unit(u):
+    length = _norm(u)
+    for k in range(3):
+        u[k] /= max(length, 1e-300)
+    return u
+
+
+@helper
+def _jump(bvh, mesh, cls, plane, p_kind, p_id, p, before, q_kind, q_id, q, snap):
+    """Whether the path may jump from boundary point p (reached from ``before``; p itself when it is
+    the start) to boundary point q through an opening of the surface: the two sides of a closed slit
+    (within ``snap`` of each other), or two boundary edges' crossings with no face between them, the
+    jump going on the way the section arrives at p and leaves q into its face (so never back, nor
+    along a slit, nor over the skin from one slit to another)."""
+    (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
+    d = _sub(q, p)
+    length = _norm(d)
+    if length <= snap:
+        # across a closed slit, unless the slit runs along the plane there (a jump between its two
+        # sides would then follow the slit, not cross it)
+        for kind, w in ((p_kind, p_id), (q_kind, q_id)):
+            if kind == VERTEX and _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cls,
+                                                   True):
+                return False
+        return True
+    if p_kind != EDGE or q_kind != EDGE:
+        return False
+    d = _unit(d)
+    if _dot(d, _sub(p, before)) < 0.0:
+        return False
+    # where the section leaves q's face (its one face: q lies on a boundary edge)
+    g = ef_faces[ef_offsets[q_id]]
+    kinds, ids = np.empty(3, np.int64), np.empty(3, np.int64)
+    count = _elements(g, wfaces, face_edges, cls, kinds, ids)
+    for c in range(count):
+        if not (kinds[c] == EDGE and ids[c] == q_id):
+            _, x, y, z = _element_point(kinds[c], ids[c], plane, wpos, edges)
+            if (x - q[0]) * d[0] + (y - q[1]) * d[1] + (z - q[2]) * d[2] <= 0.0:
+                return False
+    s = min(0.25, snap / length + 1e-7)      # the ends lie on faces: leave them out
+    a, b = np.empty(3), np.empty(3)
+    for k in range(3):
+        a[k] = p[k] + s * length * d[k]
+        b[k] = q[k] - s * length * d[k]
+    return _first_hit(bvh, a, b)[0] < 0
+
+
+@helper
+def _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cls, in_plane):
+    """Whether welded vertex w lies on the boundary (an edge from it has one face); with ``in_plane``,
+    on a boundary edge that lies in the plane (its other end on the plane too)."""
+    for r in range(vf_offsets[w], vf_offsets[w + 1]):
+        g = vf_faces[r]
+        for k in range(3):
+            if wfaces[g, k] == w:
+                for side in range(2):
+                    e = face_edges[g, k] if side == 0 else face_edges[g, (k + 2) % 3]
+                    other = wfaces[g, (k + 1) % 3] if side == 0 else wfaces[g, (k + 2) % 3]
+                    if ef_offsets[e + 1] - ef_offsets[e] == 1 and (not in_plane or cls[other] == 0):
+                        return True
+    return False
+
+
+@helper
+def _jumps(node, ni, nf, target, n, cap, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id, vertex_used,
+           region, margin, snap):
+    """Push the jumps from boundary node ``node`` to the ``openings`` (``_openings``) not yet jumped
+    to that ``_jump`` allows; returns the new node count."""
+    wpos, edges = mesh[0], mesh[3]
+    kind, ident = ni[node, 0], ni[node, 1]
+    came_from = nf[max(ni[node, 2], 0), 1:4]
+    to = np.empty(3)
+    for c in range(openings.shape[0]):
+        ok, oid = openings[c, 0], openings[c, 1]
+        if jumped[c] or (ok == kind and oid == ident) or n + 8 > cap:
+            continue
+        _, to[0], to[1], to[2] = _element_point(ok, oid, plane, wpos, edges)
+        if _jump(bvh, mesh, cls, plane, kind, ident, nf[node, 1:4], came_from, ok, oid, to, snap):
+            jumped[c] = True
+            n = _push_element(ni, nf, target, n, ok, oid, node, JUMP_CARRIER, np.int64(-1), plane, wpos, edges,
+                              t_kind, t_id, vertex_used, region, margin)
+    return n
