@@ -1,4 +1,4 @@
-"""C99 printer of the kernel IR: one header of ``static inline`` functions, and a skinning header.
+"""C99 printer of the kernel IR: headers of ``static inline`` functions (double and float), and skinning headers.
 
 Files (``render``):
 
@@ -16,18 +16,29 @@ Files (``render``):
         values, ``out`` n_rows x N); an input the catalogue declares uniform is taken once (a pointer to
         one array, or one ``double``) for every row.
 
-``<prefix>_skin.h`` (with ``skinning=True``, see ``c_skinning``)
-    ``<prefix>_bone_affines`` and ``<prefix>_skin_blend``: the two stages of generated/skinning.py.
+``<prefix>_f32.h``
+    the same in float: ``<prefix>_f32_k(const float a[12], ..., float out[N])`` and
+    ``<prefix>_f32_k_batch``; every literal is a float literal (``0.5f``) and every libm call the float
+    one (``sqrtf``, ``sinf``), so nothing is computed in double (``-Wdouble-promotion`` checks it).
+    Both headers can be included together.
 
-Float64 only: the kernels' tolerances (1e-12 against numba) are float64 ones, and a float build would
-need every literal and libm call re-typed (``sinf``, ``1.0f``) to stay in float; no float variant.
-No allocation, no global state; ``-std=c99 -Wall -Wextra -Werror`` clean (the tests compile it so).
-Where the numba kernel takes ``max``/``min`` of a NaN, C's ``fmax``/``fmin`` return the other argument
-(no built-in kernel uses them).
+``<prefix>_skin.h``, ``<prefix>_skin_f32.h`` (with ``skinning=True``, see ``c_skinning``)
+    ``<prefix>_bone_affines`` and ``<prefix>_skin_blend`` (``<prefix>_f32_...`` in float): the two
+    stages of generated/skinning.py.
+
+No allocation, no global state; ``-std=c99 -pedantic -Wall -Wextra -Werror`` clean (the tests compile
+it so, with -Wshadow -Wconversion -Wdouble-promotion -Wfloat-equal too, and as C++11). Float meets 1e-5
+of numba's float64 only where the kernel is well-conditioned at float's input rounding (see
+tests/targets/test_c.py); inputs whose products leave float's range (|x| < 2^-10 squared and cubed)
+underflow. Where the numba kernel takes ``max``/``min`` of a NaN, C's ``fmax``/``fmin`` return the other
+argument (no built-in kernel uses them).
 """
 from __future__ import annotations
 
+import math
 import re
+from dataclasses import replace
+
 import sympy
 
 from ..expressions import Dialect, kernel_body
@@ -62,6 +73,16 @@ C99 = Dialect(
     sqrt="sqrt({})",
     cbrt="cbrt({})",
 )
+
+# float: every literal and libm call in float (a bare 0.5 or sin() would compute in double)
+C99_FLOAT = replace(
+    C99, name="c99-float",
+    functions={f: (t.replace("(", "f(", 1) if not t.startswith("(") else t) for f, t in C99.functions.items()},
+    literal=lambda v: _c_literal(v) if not math.isfinite(float(v)) else _c_literal(v) + "f",
+    sqrt="sqrtf({})", cbrt="cbrtf({})")
+
+#: (dialect, C type, name infix) of each precision: ``<prefix>_k`` in double, ``<prefix>_f32_k`` in float
+PRECISIONS = {"double": (C99, "double", ""), "float": (C99_FLOAT, "float", "_f32")}
 
 _WORD = re.compile(r"[A-Za-z_]\w*")
 
@@ -169,31 +190,36 @@ def check_prefix(prefix: str) -> None:
         raise CodegenError(f"prefix {prefix!r} is not a C identifier")
 
 
-def header_source(kernels, prefix: str, header, uniform=None) -> str:
-    """The text of ``<prefix>.h``."""
+def header_source(kernels, prefix: str, header, uniform=None, precision: str = "double") -> str:
+    """The text of ``<prefix>.h`` (double) or ``<prefix>_f32.h`` (float: names ``<prefix>_f32_k``)."""
     check_prefix(prefix)
+    dialect, real, infix = PRECISIONS[precision]
     uniform = uniform or {}
     api = f"{prefix.upper()}_API"
-    guard = guard_name(f"{prefix}.h")
+    guard = guard_name(f"{prefix}{infix}.h")
     lines = [*comment([*header, "",
-                       f"C99 kernels: <prefix>_<kernel>(inputs..., out) and <prefix>_<kernel>_batch(n_rows, ...).",
-                       "Flat float64 arrays in the blade order of cgaskin's generated/layout.py; 3x4 matrices row-major.",
+                       f"C99 kernels in {real}: {prefix}{infix}_<kernel>(inputs..., out) and "
+                       f"{prefix}{infix}_<kernel>_batch(n_rows, ...).",
+                       f"Flat {real} arrays in the blade order of cgaskin's generated/layout.py; 3x4 matrices row-major.",
                        f"Every function is {api} (default: static inline); #define {api} (e.g. empty) before",
                        "including this header to get external definitions (one translation unit)."]),
              f"#ifndef {guard}", f"#define {guard}", "", "#include <math.h>", "#include <stddef.h>", "",
              f"#ifndef {api}", f"#define {api} static inline", "#endif", ""]
     for k in kernels:
-        name = f"{prefix}_{k.name}"
-        lines.append(function_source(k, name, api))
-        lines.append(batch_source(k, name, api, uniform.get(k.name, ())))
+        name = f"{prefix}{infix}_{k.name}"
+        lines.append(function_source(k, name, api, dialect, real))
+        lines.append(batch_source(k, name, api, uniform.get(k.name, ()), real=real))
     lines.append(f"#endif /* {guard} */")
     return "\n".join(lines) + "\n"
 
 
 def render(kernels, *, prefix: str, header, uniform=None, skinning: bool = False) -> dict[str, str]:
-    """{``<prefix>.h``: the kernels, ``<prefix>_skin.h``: the skinning stages (with ``skinning``)}."""
+    """{``<prefix>.h`` and ``<prefix>_f32.h``: the kernels in double and float, and with ``skinning``
+    ``<prefix>_skin.h`` and ``<prefix>_skin_f32.h``: the skinning stages}."""
     from .c_skinning import skin_header_source
-    files = {f"{prefix}.h": header_source(kernels, prefix, header, uniform)}
+    files = {f"{prefix}.h": header_source(kernels, prefix, header, uniform),
+             f"{prefix}_f32.h": header_source(kernels, prefix, header, uniform, "float")}
     if skinning:
         files[f"{prefix}_skin.h"] = skin_header_source(kernels, prefix, header)
+        files[f"{prefix}_skin_f32.h"] = skin_header_source(kernels, prefix, header, "float")
     return files

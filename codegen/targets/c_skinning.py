@@ -16,7 +16,7 @@ const double *weights, size_t n_bones, const double *affines, double *out)``
 from __future__ import annotations
 
 from ..ir import CodegenError
-from .c import comment, check_prefix, guard_name
+from .c import PRECISIONS, comment, check_prefix, guard_name
 
 
 def require_skinning_kernels(kernels) -> None:
@@ -27,7 +27,9 @@ def require_skinning_kernels(kernels) -> None:
 
 
 def skin_functions(prefix: str, qualifier: str, joint: str, real: str = "double") -> str:
-    """``<prefix>_skin_vertex`` and ``<prefix>_bone_one`` in C syntax that C99 and CUDA C share."""
+    """``<prefix>_skin_vertex`` in C syntax that C99 and CUDA C share (``prefix`` names the kernels it
+    calls: ``<prefix>_affine_point``)."""
+    zero = "0.0f" if real == "float" else "0.0"
     blend = "\n".join(f"            a[{c}] += w * row[{c}];" for c in range(12))
     return f"""\
 /*
@@ -39,12 +41,12 @@ def skin_functions(prefix: str, qualifier: str, joint: str, real: str = "double"
 {qualifier} void {prefix}_skin_vertex(size_t k, const {real} *rest3, const {joint} *joints,
         const {real} *weights, size_t n_bones, const {real} *affines, {real} *out3, size_t counts[3])
 {{
-    {real} a[12] = {{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}};
+    {real} a[12] = {{{", ".join([zero] * 12)}}};
     size_t j;
     for (j = 0; j < k; ++j) {{
         const {real} w = weights[j];
         const {joint} b = joints[j];
-        if (!(w >= 0.0))
+        if (!(w >= {zero}))
             counts[1] += 1;
         if (b < 0 || (size_t)b >= n_bones) {{
             counts[0] += 1;
@@ -62,29 +64,33 @@ def skin_functions(prefix: str, qualifier: str, joint: str, real: str = "double"
 """
 
 
-def skin_header_source(kernels, prefix: str, header) -> str:
-    """The text of ``<prefix>_skin.h``."""
+def skin_header_source(kernels, prefix: str, header, precision: str = "double") -> str:
+    """The text of ``<prefix>_skin.h`` (double) or ``<prefix>_skin_f32.h`` (float: names
+    ``<prefix>_f32_...``, including ``<prefix>_f32.h``)."""
     check_prefix(prefix)
     require_skinning_kernels(kernels)
+    _, real, infix = PRECISIONS[precision]
     api = f"{prefix.upper()}_API"
-    guard = guard_name(f"{prefix}_skin.h")
-    lines = [*comment([*header, "", "C99 skinning in two stages: per bone <prefix>_bone_affines (versor_to_affine),",
+    guard = guard_name(f"{prefix}_skin{infix}.h")
+    include = f"{prefix}{infix}.h"
+    prefix = prefix + infix
+    lines = [*comment([*header, "", f"C99 skinning in {real}, two stages: per bone <prefix>_bone_affines (versor_to_affine),",
                        "then per vertex <prefix>_skin_blend (blend the bones' 3x4 maps by the weights, apply once)."]),
-             f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", "", f'#include "{prefix}.h"', "",
+             f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", "", f'#include "{include}"', "",
              "/* what the blend loop found: bad joint indices (skipped), negative/NaN weights, non-finite results */",
              f"typedef struct {{", "    size_t bad_joints;", "    size_t bad_weights;", "    size_t bad_values;",
              f"}} {prefix}_skin_counts;", "",
              "/* affines (n_bones x 12, row-major 3x4) of versors (n_bones x 12) */",
-             f"{api} void {prefix}_bone_affines(size_t n_bones, const double *versors, double *affines)",
+             f"{api} void {prefix}_bone_affines(size_t n_bones, const {real} *versors, {real} *affines)",
              "{", "    size_t b;", "    for (b = 0; b < n_bones; ++b)",
              f"        {prefix}_versor_to_affine(versors + 12 * b, affines + 12 * b);", "}", "",
-             skin_functions(prefix, api, "int32_t"),
+             skin_functions(prefix, api, "int32_t", real),
              "/*",
              " * out (n x 3) = rest (n x 3) skinned by joints, weights (n x k, row-major) and affines (n_bones x 12);",
              " * see <prefix>_skin_vertex for the counts it returns (all zero on valid input).",
              " */",
-             f"{api} {prefix}_skin_counts {prefix}_skin_blend(size_t n, size_t k, const double *rest,",
-             "        const int32_t *joints, const double *weights, size_t n_bones, const double *affines, double *out)",
+             f"{api} {prefix}_skin_counts {prefix}_skin_blend(size_t n, size_t k, const {real} *rest,",
+             f"        const int32_t *joints, const {real} *weights, size_t n_bones, const {real} *affines, {real} *out)",
              "{",
              "    size_t counts[3] = {0, 0, 0};",
              f"    {prefix}_skin_counts result;",

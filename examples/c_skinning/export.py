@@ -6,8 +6,9 @@ OUT.bin (little-endian): the magic "CGASKIN1"; uint64 n, k, n_bones, n_versors; 
 int32 joints (n, k), float64 weights (n, k), float64 affines (n_bones, 12) = pose.bone_affines() (the
 3x4 maps the blend takes), float64 expected (n, 3) = cgaskin.skin(rig, pose), float64 versors
 (n_versors, 12) = the pose's node versors and float64 versor_affines (n_versors, 12) = cgaskin's
-versor_to_affine of them (to check the C per-bone stage). ``--headers DIR`` writes cgaskin.h and
-cgaskin_skin.h for the built-in catalogue (what ``cgaskin build --target c`` writes).
+versor_to_affine of them (to check the C per-bone stage). ``--headers DIR`` writes cgaskin.h,
+cgaskin_skin.h (and their float twins *_f32.h) for the built-in catalogue, as ``cgaskin build --target c``
+does.
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ MAGIC = b"CGASKIN1"
 
 
 def write_headers(directory: Path) -> list[Path]:
-    """cgaskin.h and cgaskin_skin.h of the built-in catalogue, rendered by codegen/targets/c.py."""
+    """The C headers of the built-in catalogue (double and float), rendered by codegen/targets/c.py."""
     from cgaskin.codegen import catalogue
     from cgaskin.codegen.targets import c
     kernels = [make() for make in catalogue.KERNELS]
@@ -59,7 +60,7 @@ def main(argv=None):
     ap.add_argument("out", type=Path)
     ap.add_argument("--clip", default=None, help="clip name or index (default: the rest pose)")
     ap.add_argument("--time", type=float, default=0.0, help="seconds into the clip")
-    ap.add_argument("--headers", type=Path, default=None, help="also write cgaskin.h, cgaskin_skin.h here")
+    ap.add_argument("--headers", type=Path, default=None, help="also write the C headers (cgaskin.h, ...) here")
     args = ap.parse_args(argv)
     clip = int(args.clip) if args.clip is not None and args.clip.isdigit() else args.clip
     info = export(args.model, args.out, clip, args.time)

@@ -67,6 +67,47 @@ def assert_rows_close(what: str, got, ref, tol: float, inputs=None) -> None:
                              f"row {row}: got {got[row].tolist()}, numba {ref[row].tolist()}{detail}")
 
 
+def input_spread(module, kernel, inputs, eps: float, copies: int = 4, seed: int = 0) -> np.ndarray:
+    """(rows,) D: the largest change of numba's float64 result over ``copies`` copies of each row's
+    inputs with every entry moved by one relative ``eps`` (random sign): what rounding the inputs to
+    a precision of that ``eps`` alone may change. inf where the move changes whether an output is
+    finite (the row sits on a singularity)."""
+    from tests.helpers.target_cases import reference
+    rng = np.random.default_rng(seed)
+    ref = reference(module, kernel, inputs)
+    spread = np.zeros(len(ref))
+    for _ in range(copies):
+        moved = tuple(a * (1.0 + eps * rng.choice([-1.0, 1.0], size=a.shape)) for a in inputs)
+        other = reference(module, kernel, moved)
+        with np.errstate(invalid="ignore"):
+            change = np.where(np.isfinite(ref) & np.isfinite(other), np.abs(other - ref),
+                              np.where((np.isnan(ref) & np.isnan(other)) | (ref == other), 0.0, np.inf))
+        spread = np.maximum(spread, change.max(axis=1))
+    return spread
+
+
+def assert_rows_close_float(what: str, got, ref, spread, tol: float, inputs=None) -> None:
+    """A float result against numba's float64 one on the same (float-rounded) inputs:
+    |got - ref| <= tol * S + 16 D per output (S the row's scale as in ``assert_rows_close``, D its
+    ``input_spread`` at float's eps: a row that rounding an input by one float ulp changes by more than
+    tol * S is ill-conditioned, and float arithmetic inside the kernel rounds by that much and more).
+    Where numba's output is not finite and the row is not singular (D finite), the float result must
+    be the same NaN or infinity; on a singular row (D = inf) nothing is asserted of it."""
+    got, ref = np.asarray(got, np.float64), np.asarray(ref, np.float64)
+    finite = np.isfinite(ref)
+    scale = np.maximum(1.0, np.max(np.where(finite, np.abs(ref), 0.0), axis=-1, keepdims=True))
+    d = spread[:, None]
+    with np.errstate(invalid="ignore"):
+        close = finite & (np.abs(got - ref) <= tol * scale + 16.0 * d)
+        same_special = ~finite & ((np.isnan(ref) & np.isnan(got)) | (got == ref))
+    ok = close | same_special | np.isinf(d)
+    if not ok.all():
+        row = int(np.argwhere(~ok)[0][0])
+        detail = "" if inputs is None else f"\ninputs of row {row}: {[np.asarray(a)[row].tolist() for a in inputs]}"
+        raise AssertionError(f"{what}: {int((~ok).sum())} outputs differ beyond {tol} x scale + 16 D; row {row}: "
+                             f"got {got[row].tolist()}, numba {ref[row].tolist()}, D {spread[row]:.3g}{detail}")
+
+
 def user_catalogue(tmp_path_factory):
     """``user_kernels`` built once per session for both the C and the CUDA tests (one folder, so its
     cache hits): (Kernel IRs, uniform dict, numba module)."""
