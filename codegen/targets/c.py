@@ -51,7 +51,7 @@ if inline int long register restrict return short signed sizeof static struct sw
 unsigned void volatile while""".split())
 
 
-def _c_literal(value) -> str:
+def c_literal(value) -> str:
     v = float(value)
     if v != v:
         return "NAN"
@@ -65,7 +65,7 @@ C99 = Dialect(
     {sympy.sin: "sin({})", sympy.cos: "cos({})", sympy.atan2: "atan2({}, {})", sympy.acos: "acos({})",
      sympy.log: "log({})", sympy.exp: "exp({})", sympy.Abs: "fabs({})", sympy.atanh: "atanh({})",
      sympy.cosh: "cosh({})", sympy.sinh: "sinh({})", sympy.Max: "fmax({}, {})", sympy.Min: "fmin({}, {})"},
-    literal=_c_literal,
+    literal=c_literal,
     select=lambda cond, a, b: f"({cond} ? {a} : {b})",
     conjunction=(" && ", " || "),
     true="1",
@@ -78,7 +78,7 @@ C99 = Dialect(
 C99_FLOAT = replace(
     C99, name="c99-float",
     functions={f: (t.replace("(", "f(", 1) if not t.startswith("(") else t) for f, t in C99.functions.items()},
-    literal=lambda v: _c_literal(v) if not math.isfinite(float(v)) else _c_literal(v) + "f",
+    literal=lambda v: c_literal(v) if not math.isfinite(float(v)) else c_literal(v) + "f",
     sqrt="sqrtf({})", cbrt="cbrtf({})")
 
 #: (dialect, C type, name infix) of each precision: ``<prefix>_k`` in double, ``<prefix>_f32_k`` in float

@@ -42,7 +42,7 @@ NUMBA_CUDA = replace(PYTHON, name="numba-cuda", cbrt="cuda.cbrt({})")
 
 
 def _cuda_literal(value) -> str:
-    text = c_target._c_literal(value)
+    text = c_target.c_literal(value)
     # CUDA C has no <math.h> macros without includes: NaN and infinity from their bit patterns
     return {"NAN": 'nan("")', "INFINITY": "__longlong_as_double(0x7ff0000000000000LL)",
             "(-INFINITY)": "__longlong_as_double(0xfff0000000000000LL)"}.get(text, text)

@@ -2,7 +2,9 @@
 NVRTC: every kernel of the built-in and of a user catalogue, as a numba-cuda device function behind its
 ``@cuda.jit`` batch kernel, equals its numba kernel on hypothesis-drawn inputs (<= 1e-12 of the row's
 scale); the simulated skinning kernels skin the shared Fox model equal to ``cgaskin.skin`` and count bad
-input like the numba loop; the CUDA C headers compile under NVRTC without a diagnostic.
+input like the numba loop; the CUDA C headers compile under NVRTC without a diagnostic, and, compiled
+for the host by c++ as a grid of one thread (``HOST_CUDA_SHIM``), their kernels equal numba and their
+skinning kernel skins Fox equal to ``cgaskin.skin``.
 
 The simulator needs NUMBA_ENABLE_CUDASIM=1 before numba is imported, and this session imported numba
 long ago, so one runner process per module (_cuda_sim_runner.py) executes the launches. No GPU is used
@@ -162,3 +164,80 @@ def test_cuda_c_compiles_clean_with_nvrtc(catalogue, tmp_path_factory):
         main = "userkernels.cuh"
     ok, log = nvrtc_compile(f'#include "{main}"\n', "check.cu", {n: t for n, t in files.items() if n.endswith(".cuh")})
     assert ok and not log, f"NVRTC on {main}:\n{log}"
+
+
+#: what a CUDA compiler provides that the CUDA C files use, for a host C++ compiler: a grid of one
+#: thread (the grid-stride loops then visit every row), plain functions for the qualifiers, a serial
+#: atomicAdd, NaN/inf from bits; everything else (sqrt, sin, isfinite, nan) is the C library's
+HOST_CUDA_SHIM = """\
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+#define __device__
+#define __forceinline__ inline
+#define __global__
+struct cgaskin_dim3 { unsigned int x, y, z; };
+static const cgaskin_dim3 blockIdx = {0, 0, 0}, threadIdx = {0, 0, 0}, blockDim = {1, 1, 1}, gridDim = {1, 1, 1};
+static inline unsigned long long atomicAdd(unsigned long long *a, unsigned long long v) { unsigned long long o = *a; *a += v; return o; }
+static inline double __longlong_as_double(long long bits) { double d; memcpy(&d, &bits, sizeof d); return d; }
+"""
+
+
+@pytest.fixture(scope="module")
+def cuda_c_on_host(tmp_path_factory):
+    """The built-in catalogue's CUDA C files compiled for the host by c++ (HOST_CUDA_SHIM) into a
+    shared library: (ffi, lib, kernels, numba module)."""
+    import shutil
+    try:
+        import cffi
+    except ImportError:
+        cffi = None
+    cxx = shutil.which("c++")
+    require([n for n, ok in (("a C++ compiler (c++)", cxx), ("cffi (PyPI)", cffi)) if not ok],
+            "the CUDA C host execution test")
+    directory = tmp_path_factory.mktemp("cuda_c_host")
+    kernels, module = builtin_kernels()
+    for name, text in cuda_target.render(kernels, prefix="cgaskin", header=HEADER, skinning=True).items():
+        (directory / name).write_text(text)
+    (directory / "host.cpp").write_text(HOST_CUDA_SHIM + 'extern "C" {\n#include "cgaskin_skin.cuh"\n}\n')
+    result = subprocess.run([cxx, "-std=c++11", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-Werror", "-shared",
+                             "-fPIC", str(directory / "host.cpp"), "-o", str(directory / "libhost.so")],
+                            capture_output=True, text=True)
+    assert result.returncode == 0 and not result.stderr.strip(), result.stderr
+    from cgaskin.codegen.targets import c as c_target
+    ffi = cffi.FFI()
+    ffi.cdef("\n".join(f"void cgaskin_{k.name}_batch({', '.join(['size_t n_rows'] + c_target.parameters(k, True))});"
+                       for k in kernels)
+             + "\nvoid cgaskin_skin_blend_kernel(size_t n, size_t k, const double *rest, const int *joints,"
+               " const double *weights, size_t n_bones, const double *affines, double *out, unsigned long long *counts);")
+    return ffi, ffi.dlopen(str(directory / "libhost.so")), kernels, module
+
+
+def test_cuda_c_executed_on_host_equals_numba(cuda_c_on_host, models_dir):
+    """The CUDA C text (the C printer with CUDA qualifiers, grid-stride __global__ loops) executed on
+    the CPU as a grid of one thread: every built-in kernel equals numba (1e-12 of the row's scale) on
+    hypothesis-drawn rows, and the skinning kernel skins Fox equal to cgaskin.skin. (What a GPU's own
+    sqrt/sin/cbrt give is its libdevice's, within a few ulp of these; this checks the printed code.)"""
+    import cgaskin
+    ffi, lib, kernels, module = cuda_c_on_host
+    ptr = lambda t, a: ffi.from_buffer(t, a)  # noqa: E731
+
+    @given(data=st.data(), magnitude=st.sampled_from([1.0, 10.0, 1e4]))
+    def check(data, magnitude):
+        for kernel in kernels:
+            inputs = tuple(np.ascontiguousarray(a) for a in data.draw(input_arrays(kernel, ROWS, magnitude), label=kernel.name))
+            out = np.empty((ROWS, len(kernel.outputs)))
+            getattr(lib, f"cgaskin_{kernel.name}_batch")(ROWS, *(ptr("double[]", a) for a in inputs), ptr("double[]", out))
+            assert_rows_close(f"CUDA C (host) cgaskin_{kernel.name}", out, reference(module, kernel, inputs), TOL, inputs)
+
+    check()
+    rig, pose = fox_posed(models_dir)
+    rest, weights = np.ascontiguousarray(rig.vertices), np.ascontiguousarray(rig.weights)
+    joints, affines = np.ascontiguousarray(rig.joints, np.int32), np.ascontiguousarray(pose.bone_affines())
+    out, counts = np.empty_like(rest), np.zeros(3, np.uint64)
+    lib.cgaskin_skin_blend_kernel(len(rest), 4, ptr("double[]", rest), ptr("int[]", joints), ptr("double[]", weights),
+                                  len(affines), ptr("double[]", affines), ptr("double[]", out),
+                                  ptr("unsigned long long[]", counts))
+    ref = cgaskin.skin(rig, pose)
+    assert counts.tolist() == [0, 0, 0]
+    assert np.abs(out - ref).max() <= TOL * np.abs(ref).max()
