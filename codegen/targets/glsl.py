@@ -29,7 +29,7 @@ import sympy
 
 from ..expressions import Dialect, kernel_body
 from ..ir import CodegenError, Kernel
-from .glsl_math import DOUBLE_FUNCTIONS, library
+from .glsl_math import DOUBLE_FUNCTIONS, FLOAT_FUNCTIONS, library
 
 #: GLSL keywords, reserved words and the built-in functions a kernel's local names must not shadow
 RESERVED = frozenset("""
@@ -77,9 +77,9 @@ def dialect(prefix: str, double: bool) -> Dialect:
                      for n in DOUBLE_FUNCTIONS}
         literal = lambda v: repr(float(v)) + "lf"                          # noqa: E731
     else:
-        functions = {sympy.exp: "exp({})", sympy.log: "log({})", sympy.sin: "sin({})", sympy.cos: "cos({})",
-                     sympy.atan2: "atan({}, {})", sympy.acos: "acos({})", sympy.atanh: "atanh({})",
-                     sympy.sinh: "sinh({})", sympy.cosh: "cosh({})"}
+        functions = {sympy.exp: "exp({})", sympy.sin: "sin({})", sympy.cos: "cos({})", sympy.cosh: "cosh({})"}
+        functions.update({getattr(sympy, n): f"{prefix}_lib_{n}({{}}" + (", {})" if n == "atan2" else ")")
+                          for n in FLOAT_FUNCTIONS})
         literal = lambda v: repr(float(v))                                 # noqa: E731 (unsuffixed: float)
     functions.update({sympy.Abs: "abs({})", sympy.sign: "sign({})", sympy.Max: "max({}, {})",
                       sympy.Min: "min({}, {})"})
@@ -134,8 +134,8 @@ def include(kernels, prefix: str, header, double: bool, uniform=None) -> str:
                   "|x| < 1.6e6; results below 2^-1022 may flush to zero), so every kernel, versor_log and",
                   "versor_exp included, is double-precision throughout."]
     else:
-        notes += ["Transcendental functions are GLSL's float built-ins (driver accuracy); cbrt is",
-                  "<prefix>_lib_cbrt (a pow estimate refined by a Newton step)."]
+        notes += ["exp/sin/cos/cosh are GLSL's float built-ins (driver accuracy); log, atan2, acos, atanh,",
+                  "sinh and cbrt are the <prefix>_lib_* functions below (GLSL's are inaccurate or absent)."]
     parts = [comment(list(header) + notes, title), library(prefix, double)]
     parts += [kernel_function(k, prefix, d, real, (uniform or {}).get(k.name, ())) for k in kernels]
     return "\n".join(parts)

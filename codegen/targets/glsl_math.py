@@ -18,14 +18,22 @@ sinh cosh  Taylor to x^21 for |x| < 1 (sinh), (e Â± 1/e)/2 otherwise, e^(|x|/2)Â
 cbrt    (both precisions) x = m 2^(3q+r): a float pow estimate of cbrt(m 2^r) in [0.79, 1.59], Newton steps
         (two in double, one in float), times 2^q: no overflow or underflow at any finite x
 
-The reductions are declared ``precise`` so that the compiler neither fuses nor reassociates them. The
-float include uses GLSL's own float functions (their accuracy is the driver's: within 1e-6 relative on
-Mesa llvmpipe on the tested ranges) and only adds cbrt and NaN.
+The reductions are declared ``precise`` so that the compiler neither fuses nor reassociates them.
+
+The float include uses GLSL's own exp, sin, cos and cosh (measured on Mesa llvmpipe: 1.1e-7 relative
+for sin/cos on [-10, 10], 1e-6 for exp/cosh) and the same algorithms as above, in float, for log,
+atan2, acos, atanh and sinh, which GLSL does not make accurate: llvmpipe's float atan is 2e-5 relative,
+acos 1.6e-4 absolute, log 1.6e-6 absolute near 1 (unbounded relative), sinh and atanh lose relative
+accuracy near 0 (GLSL 4.60 section 8.1 gives no precision for the trigonometric functions at all).
 """
 from __future__ import annotations
 
+import math
+
 #: sympy function name -> GLSL helper name (without the prefix) in the double include
 DOUBLE_FUNCTIONS = ("exp", "log", "sin", "cos", "atan2", "acos", "atanh", "sinh", "cosh")
+#: ... and in the float include (the others are GLSL's float built-ins)
+FLOAT_FUNCTIONS = ("log", "atan2", "acos", "atanh", "sinh")
 
 _DOUBLE = """\
 double P_lib_nan() { return packDouble2x32(uvec2(0u, 0x7ff80000u)); }
@@ -222,6 +230,76 @@ double P_lib_cbrt(double x) {
 
 _FLOAT = """\
 float P_lib_nanf() { return uintBitsToFloat(0x7fc00000u); }
+bool P_lib_signbit(float x) { return (floatBitsToUint(x) & 0x80000000u) != 0u; }
+
+float P_lib_log(float x) {
+    if (isnan(x) || x < 0.0) return P_lib_nanf();
+    if (x == 0.0) return -uintBitsToFloat(0x7f800000u);
+    if (isinf(x)) return x;
+    int e, sub = 0;
+    if (x < 1.17549435e-38) { x *= 16777216.0; sub = 24; }           // frexp needs a normal x
+    float m = frexp(x, e);
+    e -= sub;
+    if (m < 0.70710678) { m = 2.0 * m; e = e - 1; }
+    precise float f = m - 1.0;
+    float s = f / (2.0 + f);
+    float s2 = s * s;
+    float p = LOG_SERIES_F;                              // sum of s2^n / (2n + 1), n <= 5
+    float de = float(e);
+    precise float lo = de * 9.05800061445916e-06 + 2.0 * s * p;
+    return de * 0.6931381225585938 + lo;
+}
+
+float P_lib_log1p(float u) {
+    precise float w = 1.0 + u;
+    if (w == 1.0) return u;
+    precise float d = w - 1.0;
+    return P_lib_log(w) * (u / d);
+}
+
+float P_lib_atan01(float t) {
+    bool upper = t > 0.41421356;
+    float u = upper ? (t - 1.0) / (t + 1.0) : t;
+    float u2 = u * u;
+    float p = ATAN_SERIES_F;                             // atan u = u + u^3 p(u^2), to u^21
+    float a = u + u * u2 * p;
+    precise float shifted = 0.7853981852531433 + (a - 2.1855694143368964e-08);
+    return upper ? shifted : a;
+}
+
+float P_lib_atan2(float y, float x) {
+    if (isnan(x) || isnan(y)) return P_lib_nanf();
+    float ax = abs(x), ay = abs(y);
+    float a;
+    if (ax == ay) a = (ax == 0.0) ? 0.0 : 0.7853981852531433;
+    else if (ay < ax) a = P_lib_atan01(ay / ax);
+    else { precise float c = 1.5707963705062866 - (P_lib_atan01(ax / ay) + 4.371138828673793e-08); a = c; }
+    if (P_lib_signbit(x)) { precise float c = 3.1415927410125732 - (a + 8.742277657347586e-08); a = c; }
+    return P_lib_signbit(y) ? -a : a;
+}
+
+float P_lib_acos(float x) {
+    if (!(abs(x) <= 1.0)) return P_lib_nanf();
+    return P_lib_atan2(sqrt((1.0 - x) * (1.0 + x)), x);
+}
+
+float P_lib_atanh(float x) {
+    float ax = abs(x);
+    if (!(ax <= 1.0)) return P_lib_nanf();
+    if (ax == 1.0) return x * uintBitsToFloat(0x7f800000u);
+    if (x == 0.0) return x;
+    float v = 0.5 * P_lib_log1p(2.0 * ax / (1.0 - ax));
+    return x < 0.0 ? -v : v;
+}
+
+float P_lib_sinh(float x) {
+    float ax = abs(x);
+    if (ax < 1.0) { float x2 = x * x; return x + x * x2 * SINH_SERIES_F; }
+    float v;
+    if (ax > 88.0) { float h = exp(0.5 * ax); v = (0.5 * h) * h; }
+    else { float e = exp(ax); v = 0.5 * (e - 1.0 / e); }
+    return x < 0.0 ? -v : v;
+}
 
 float P_lib_cbrt(float x) {
     if (x == 0.0 || isnan(x) || isinf(x)) return x;
@@ -237,15 +315,18 @@ float P_lib_cbrt(float x) {
 """
 
 
-def _horner(var: str, coefficients) -> str:
-    """c0 + var (c1 + var (c2 + ...)) with double literals (no division left to the shader)."""
-    text = f"{coefficients[-1]!r}lf"
+def _horner(var: str, coefficients, suffix: str = "lf") -> str:
+    """c0 + var (c1 + var (c2 + ...)) with literals (no division left to the shader)."""
+    text = f"{coefficients[-1]!r}{suffix}"
     for c in reversed(coefficients[:-1]):
-        text = f"({c!r}lf + {var} * {text})"
+        text = f"({c!r}{suffix} + {var} * {text})"
     return text
 
 
-_SERIES = {"LOG_SERIES": _horner("s2", [1.0 / (2 * n + 1) for n in range(12)]),
+_SERIES = {"LOG_SERIES_F": _horner("s2", [1.0 / (2 * n + 1) for n in range(6)], ""),
+           "ATAN_SERIES_F": _horner("u2", [(-1.0) ** n / (2 * n + 1) for n in range(1, 11)], ""),
+           "SINH_SERIES_F": _horner("x2", [1.0 / math.factorial(2 * n + 1) for n in range(1, 7)], ""),
+           "LOG_SERIES": _horner("s2", [1.0 / (2 * n + 1) for n in range(12)]),
            "ATAN_SERIES": _horner("u2", [(-1.0) ** n / (2 * n + 1) for n in range(1, 23)])}
 
 
