@@ -6,7 +6,8 @@ Files (``render``):
 <prefix>.glsl      every kernel as a double-precision function (doubles are core GLSL since 4.00, the
                    ``GL_ARB_gpu_shader_fp64`` features; literals suffixed ``lf``), with the double
                    scalar functions of ``glsl_math`` (GLSL has no double exp/sin/log/atan/...)
-<prefix>_f32.glsl  the same functions in float, for drivers without fp64 (GLSL's own float functions)
+<prefix>_f32.glsl  the same functions in float, for drivers without fp64 (GLSL's float exp, sin, cos,
+                   cosh; ``glsl_math``'s float log, atan2, acos, atanh, sinh, cbrt)
 
 Neither has a #version line: paste or ``#include`` it after your own. Both can be included together:
 the two precisions are overloads of the same names (GLSL picks by the argument types). A kernel ``k``
