@@ -2,8 +2,9 @@
 
     python -m benchmarks.bench_targets_cpu [--vertices 1000000] [--bones 32] [--cuda [--cuda-vertices 10000000]]
 
-Rows: the C99 target's cgaskin_skin_blend (codegen/targets/c.py) compiled -O3 and called through cffi on
-the numpy buffers (no copies), and cgaskin.skin_affine (the numba loop) serial and prange, on the same
+Rows: the C99 target's cgaskin_skin_blend (codegen/targets/c.py) compiled -O3 (and -O3 -march=native, and
+its float twin cgaskin_f32_skin_blend) and called through cffi on the numpy buffers (no copies), and
+cgaskin.skin_affine (the numba loop) serial and prange, on the same
 arrays: rest (n, 3) float64, joints (n, 4) int32, weights (n, 4) float64, affines (B, 12), out (n, 3).
 The loop moves 96 B per vertex (rest 24 + joints 16 + weights 32 read, out 24 written; the B x 96 B of
 affines stay in cache). The memory bound is that traffic at the bandwidth of a copy measured in the
@@ -33,6 +34,7 @@ from ._timing import median_seconds, print_table
 from .bench_skinning import make_problem
 
 BYTES_PER_VERTEX = 3 * 8 + 4 * 4 + 4 * 8 + 3 * 8     # rest, joints int32, weights, out
+BYTES_PER_VERTEX_F32 = 3 * 4 + 4 * 4 + 4 * 4 + 3 * 4  # the same in float (the float header)
 
 
 @njit(cache=True, parallel=True)
@@ -47,19 +49,30 @@ def builtin_kernels():
 
 
 def c_skin_blend(kernels, directory: Path, flags=("-O3",)):
-    """The C target's cgaskin_skin_blend, compiled with ``flags`` into a shared library: (ffi, lib)."""
+    """The C target's cgaskin_skin_blend and cgaskin_f32_skin_blend, compiled with ``flags`` into a
+    shared library: (ffi, lib)."""
     import cffi
     from cgaskin.codegen.targets import c
     for name, text in c.render(kernels, prefix="cgaskin", header=["bench_targets_cpu"], skinning=True).items():
         (directory / name).write_text(text)
-    (directory / "skin.c").write_text('#define CGASKIN_API\n#include "cgaskin_skin.h"\n')
+    # the header's functions stay static inline (what a C program gets): exported wrappers call them,
+    # so the compiler inlines the per-vertex code into the loop (with -fPIC, external definitions of
+    # the header's functions would be interposable calls, not inlined: measured ~2x slower)
+    wrappers = [f"""{p}_skin_counts bench_{p}_skin_blend(size_t n, size_t k, const {real} *rest, const int32_t *joints,
+        const {real} *weights, size_t n_bones, const {real} *affines, {real} *out)
+{{
+    return {p}_skin_blend(n, k, rest, joints, weights, n_bones, affines, out);
+}}
+""" for p, real in (("cgaskin", "double"), ("cgaskin_f32", "float"))]
+    (directory / "skin.c").write_text('#include "cgaskin_skin.h"\n#include "cgaskin_skin_f32.h"\n\n' + "\n".join(wrappers))
     lib_path = directory / f"libskin{abs(hash(flags))}.so"
-    subprocess.run(["cc", "-std=c99", *flags, "-ffp-contract=off", "-shared", "-fPIC", str(directory / "skin.c"),
+    subprocess.run(["cc", "-std=c99", "-Wall", "-Wextra", "-Werror", *flags, "-ffp-contract=off", "-shared", "-fPIC", str(directory / "skin.c"),
                     "-o", str(lib_path), "-lm"], check=True)
     ffi = cffi.FFI()
-    ffi.cdef("typedef struct { size_t bad_joints; size_t bad_weights; size_t bad_values; } cgaskin_skin_counts;\n"
-             "cgaskin_skin_counts cgaskin_skin_blend(size_t n, size_t k, const double *rest, const int32_t *joints,"
-             " const double *weights, size_t n_bones, const double *affines, double *out);")
+    for p, real in (("cgaskin", "double"), ("cgaskin_f32", "float")):
+        ffi.cdef(f"typedef struct {{ size_t bad_joints; size_t bad_weights; size_t bad_values; }} {p}_skin_counts;\n"
+                 f"{p}_skin_counts bench_{p}_skin_blend(size_t n, size_t k, const {real} *rest, const int32_t *joints,"
+                 f" const {real} *weights, size_t n_bones, const {real} *affines, {real} *out);")
     return ffi, ffi.dlopen(str(lib_path))
 
 
@@ -76,9 +89,15 @@ def cpu_table(args, kernels, work: Path) -> None:
         ptr = {name: ffi.from_buffer(t, a) for name, t, a in (
             ("rest", "double[]", rest), ("joints", "int32_t[]", joints), ("weights", "double[]", weights),
             ("affines", "double[]", affines), ("out", "double[]", out_c))}
-        call = lambda: lib.cgaskin_skin_blend(n, 4, ptr["rest"], ptr["joints"], ptr["weights"],  # noqa: E731
+        call = lambda: lib.bench_cgaskin_skin_blend(n, 4, ptr["rest"], ptr["joints"], ptr["weights"],  # noqa: E731
                                               len(affines), ptr["affines"], ptr["out"])
         rows.append((f"C99 target skin_blend {label} (cffi)", median_seconds(call, args.repeat)))
+    f32 = {name: np.ascontiguousarray(a, np.float32) for name, a in (("rest", rest), ("weights", weights),
+                                                                       ("affines", affines))}
+    out_f32 = np.empty_like(f32["rest"])
+    p32 = {name: ffi.from_buffer("float[]", a) for name, a in (*f32.items(), ("out", out_f32))}
+    t_f32 = median_seconds(lambda: lib.bench_cgaskin_f32_skin_blend(n, 4, p32["rest"], ptr["joints"], p32["weights"],
+                                                               len(affines), p32["affines"], p32["out"]), args.repeat)
     cgaskin.skin_affine(rest, joints, weights, affines, parallel=False, out=out_numba)
     err = np.abs(out_c - out_numba).max() / np.abs(out_numba).max()
     rows.append(("numba skin_affine serial", median_seconds(
@@ -93,12 +112,16 @@ def cpu_table(args, kernels, work: Path) -> None:
     t_copyn = median_seconds(lambda: parallel_copy(src, dst), args.repeat)
     bound = min(t_copy1, t_copyn)
     table = [[name, t * 1e3, n / t, bound / t] for name, t in rows]
+    # the float loop moves fewer bytes: its bound is the copy time scaled to them
+    table.insert(2, [f"C99 target f32 skin_blend -O3 -march=native ({BYTES_PER_VERTEX_F32} B/vertex)", t_f32 * 1e3,
+                     n / t_f32, bound * BYTES_PER_VERTEX_F32 / BYTES_PER_VERTEX / t_f32])
     table.append([f"memory bound, numpy copy (1 thr, {2 * src.nbytes / t_copy1 / 1e9:.1f} GB/s)", t_copy1 * 1e3,
                   n / t_copy1, bound / t_copy1])
     table.append([f"memory bound, prange copy ({numba.get_num_threads()} thr, {2 * src.nbytes / t_copyn / 1e9:.1f} GB/s)",
                   t_copyn * 1e3, n / t_copyn, bound / t_copyn])
     print_table(f"Skinning {n} vertices x 4 influences x {args.bones} bones, {BYTES_PER_VERTEX} B/vertex "
-                f"(median of {args.repeat}; C vs numba max relative difference {err:.1e})",
+                f"(median of {args.repeat}; C vs numba max relative difference {err:.1e}, "
+                f"float C {np.abs(out_f32 - out_numba).max() / np.abs(out_numba).max():.1e})",
                 ["method", "ms", "vertices/s", "of bound"], table)
 
 

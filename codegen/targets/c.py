@@ -5,7 +5,8 @@ Files (``render``):
 ``<prefix>.h``
     ``#include <math.h>`` and ``<stddef.h>`` (size_t) only; every function is ``<PREFIX>_API``, which
     defaults to ``static inline`` (define it, e.g. empty, before including the header to get external
-    definitions for a shared library). For each kernel ``k``:
+    definitions; in a -fPIC library those are interposable and not inlined into the loops, so fast
+    code exports wrappers of the static inline functions instead). For each kernel ``k``:
 
     ``void <prefix>_k(const double a[12], const double x[3], double angle, double out[N])``
         multivector and array inputs as flat arrays in the blade order of generated/layout.py, scalar
@@ -202,7 +203,9 @@ def header_source(kernels, prefix: str, header, uniform=None, precision: str = "
                        f"{prefix}{infix}_<kernel>_batch(n_rows, ...).",
                        f"Flat {real} arrays in the blade order of cgaskin's generated/layout.py; 3x4 matrices row-major.",
                        f"Every function is {api} (default: static inline); #define {api} (e.g. empty) before",
-                       "including this header to get external definitions (one translation unit)."]),
+                       "including this header to get external definitions (one translation unit). In a -fPIC shared",
+                       "library those are interposable calls the compiler does not inline into the batch and skinning",
+                       "loops (about 2x slower skinning): export your own wrappers of the static inline functions."]),
              f"#ifndef {guard}", f"#define {guard}", "", "#include <math.h>", "#include <stddef.h>", "",
              f"#ifndef {api}", f"#define {api} static inline", "#endif", ""]
     for k in kernels:
