@@ -18,6 +18,7 @@ command -v node >/dev/null 2>&1 || missing+=(nodejs)
 command -v npm >/dev/null 2>&1 || missing+=(npm)
 command -v cc >/dev/null 2>&1 || missing+=(gcc libc6-dev)
 command -v glslangValidator >/dev/null 2>&1 || missing+=(glslang-tools)
+command -v spirv-val >/dev/null 2>&1 || missing+=(spirv-tools)
 # Mesa: EGL + llvmpipe (moderngl's headless GL 4.5) and lavapipe (wgpu's Vulkan adapter)
 for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri mesa-vulkan-drivers libvulkan1; do
     dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
