@@ -22,7 +22,7 @@ counting.
 from __future__ import annotations
 
 from ..ir import CodegenError
-from .glsl import comment, dialect, kernel_function
+from .glsl_kernels import comment, dialect, kernel_function
 from .glsl_math import library
 
 LOCAL_SIZE = 64

@@ -41,7 +41,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from cgaskin.codegen.targets import glsl
+from cgaskin.codegen.targets import glsl, glsl_kernels
 from tests.helpers import gl_compute
 from tests.helpers.target_cases import builtin_kernels, input_arrays, reference, user_kernels
 
@@ -243,10 +243,10 @@ def test_render_contract(catalogues):
 def test_reserved_names_are_renamed():
     """A user's input named like a GLSL keyword or built-in (``sample``, ``input``) is renamed."""
     kernel = next(k for k in builtin_kernels()[0] if k.name == "affine_point")
-    renamed = glsl.glsl_kernel(dataclasses.replace(kernel, inputs=(
+    renamed = glsl_kernels.glsl_kernel(dataclasses.replace(kernel, inputs=(
         dataclasses.replace(kernel.inputs[0], name="sample"), dataclasses.replace(kernel.inputs[1], name="input"))))
     assert [i.name for i in renamed.inputs] == ["v_sample", "v_input"]
-    assert glsl.glsl_kernel(kernel) is kernel
+    assert glsl_kernels.glsl_kernel(kernel) is kernel
 
 
 # -- the scalar functions GLSL lacks in double -------------------------------------------------------
