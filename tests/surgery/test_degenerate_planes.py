@@ -96,6 +96,20 @@ def incision(rig, xs, opening, row="top"):
     return rig, results
 
 
+def rotation(seed) -> np.ndarray:
+    """A random rotation matrix (3, 3)."""
+    q, r = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return q if np.linalg.det(q) > 0 else -q
+
+
+def moved(rig, rotation, shift):
+    """``rig`` with its vertices rotated and shifted: the grid planes are no longer axis planes, and
+    its vertices lie on them only up to rounding (the tolerances decide)."""
+    return rig.with_mesh(np.asarray(rig.vertices) @ rotation.T + shift, rig.faces, rig.joints, rig.weights,
+                         dict(rig.attributes))
+
+
 def cut_checked(rig, normal, point, cap, closed=True):
     with warnings.catch_warnings():
         warnings.simplefilter("error")           # a plane that misses would warn
@@ -178,6 +192,24 @@ def test_tear_up_a_staircase_along_a_grid_plane(y, step, opening):
         assert not result.jumps.any() and (i == 0 or (result.kinds[0] == VERTEX and result.split[0]))
         assert np.abs(result.points[:, 1] - y).max() <= 1e-12
         rig = result.rig
+    assert len(tear_topology(rig).boundary_loops()) == 1 and pieces(rig) == 1
+
+
+@pytest.mark.parametrize("opening", [0.0, 0.002])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_tear_incision_along_a_row_of_a_rotated_capsule(seed, opening):
+    """The issue's incision on a rotated and shifted capsule: the row's vertices lie on the planes only
+    up to rounding, and each welded vertex's one classification (``tol``) keeps the walk along the row:
+    40 strokes continue one slit."""
+    rot, shift = rotation(seed), np.array([2.0, -1.0, 0.5])
+    rig = moved(capsule_arm(), rot, shift)
+    x = 0.1
+    for i in range(40):
+        blades = [np.array(row_blade(x + d)) @ rot.T + shift for d in (0.0, 0.014)]
+        result = tear_stroke(rig, *blades, opening=opening)
+        check_tear(rig, result, *blades, opening)
+        assert not result.jumps.any() and (i == 0 or (result.kinds[0] == VERTEX and result.split[0]))
+        rig, x = result.rig, x + 0.014
     assert len(tear_topology(rig).boundary_loops()) == 1 and pieces(rig) == 1
 
 
@@ -333,3 +365,14 @@ def test_cut_a_staircase_along_grid_planes(normal, point, cap):
     of vertices, edges and faces in the plane; the caps' loops with runs of collinear vertices, which
     once gave zero-area cap triangles): the cut's invariants hold, and no sliver anywhere."""
     cut_checked(staircase(STAIRS), normal, point, cap)       # (both halves non-empty: a miss would warn)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_cut_a_rotated_staircase_along_its_grid_planes(seed):
+    """The grid planes of a rotated staircase far from the origin: vertices, edges and faces lie in
+    them only up to rounding; the same invariants hold (with and without caps)."""
+    rot, shift = rotation(seed), np.array([100.0, -3.0, 7.0])
+    rig = moved(staircase(STAIRS), rot, shift)
+    for normal, point in _grid_planes():
+        for cap in (False, True):
+            cut_checked(rig, np.array(normal) @ rot.T, np.array(point) @ rot.T + shift, cap)

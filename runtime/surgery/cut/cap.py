@@ -46,8 +46,9 @@ def _left_or_on(ax, ay, bx, by, px, py, min_sine):
     between b and p at most ``min_sine`` to the right): a loop vertex that the plane's section puts on
     a triangle's side, where the plane runs along a flat part of the mesh, is on it even when its 2D
     coordinates put it a rounding error outside (clipping that ear would leave a zero-area triangle)."""
-    return _orient(ax, ay, bx, by, px, py) >= -min_sine * math.sqrt(
-        ((bx - ax) ** 2 + (by - ay) ** 2) * ((px - ax) ** 2 + (py - ay) ** 2))
+    turn = _orient(ax, ay, bx, by, px, py)
+    return turn >= 0.0 or turn >= -min_sine * math.sqrt(((bx - ax) ** 2 + (by - ay) ** 2)
+                                                        * ((px - ax) ** 2 + (py - ay) ** 2))
 
 
 @kernel((F2, I1, f8), cost=0.5)
