@@ -16,7 +16,7 @@ const double *weights, size_t n_bones, const double *affines, double *out)``
 from __future__ import annotations
 
 from ..ir import CodegenError
-from .c import PRECISIONS, comment, check_prefix, guard_name
+from .c_kernels import PRECISIONS, comment, check_prefix, guard_name
 
 
 def require_skinning_kernels(kernels) -> None:
@@ -78,7 +78,7 @@ def skin_header_source(kernels, prefix: str, header, precision: str = "double") 
                        "then per vertex <prefix>_skin_blend (blend the bones' 3x4 maps by the weights, apply once)."]),
              f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", "", f'#include "{include}"', "",
              "/* what the blend loop found: bad joint indices (skipped), negative/NaN weights, non-finite results */",
-             f"typedef struct {{", "    size_t bad_joints;", "    size_t bad_weights;", "    size_t bad_values;",
+             "typedef struct {", "    size_t bad_joints;", "    size_t bad_weights;", "    size_t bad_values;",
              f"}} {prefix}_skin_counts;", "",
              "/* affines (n_bones x 12, row-major 3x4) of versors (n_bones x 12) */",
              f"{api} void {prefix}_bone_affines(size_t n_bones, const {real} *versors, {real} *affines)",

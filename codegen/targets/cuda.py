@@ -17,7 +17,7 @@ Files (``render``):
     import the first by a package path the user chooses.)
 ``<prefix>.cuh`` (CUDA C, no includes)
     ``__device__ __forceinline__ void <prefix>_k(const double a[12], ..., double out[N])``: the C99
-    printer's functions (``codegen.targets.c.function_source``) with the CUDA qualifier, and
+    printer's functions (``codegen.targets.c_kernels.function_source``) with the CUDA qualifier, and
     ``__global__ void <prefix>_k_batch(size_t n_rows, ...)``: the C batch form as a grid-stride loop.
 ``<prefix>_skin.cuh`` (with ``skinning=True``; includes ``<prefix>.cuh``)
     ``__device__ <prefix>_skin_vertex`` (the C one, joints as ``int``),
@@ -34,7 +34,7 @@ from dataclasses import replace
 from ..expressions import PYTHON
 from ..ir import CodegenError
 from ..printer import print_kernel
-from . import c as c_target
+from . import c_kernels as c_target
 from .c_skinning import require_skinning_kernels, skin_functions
 
 #: the numba printer's Python with CUDA's cube root (numpy's cbrt is not a device function)

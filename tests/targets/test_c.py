@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from cgaskin.codegen.targets import c as c_target
+from cgaskin.codegen.targets import c as c_target, c_kernels
 from tests.helpers.target_cases import builtin_kernels, input_arrays, reference
 
 from ._c_cuda_common import (assert_rows_close, assert_rows_close_float, c_compiler, compile_c, fox_posed,
@@ -39,7 +39,7 @@ PRECISIONS = {"double": ("double", "", np.float64), "float": ("float", "_f32", n
 def batch_cdef(kernels, prefix, uniform, real, infix) -> str:
     """cffi declarations of every ``<prefix><infix>_<k>_batch`` (the printer's own parameter lists)."""
     return "\n".join(f"void {prefix}{infix}_{k.name}_batch("
-                     f"{', '.join(['size_t n_rows'] + c_target.parameters(k, True, uniform.get(k.name, ()), real))});"
+                     f"{', '.join(['size_t n_rows'] + c_kernels.parameters(k, True, uniform.get(k.name, ()), real))});"
                      for k in kernels)
 
 

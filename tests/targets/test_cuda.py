@@ -204,9 +204,9 @@ def cuda_c_on_host(tmp_path_factory):
                              "-fPIC", str(directory / "host.cpp"), "-o", str(directory / "libhost.so")],
                             capture_output=True, text=True)
     assert result.returncode == 0 and not result.stderr.strip(), result.stderr
-    from cgaskin.codegen.targets import c as c_target
+    from cgaskin.codegen.targets import c_kernels
     ffi = cffi.FFI()
-    ffi.cdef("\n".join(f"void cgaskin_{k.name}_batch({', '.join(['size_t n_rows'] + c_target.parameters(k, True))});"
+    ffi.cdef("\n".join(f"void cgaskin_{k.name}_batch({', '.join(['size_t n_rows'] + c_kernels.parameters(k, True))});"
                        for k in kernels)
              + "\nvoid cgaskin_skin_blend_kernel(size_t n, size_t k, const double *rest, const int *joints,"
                " const double *weights, size_t n_bones, const double *affines, double *out, unsigned long long *counts);")
