@@ -249,16 +249,18 @@ def test_tear_along_the_top_of_a_wall_in_the_plane():
 @pytest.mark.parametrize("opening", [0.0, 0.01])
 def test_tear_from_inside_a_face_in_the_plane(opening):
     """The second blade lies in the tread z = 1 (it meets the staircase at the tread's far edge): the
-    plane is the tread's, and the first blade's hit is inside a face lying in it. The path leaves that
-    face by a corner and goes on along edges in the plane (no walk across the tread's other faces); no
-    sliver."""
+    plane is the tread's, and the first blade's hit is inside a face lying in it. Over the tread the
+    section is the tread itself; the path goes straight from S_i to S_(i+1) across its faces (not round
+    by their edges), with no sliver."""
     rig = staircase([[2, 2, 2], [1, 1, 1], [1, 1, 1]])
     blades = ([2.3, 1.4, 2.0], [2.3, 1.4, 0.5]), ([3.5, 1.6, 1.0], [2.0, 1.6, 1.0])
     result = tear_stroke(rig, *blades, opening=opening)
     check_tear(rig, result, *blades, opening)
-    assert result.kinds[0] == FACE and np.all(np.abs(result.points[:, 2] - 1.0) <= 1e-12)
-    # the start's face in three, the two faces on the end's edge in two each, no other face split
-    assert result.rig.n_faces == rig.n_faces + 4
+    assert result.kinds[0] == FACE and VERTEX not in result.kinds
+    s, t = result.points[0], result.points[-1]
+    np.testing.assert_allclose(t, [3.0, 1.6, 1.0], atol=1e-12)
+    for p in result.points:                                  # on the segment S_i S_(i+1)
+        assert np.linalg.norm(np.cross(p - s, t - s)) <= 1e-12 and 0.0 <= (p - s) @ (t - s) <= (t - s) @ (t - s)
 
 
 # ---- tear: the slit's own end on the plane -------------------------------------------------------------

@@ -8,6 +8,7 @@ from ...tolerances import tol
 from ..bvh import BVH_ARRAYS
 from ..surface import WELDED_MESH
 from .elements import _along_edge, _edge_parameter, _elements, _in_plane, _push, _push_element
+from .flat import _across_flat, _flat, _line_plane, _line_side
 from .junctions import _boundary_vertex, _jumps, _openings
 from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CARRIER, VERTEX, Ends, Path
 from .region import _margin
@@ -57,6 +58,7 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     if s_kind == EDGE:
         nf[0, 0] = _edge_parameter(s_id, s_pos, cls, plane, wpos, edges)
     t_param = _edge_parameter(t_id, t_pos, cls, plane, wpos, edges) if t_kind == EDGE else 0.0
+    line = _line_plane(plane, s_pos, t_pos)
     if s_kind == VERTEX:
         vertex_used[s_id] = True
     n = np.int64(1)
@@ -79,7 +81,13 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
             break
         kind, ident, ck, cid = ni[node, 0], ni[node, 1], ni[node, 3], ni[node, 4]
         before = n
-        if kind == FACE:
+        if kind == FACE and _flat(ident, wfaces, cls):
+            # the start inside a face lying in the plane: straight on towards S_(i+1) (flat.py)
+            face_used[ident] = True
+            n = _across_flat(ni, nf, target, n, node, ident, np.int64(-1), np.int64(-1), FACE_CARRIER, line, wfaces,
+                             face_edges, wpos, edges, snap, t_kind, t_id, t_param, t_pos, vertex_used, region,
+                             margin, kinds, ids)
+        elif kind == FACE:
             # the start inside a face: the section leaves it at both ends of its chord
             g = ident
             face_used[g] = True
@@ -88,9 +96,20 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
                 n = _push_element(ni, nf, target, n, kinds[q], ids[q], node, FACE_CARRIER, g, plane,
                                   wpos, edges, t_kind, t_id, vertex_used, region, margin)
         elif kind == EDGE and _in_plane(ident, edges, cls):
-            # a point of an edge lying in the plane (an end of the stroke): along the edge, unless it
-            # is a boundary edge (the surface is already open there)
-            if ef_offsets[ident + 1] - ef_offsets[ident] >= 2 and not edge_used[ident]:
+            # a point of an edge lying in the plane: straight on across each face on it that lies in the
+            # plane too; along the edge where a face on it does not (there the edge is the section, or
+            # the border of a flat part), unless it is a boundary edge (the surface is open there)
+            along = False
+            for r in range(ef_offsets[ident], ef_offsets[ident + 1]):
+                g = ef_faces[r]
+                if not _flat(g, wfaces, cls):
+                    along = True
+                elif not (face_used[g] or (ck == FACE_CARRIER and g == cid)):
+                    face_used[g] = True
+                    n = _across_flat(ni, nf, target, n, node, g, EDGE, ident, FACE_CARRIER, line, wfaces, face_edges,
+                                     wpos, edges, snap, t_kind, t_id, t_param, t_pos, vertex_used, region, margin,
+                                     kinds, ids)
+            if along and ef_offsets[ident + 1] - ef_offsets[ident] >= 2 and not edge_used[ident]:
                 edge_used[ident] = True
                 n = _along_edge(ni, nf, target, n, node, ident, plane, wpos, edges, t_kind, t_id, t_param, t_pos,
                                 vertex_used, region, margin)
@@ -131,6 +150,13 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
                     n = _push(ni, nf, target, n, FACE, g, 0.0, t_pos[0], t_pos[1], t_pos[2], node,
                               FACE_CARRIER, g, np.bool_(True))
                     continue
+                if cls[x] == 0 and cls[y] == 0 and _line_side(ident, line, wpos, snap) == 0:
+                    # a face lying in the plane, and the vertex on the line from S_i to S_(i+1): straight
+                    # on across it (and round it by its edges, below)
+                    face_used[g] = True
+                    n = _across_flat(ni, nf, target, n, node, g, VERTEX, ident, FACE_CARRIER, line, wfaces,
+                                     face_edges, wpos, edges, snap, t_kind, t_id, t_param, t_pos, vertex_used,
+                                     region, margin, kinds, ids)
                 if cls[x] * cls[y] < 0:
                     face_used[g] = True
                     n = _push_element(ni, nf, target, n, EDGE, face_edges[g, (k + 1) % 3], node,
