@@ -44,7 +44,7 @@ def without_sympy_version(text: str) -> str:
         return re.sub(rf"^{re.escape(SYMPY_LINE)}.*$", SYMPY_LINE, text[:end], count=1, flags=re.MULTILINE) + text[end:]
     lines = text.split("\n")
     for i, line in enumerate(lines[:20]):
-        match = re.match(rf"^(//\s*|#\s*){re.escape(SYMPY_LINE)}", line)
+        match = re.match(rf"^[/#*\s]*{re.escape(SYMPY_LINE)}", line)     # after //, #, /* or *
         if match:
             lines[i] = match.group(0)
             break
