@@ -9,10 +9,11 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers.requirements import require
+
 from .files import write_files
 
 JS = Path(__file__).resolve().parent / "js"
-INSTALL = "bash scripts/install-test-deps.sh"
 CHROMIUM = os.environ.get("CGASKIN_CHROMIUM", "/usr/bin/chromium")
 #: one line per client test run: what was compared (printed at the end of the session)
 SUMMARY: list = []
@@ -23,16 +24,6 @@ def pytest_terminal_summary(terminalreporter):
         terminalreporter.section("real clients")
         for line in SUMMARY:
             terminalreporter.write_line(line)
-
-
-def require(missing: list, what: str) -> None:
-    """Skip (fail under CGASKIN_CI=1) when anything in ``missing`` is absent."""
-    if not missing:
-        return
-    reason = f"{what} needs {', '.join(missing)}: run `{INSTALL}`"
-    if os.environ.get("CGASKIN_CI") == "1":
-        pytest.fail(f"CGASKIN_CI=1: {reason}", pytrace=False)
-    pytest.skip(reason)
 
 
 @pytest.fixture(scope="session")

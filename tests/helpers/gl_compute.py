@@ -14,18 +14,6 @@ import numpy as np
 LOCAL_SIZE = 64
 
 
-def require(missing: str | None, what: str) -> None:
-    """Skip the test (fail it under CGASKIN_CI=1, where nothing may be skipped) when ``missing`` says
-    what is absent."""
-    if missing is None:
-        return
-    import pytest
-    reason = f"{what}: {missing}"
-    if os.environ.get("CGASKIN_CI") == "1":
-        pytest.fail(f"CGASKIN_CI=1: {reason}", pytrace=False)
-    pytest.skip(reason)
-
-
 def open_context():
     """(moderngl context, None) or (None, why it cannot be had)."""
     os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="cgaskin-xdg-"))  # silences Mesa

@@ -1,4 +1,4 @@
-"""What the C and CUDA target tests share: skip-or-fail for a missing tool, the comparison of a
+"""What the C and CUDA target tests share: the comparison of a
 target's rows with numba's, the C compiler, and the Fox model posed at a clip time."""
 from __future__ import annotations
 
@@ -8,23 +8,13 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
-import pytest
+
+from tests.helpers.requirements import require  # noqa: F401 (test_cuda imports it from here)
 
 #: the flags every generated C source must compile under without a diagnostic (the issue's -Wall
 #: -Werror, and the warnings a strict C project adds: shadowing, implicit conversions, float ==)
 C_FLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wshadow", "-Wconversion", "-Wdouble-promotion",
            "-Wfloat-equal", "-Werror", "-O2", "-ffp-contract=off"]
-INSTALL = "bash scripts/install-test-deps.sh"
-
-
-def require(missing: list, what: str) -> None:
-    """Skip (fail under CGASKIN_CI=1) when anything in ``missing`` is absent."""
-    if not missing:
-        return
-    reason = f"{what} needs {', '.join(missing)}: run `{INSTALL}`"
-    if os.environ.get("CGASKIN_CI") == "1":
-        pytest.fail(f"CGASKIN_CI=1: {reason}", pytrace=False)
-    pytest.skip(reason)
 
 
 def c_compiler() -> str:
