@@ -60,11 +60,11 @@ def face_areas(rig) -> np.ndarray:
 
 
 def slivers(rig, relative=1e-12) -> int:
-    """Faces whose area is below ``relative`` times the squared bounding-box diagonal: zero-area
-    triangles (three corners on a line, up to rounding). A thin but real triangle -- a stroke that
-    starts 1e-9 of the diagonal from a vertex, beyond the snap distance, makes one -- is not one."""
-    v = np.asarray(rig.vertices, np.float64)
+    """Zero-area faces: three corners on a line up to rounding (twice the area below ``relative`` times
+    the square of the longest side: a shape measure, so that a tiny but well-shaped triangle -- a plane
+    that passes 1e-6 from a corner cuts one off -- or a thin real one is not one)."""
     if len(rig.faces) == 0:
         return 0
-    diagonal = float(np.linalg.norm(np.ptp(v, axis=0)))
-    return int(np.count_nonzero(face_areas(rig) <= relative * diagonal ** 2))
+    corners = np.asarray(rig.vertices, np.float64)[np.asarray(rig.faces)]
+    longest = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
+    return int(np.count_nonzero(2 * face_areas(rig) <= relative * longest ** 2))

@@ -301,6 +301,37 @@ def test_random_axis_aligned_incisions(row, ring, offset, step, direction, strok
     assert len(tear_topology(torn).boundary_loops()) == 1 and pieces(torn) == 1
 
 
+STEPS = [[3, 3, 3, 3], [2, 2, 2, 2], [1, 1, 1, 1], [1, 1, 1, 1]]
+
+
+@settings(suppress_health_check=[HealthCheck.too_slow], deadline=None, max_examples=25)
+@given(y=st.one_of(st.sampled_from([0.0, 1.0, 2.0, 1.5, 4.0, 1e-9, 1e-6]), st.floats(0.0, 4.0)),
+       x0=st.one_of(st.sampled_from([0.5, 1.0, 2.0, 3.0]), st.floats(0.1, 3.9)),
+       step=st.one_of(st.sampled_from([0.25, 0.5, 1.0]), st.floats(0.05, 1.5)),
+       direction=st.sampled_from([1.0, -1.0]), strokes=st.integers(1, 4), opening=st.sampled_from([0.0, 0.002]),
+       across=st.booleans())
+def test_random_axis_aligned_incisions_on_a_staircase(y, x0, step, direction, strokes, opening, across):
+    """Incisions on a staircase in vertical grid planes (x = const or y = const, often through a row of
+    vertices, along the side walls whose faces lie in them, or within rounding of one), up and down its
+    steps, in strokes of random length: every stroke continues one slit, within the swept region, with
+    no sliver. (Found: a path that went back along an edge to a corner and down a wall's diagonal when
+    the straight way over the wall was shorter; a one-face path 1e-9 from the face's side that made a
+    zero-area piece.)"""
+    xs = x0 + direction * step * np.arange(strokes + 1)
+    assume(0.05 <= xs.min() and xs.max() <= 3.95)
+    rig = staircase(STEPS)
+
+    def blade(x):
+        return ([y, x, 5.0], [y, x, 0.5]) if across else ([x, y, 5.0], [x, y, 0.5])
+    for i in range(strokes):
+        blades = blade(xs[i]), blade(xs[i + 1])
+        result = tear_stroke(rig, *blades, opening=opening)
+        check_tear(rig, result, *blades, opening)
+        assert not result.jumps.any() and (i == 0 or (result.kinds[0] == VERTEX and result.split[0]))
+        rig = result.rig
+    assert len(tear_topology(rig).boundary_loops()) == 1 and pieces(rig) == 1
+
+
 # ---- cut -----------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("cap", [False, True])
 def test_cut_through_one_vertex(cap):

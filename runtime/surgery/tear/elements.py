@@ -54,18 +54,25 @@ def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier,
                   t_kind, t_id, vertex_used, region, margin):
     """Append the node for a boundary element (``_element_point``). Returns the new count, unchanged
     when the element lies outside the swept region (``region.py``: the front dies there, no detour)
-    or is a vertex the path already went through (no self-crossing path)."""
+    or is a vertex that a path as short or shorter already reached (``vertex_used`` (w,) float64: the
+    shortest length a node of each welded vertex was pushed with, inf if none; so no self-crossing path,
+    and where the plane holds edges and faces, which reach a vertex by several ways, the shortest wins:
+    the walk drops a vertex's node that a shorter one superseded when it pops it)."""
     is_target = t_kind == kind and ident == t_id
-    if kind == VERTEX and vertex_used[ident] and not is_target:
-        return n
     t, x, y, z = _element_point(kind, ident, plane, wpos, edges)
+    if kind == VERTEX and not is_target:
+        length = nf[parent, 4] + math.sqrt((x - nf[parent, 1]) ** 2 + (y - nf[parent, 2]) ** 2
+                                           + (z - nf[parent, 3]) ** 2)
+        if not length < vertex_used[ident]:
+            return n
     if not is_target:
         # within the margin of S_i (the root: in the hull) is within the region; else measure
         near = (x - nf[0, 1]) ** 2 + (y - nf[0, 2]) ** 2 + (z - nf[0, 3]) ** 2 <= margin * margin
         if not near and _outside((x, y, z), region) > margin:
             return n
     if kind == VERTEX:
-        vertex_used[ident] = True
+        vertex_used[ident] = min(vertex_used[ident], nf[parent, 4] + math.sqrt(
+            (x - nf[parent, 1]) ** 2 + (y - nf[parent, 2]) ** 2 + (z - nf[parent, 3]) ** 2))   # as _push
     return _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
 
 

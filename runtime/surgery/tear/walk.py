@@ -46,7 +46,7 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     open_ = np.empty(cap, np.int64)
     face_used = np.zeros(m, np.bool_)
     edge_used = np.zeros(edges.shape[0], np.bool_)
-    vertex_used = np.zeros(wpos.shape[0], np.bool_)
+    vertex_used = np.full(wpos.shape[0], np.inf)     # shortest length a node of each vertex was pushed with
     kinds = np.empty(3, np.int64)
     ids = np.empty(3, np.int64)
     openings = np.empty((0, 2), np.int64)   # boundary points on the plane, found when first needed
@@ -60,7 +60,7 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     t_param = _edge_parameter(t_id, t_pos, cls, plane, wpos, edges) if t_kind == EDGE else 0.0
     line = _line_plane(plane, s_pos, t_pos)
     if s_kind == VERTEX:
-        vertex_used[s_id] = True
+        vertex_used[s_id] = 0.0
     n = np.int64(1)
     open_[0] = 0
     n_open = 1
@@ -77,6 +77,8 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
         if target[node]:
             found = node
             break
+        if ni[node, 0] == VERTEX and nf[node, 4] > vertex_used[ni[node, 1]]:
+            continue             # superseded: a shorter way reached this vertex (elements._push_element)
         if n + 8 > cap:
             break
         kind, ident, ck, cid = ni[node, 0], ni[node, 1], ni[node, 3], ni[node, 4]
@@ -109,7 +111,9 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
                     n = _across_flat(ni, nf, target, n, node, g, EDGE, ident, FACE_CARRIER, line, wfaces, face_edges,
                                      wpos, edges, snap, t_kind, t_id, t_param, t_pos, vertex_used, region, margin,
                                      kinds, ids)
-            if along and ef_offsets[ident + 1] - ef_offsets[ident] >= 2 and not edge_used[ident]:
+            if along and ef_offsets[ident + 1] - ef_offsets[ident] >= 2:
+                # (even when a front from one of its ends went along it: the way on from this point
+                # may be the shorter one to the other end)
                 edge_used[ident] = True
                 n = _along_edge(ni, nf, target, n, node, ident, plane, wpos, edges, t_kind, t_id, t_param, t_pos,
                                 vertex_used, region, margin)
