@@ -25,8 +25,10 @@ blade at time t_i and ``scalpel_to = (a1, b1)`` at t_{i+1}. Steps (design.md sec
 4. **Path.** The plane cuts the surface in a curve; the path follows it from S_i to S_{i+1} across
    faces (signed distances by the generated ``point_plane_distance``, crossing parameters by
    ``segment_plane``), in both directions at once, and keeps the shorter: a front-propagation over
-   the curve that visits each face at most once (so the face count bounds it, with no other step cap)
-   and follows the curve through vertices that lie on the plane and along edges that lie in it. The
+   the curve in which the shortest way to a node wins (so the face count bounds it, with no other step
+   cap) and follows the curve through vertices that lie on the plane and along edges that lie in it;
+   a hit on an edge in the plane is a point of that edge, and across faces that lie in the plane the
+   path goes straight from S_i towards S_{i+1} (``flat.py``). The
    path stays in the region the blade swept (``region.py``: the hull of the blade at both times,
    widened by the stroke's length and a face): it never detours round an obstacle. Where the curve
    meets an existing slit (or any opening of the surface), the path jumps across it to the curve
