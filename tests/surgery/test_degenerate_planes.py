@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings, strategies as st
+from hypothesis import HealthCheck, assume, example, given, settings, strategies as st
 
 from cgaskin import TearPathError, TriangleBVH, capsule_arm, cut_details, tear_stroke
 from cgaskin.surgery.tear import tear_topology
@@ -310,13 +310,15 @@ STEPS = [[3, 3, 3, 3], [2, 2, 2, 2], [1, 1, 1, 1], [1, 1, 1, 1]]
        step=st.one_of(st.sampled_from([0.25, 0.5, 1.0]), st.floats(0.05, 1.5)),
        direction=st.sampled_from([1.0, -1.0]), strokes=st.integers(1, 4), opening=st.sampled_from([0.0, 0.002]),
        across=st.booleans())
+@example(y=1e-09, x0=0.5, step=0.125, direction=1.0, strokes=2, opening=0.0, across=False)
 def test_random_axis_aligned_incisions_on_a_staircase(y, x0, step, direction, strokes, opening, across):
     """Incisions on a staircase in vertical grid planes (x = const or y = const, often through a row of
     vertices, along the side walls whose faces lie in them, or within rounding of one), up and down its
     steps, in strokes of random length: every stroke continues one slit, within the swept region, with
     no sliver. (Found: a path that went back along an edge to a corner and down a wall's diagonal when
     the straight way over the wall was shorter; a one-face path 1e-9 from the face's side that made a
-    zero-area piece.)"""
+    zero-area piece; the second stroke of a path 1e-9 from a wall, from the first stroke's end at a
+    corner through a midpoint to an end inside the face, fanned from the midpoint: a zero-area piece.)"""
     xs = x0 + direction * step * np.arange(strokes + 1)
     assume(0.05 <= xs.min() and xs.max() <= 3.95)
     rig = staircase(STEPS)

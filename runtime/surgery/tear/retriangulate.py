@@ -142,14 +142,16 @@ def _triangulate_face(f, path_int, wfaces, face_edges, edges, wpos, path_float, 
                 subflat[i] = flat[(start + i) % count] and 0 < i < size - 1
             n_out = _convex_fan(sub, subflat, size, f, wfaces, wpos, path_float, out, n_out)
         return n_out
-    # a fan over the whole polygon from the inner node that every chord here touches (the hub); with
-    # three (a one-segment path inside the face, and its midpoint: collinear) from the path's first
-    # node, so that the others lie on one ray from it: a fan from the midpoint could put the two ends
-    # on adjacent fan edges, whose splits would join them in a zero-area triangle when the segment
-    # runs within rounding of the face's side
+    # a fan over the whole polygon from an END of the path's segment in this face (the hub), so that
+    # the other nodes lie on one ray from it: with three inner nodes (a one-segment path inside the face
+    # and its midpoint, collinear) the path's first node; with two (the midpoint, which both chords
+    # touch, and one end: the segment's other end is on the boundary) that end, so that the midpoint
+    # lies on the fan edge from it to the boundary end and splits it. A fan from the midpoint could
+    # put the two ends on adjacent fan edges, whose splits would join all three in a zero-area
+    # triangle when the segment runs within rounding of the face's side
     hub = 0
     for q in range(1, n_inner):
-        if hub_count[q] > hub_count[hub] and n_inner < 3:
+        if hub_count[q] < hub_count[hub] and n_inner < 3:
             hub = q
     s = inner[hub]
     for i in range(count):
