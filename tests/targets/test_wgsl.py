@@ -8,7 +8,7 @@ Comparison (f32 against the float64 numba kernel): the numba kernel runs on the 
 inputs the shader gets, and a row's error is max |wgsl − numba| / max(1, max |numba row|,
 max |input row|) ≤ 1e-5 (f64: the unrounded inputs, ≤ 1e-12); numba's non-finite values must be
 non-finite in WGSL too. Inputs are drawn
-where the comparison is meaningful in f32 (tests/helpers/wgsl_domains.py: unit-ish versors built
+where the comparison is meaningful in f32 (tests/helpers/float_domains.py: unit-ish versors built
 from rotations, translations and scales, non-degenerate triangles, ...).
 
 Without wgpu or a Vulkan adapter the GPU tests skip with the reason (fail under CGASKIN_CI=1).
@@ -28,7 +28,7 @@ from cgaskin.codegen.targets import wgsl
 from tests.helpers import wgpu_compute
 from tests.helpers.catalogues import README_CATALOGUE
 from tests.helpers.target_cases import builtin_kernels, reference, user_kernels
-from tests.helpers.wgsl_domains import kernel_inputs
+from tests.helpers.float_domains import kernel_inputs
 from tests.helpers.requirements import require
 
 ROWS = 64

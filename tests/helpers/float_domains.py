@@ -1,5 +1,5 @@
-"""Inputs where an f32 kernel can be compared with the float64 numba kernel at 1e-5: what each kernel
-input means, drawn by hypothesis (tests/targets/test_wgsl.py).
+"""Inputs where a float32 kernel can be compared with the float64 numba kernel at 1e-5: what each kernel
+input means, drawn by hypothesis (the WGSL and the C float tests in tests/targets).
 
 Raw coordinates in [-10, 10] (``target_cases.input_arrays``) make sense for points and affine maps,
 but not for a versor, a plane, a rotation matrix or a triangle: random coefficients there give
