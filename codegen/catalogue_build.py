@@ -173,11 +173,7 @@ def _batch(c: Compiled) -> str:
     else:
         call = f"{c.spec.name}({', '.join(n if n in c.uniform else f'{n}[row]' for n in names)})"
     lines.append("    for row in range(out.shape[0]):")
-    if c.out_size == 1:
-        lines.append(f"        out[row, 0] = {call}")
-    else:
-        lines.append(f"        r = {call}")
-        lines += [f"        out[row, {j}] = r[{j}]" for j in range(c.out_size)]
+    lines += printer.store_rows(call, c.out_size)
     return "\n".join(lines) + "\n"
 
 

@@ -42,6 +42,13 @@ def print_kernel(kernel: Kernel, decorator: str = NUMBA_DECORATOR, name: str | N
     return "\n".join(lines) + "\n"
 
 
+def store_rows(call: str, n_out: int) -> list[str]:
+    """The row loop's body: ``call`` (a kernel call) stored in row ``row`` of ``out``."""
+    if n_out == 1:
+        return [f"        out[row, 0] = {call}"]
+    return [f"        r = {call}"] + [f"        out[row, {j}] = r[{j}]" for j in range(n_out)]
+
+
 def print_batch(kernel: Kernel) -> str:
     """Source of ``name_batch(inputs (N, ...)..., out (N, k))``: the scalar kernel over rows."""
     args = [i.name for i in kernel.inputs]
@@ -53,9 +60,5 @@ def print_batch(kernel: Kernel) -> str:
              f'    """``{kernel.name}`` on every row: inputs (N, ...) or (N,), out (N, {n_out})."""',
              "    for row in range(out.shape[0]):"]
     call = f"{kernel.name}({', '.join(a + '[row]' for a in args)})"
-    if n_out == 1:
-        lines.append(f"        out[row, 0] = {call}")
-    else:
-        lines.append(f"        r = {call}")
-        lines += [f"        out[row, {j}] = r[{j}]" for j in range(n_out)]
+    lines += store_rows(call, n_out)
     return "\n".join(lines) + "\n"

@@ -33,7 +33,7 @@ from dataclasses import replace
 
 from ..expressions import PYTHON
 from ..ir import CodegenError
-from ..printer import print_kernel
+from ..printer import print_kernel, store_rows
 from . import c_kernels as c_target
 from .c_skinning import require_skinning_kernels, skin_functions
 
@@ -70,11 +70,7 @@ def py_batch(kernel, name: str, uniform=()) -> str:
              "    start = cuda.grid(1)",
              "    stride = cuda.gridsize(1)",
              "    for row in range(start, out.shape[0], stride):"]
-    if n_out == 1:
-        lines.append(f"        out[row, 0] = {call}")
-    else:
-        lines.append(f"        r = {call}")
-        lines += [f"        out[row, {j}] = r[{j}]" for j in range(n_out)]
+    lines += store_rows(call, n_out)
     return "\n".join(lines) + "\n"
 
 
