@@ -106,6 +106,22 @@ def strokes(draw, rig, points, radius=0.03):
 
 
 # ---- independent checks --------------------------------------------------------------------------------
+def pieces(rig) -> int:
+    """Connected pieces of the welded mesh (faces joined by welded edges)."""
+    topo = tear_topology(rig)
+    welded = topo.welded[np.asarray(rig.faces)]
+    parent = np.arange(welded.max() + 1)
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+    for a, b in np.concatenate([welded[:, [0, 1]], welded[:, [1, 2]]]):
+        parent[find(a)] = find(b)
+    return len({find(v) for v in np.unique(welded)})
+
+
 def welded_edges(topo, vertex_pairs):
     w = topo.welded
     return {tuple(sorted((int(w[a]), int(w[b])))) for a, b in vertex_pairs}

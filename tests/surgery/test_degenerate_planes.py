@@ -26,7 +26,7 @@ from cgaskin.surgery.tear import tear_topology
 from tests.helpers.cut_checks import check_cut
 from tests.helpers.grid_meshes import slivers, staircase
 from tests.helpers.swept_region import hull_distance
-from tests.helpers.tear_checks import check_stroke
+from tests.helpers.tear_checks import check_stroke, pieces
 
 VERTEX, EDGE, FACE = 0, 1, 2
 RING = 1.0 / 12.0                       # the capsule's ring spacing along x
@@ -34,22 +34,6 @@ TOP_ROW = 0.25                          # the capsule's radius: its top row is y
 
 
 # ---- helpers -------------------------------------------------------------------------------------------
-def pieces(rig) -> int:
-    """Connected pieces of the welded mesh (faces joined by welded edges)."""
-    topo = tear_topology(rig)
-    welded = topo.welded[np.asarray(rig.faces)]
-    parent = np.arange(welded.max() + 1)
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-    for a, b in np.concatenate([welded[:, [0, 1]], welded[:, [1, 2]]]):
-        parent[find(a)] = find(b)
-    return len({find(v) for v in np.unique(welded)})
-
-
 def check_in_region(rig, result, blade_from, blade_to):
     """Every path point within the margin of the blades' hull: |S_{i+1} - S_i| plus the longest edge of
     the faces the blades hit (region.py's margin, bounded by the longest edge of the mesh when a blade

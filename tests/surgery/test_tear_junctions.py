@@ -15,26 +15,11 @@ from cgaskin import TearPathError, capsule_arm, load, tear_stroke
 from cgaskin.surgery.tear import tear_topology
 
 from tests.helpers.swept_region import hull_distance
+from tests.helpers.tear_checks import pieces
 
 FOX_A = ([0.3, 120, 0.7], [0.3, 40, 0.7])
 FOX_B = ([0.3, 120, 10.1], [0.3, 40, 10.1])
 ACROSS = (([-6, 120, 5], [-6, 40, 5]), ([6, 120, 5.5], [6, 40, 5.5]))
-
-
-def pieces(rig) -> int:
-    """Connected pieces of the welded mesh (faces joined by welded edges)."""
-    topo = tear_topology(rig)
-    welded = topo.welded[np.asarray(rig.faces)]
-    parent = np.arange(welded.max() + 1)
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-    for a, b in np.concatenate([welded[:, [0, 1]], welded[:, [1, 2]]]):
-        parent[find(a)] = find(b)
-    return len({find(v) for v in np.unique(welded)})
 
 
 def max_outside(result, scalpel_from, scalpel_to) -> float:
