@@ -33,3 +33,9 @@ def rig_cached(rig, name: str, build):
 def clear() -> None:
     """Forget everything cached for every rig."""
     _CACHE.clear()
+
+
+def seed(rig, name: str, value) -> None:
+    """Store ``value`` as ``rig``'s cached ``name`` (an operation that made ``rig`` from another one
+    and knows it already, e.g. the boundary of a torn rig, which only the stroke's patch changed)."""
+    rig_cached(rig, name, lambda _rig: value)

@@ -253,7 +253,8 @@ def _first_hit(bvh, a, b):
         if node_left[node] < 0:
             for i in range(node_start[node], node_start[node] + node_count[node]):
                 t = _watertight(tri, i, a, kx, ky, kz, sx, sy, sz)
-                if t >= 0.0 and t <= 1.0 and t < best_t:
+                # equal t (a segment through an edge or a vertex): the lowest face id, whatever the tree
+                if t >= 0.0 and t <= 1.0 and (t < best_t or (t == best_t and order[i] < order[best_i])):
                     best_t, best_i = t, i
             continue
         # visit the nearer child first (pushed last), so that best_t shrinks early
@@ -368,7 +369,8 @@ class TriangleBVH:
         """The first crossing of segment a -> b with the surface, going from a towards b.
 
         Returns (face, t): the face index and the segment parameter t in [0, 1] of the crossing
-        point a + t (b - a); (-1, nan) when the segment meets no triangle.
+        point a + t (b - a) (of the faces crossed at the same t, the lowest index); (-1, nan) when the
+        segment meets no triangle.
         """
         a, b = self._segment(a, b)
         face, t = _first_hit(tuple(self._arrays), a, b)

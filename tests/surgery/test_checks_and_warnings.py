@@ -83,7 +83,7 @@ def test_plane_missing_the_mesh_warns_at_the_callers_line(name):
 def test_placement_warnings_are_one_class_at_the_callers_line(name, monkeypatch):
     # a negative placement tolerance makes every posed placement "miss": the warning path runs
     strict = Tolerances(placement=-1.0)
-    for module in ("cgaskin.surgery.cut.api", "cgaskin.surgery.tear.stroke"):
+    for module in ("cgaskin.surgery.cut.api", "cgaskin.surgery.tear.splice"):
         monkeypatch.setattr(f"{module}.tol", strict)
     rig = cgaskin.capsule_arm()
     pose = rig.pose("wave", 0.5)

@@ -71,21 +71,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..._shared.cache import rig_cached
 from ..._shared.checks import float_array, real_number
-from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...errors import CgaskinError, InvalidInputError, MissesMeshError, PlacementWarning
 from ...tolerances import tol
 from ..bvh import TriangleBVH
-from ..new_vertices import attribute_rule, interpolate_in_place
-from ..surface import TEAR_LABEL, _labels, _surface, mesh_arrays, tear_topology
-from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES, locate
-from .records import JUMP_CARRIER, Ends, Path, Pieces, Slit, TornFaces
-from .retriangulate import _retriangulate
-from .slit import _open_slit, _torn_faces
-from .vertex_data import _vertex_data
-from .walk import walk
+from ..surface import TEAR_LABEL, tear_topology
+from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES
+from .records import Ends
+from .rig_source import RigSource, torn_rig
+from .splice import stroke_splice
 
 __all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
            "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]
@@ -150,7 +145,7 @@ def _scalpel(value, name):
     return handle, tip
 
 
-def _opening(value) -> float:
+def check_opening(value) -> float:
     opening = real_number(value, "opening")
     if opening < 0:
         raise InvalidInputError(f"opening must be a finite number >= 0, got {value!r}")
@@ -195,21 +190,33 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     """
     if not isinstance(rig, Rig):
         raise InvalidInputError(f"rig must be a cgaskin.Rig, got {type(rig).__name__}")
-    a0, b0 = _scalpel(scalpel_from, "scalpel_from")
-    a1, b1 = _scalpel(scalpel_to, "scalpel_to")
-    opening = _opening(opening)
-    surface = _surface(rig, pose)
-    if bvh is None:
-        bvh = surface.bvh
-    elif not isinstance(bvh, TriangleBVH) or bvh.n_faces != rig.n_faces:
-        raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {rig.n_faces} faces")
-    faces = surface.faces
+    blades = check_blades(scalpel_from, scalpel_to)
+    opening = check_opening(opening)
+    source = RigSource(rig, pose, bvh)
+    splice = stroke_splice(source, blades, opening, check_ends, check_path)
+    return TearResult(rig=torn_rig(rig, source, splice), **splice.stroke)
 
-    # 2-3: where the blade meets the skin at both times, the tear plane, the sides of the vertices
-    ends = locate(surface, faces, a0, b0, a1, b1, bvh)
-    _check_ends(ends, surface, faces, bvh, (a0, b0), (a1, b1))
-    # 4: the path
-    path = walk(surface, ends, bvh, (a0, b0), (a1, b1))
+
+def check_blades(scalpel_from, scalpel_to) -> np.ndarray:
+    """(4, 3) float64 handle and tip at t_i, then at t_(i+1), checked."""
+    return np.array([*_scalpel(scalpel_from, "scalpel_from"), *_scalpel(scalpel_to, "scalpel_to")])
+
+
+def check_ends(ends: Ends, surface) -> None:
+    """The errors of steps 2-3, named for the user (a scalpel that misses is found before: splice.py)."""
+    if ends.status in (FROM_MISSES, TO_MISSES):
+        name = "scalpel_from" if ends.status == FROM_MISSES else "scalpel_to"
+        raise MissesMeshError(f"the scalpel {name} does not meet the surface")
+    if ends.status == NO_MOTION:
+        raise InvalidInputError(f"the stroke does not move across the surface: the scalpel meets it at "
+                                f"the same point {ends.points[0].tolist()} at both times (nothing to tear)")
+    if ends.status == NO_PLANE:
+        raise InvalidInputError("cannot place a tear plane: the scalpel at both times and the surface "
+                                "normal are all aligned with the stroke from S_i to S_{i+1}")
+
+
+def check_path(ends: Ends, path) -> None:
+    """The errors of step 4: no path, or nothing to tear."""
     s_pos, t_pos = ends.points
     if path is None:
         raise TearPathError(
@@ -221,81 +228,6 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
         raise TearPathError(
             f"nothing to tear: the stroke from S_i = {s_pos.tolist()} to S_(i+1) = {t_pos.tolist()} runs "
             f"only through openings the surface already has (an existing slit or hole)")
-    # 5-6: re-triangulate, open the slit (separate kernels, so that a cold start compiles them in
-    # parallel: cgaskin.precompile)
-    pieces = Pieces(*_retriangulate(*path, faces, tuple(surface.welded), rig.n_vertices, tol.on_edge))
-    torn = TornFaces(*_torn_faces(*path, faces, surface.topo.welded, tuple(surface.welded), pieces.affected,
-                                  pieces.tris, pieces.new_node))
-    slit = Slit(*_open_slit(torn.faces, torn.welded, torn.node_welded, surface.positions, torn.new_positions,
-                            ends.plane, torn.candidates))
-    # 7: the vertex data
-    torn_rig = _torn_rig(rig, surface, path, pieces, torn.faces, slit, ends.plane, opening, pose is not None)
-    return TearResult(rig=torn_rig, plane=ends.plane, points=path.points[:, 1:4].copy(),
-                      kinds=path.nodes[:, 0].copy(), side_a=slit.side_a, side_b=slit.side_b, split=slit.split,
-                      hits=ends.hits, jumps=path.nodes[:, 2] == JUMP_CARRIER)
-
-
-def _check_ends(ends: Ends, surface, faces, bvh, blade_from, blade_to) -> None:
-    """The errors of steps 2-3, named for the user."""
-    if ends.status in (FROM_MISSES, TO_MISSES):
-        missed = ends.status == FROM_MISSES
-        name, (a, b) = ("scalpel_from", blade_from) if missed else ("scalpel_to", blade_to)
-        raise MissesMeshError(f"the scalpel {name} (handle {a.tolist()} -> tip {b.tolist()}) does not "
-                              f"meet the surface")
-    if bvh is not surface.bvh:
-        for f in ends.hit_faces[ends.hit_faces >= 0]:
-            if not np.array_equal(bvh.triangle(f), surface.positions[faces[f]]):
-                raise InvalidInputError("bvh was built from other positions than the surface being torn "
-                                        "(the stored vertices, or the skinned positions in the given pose)")
-    if ends.status == NO_MOTION:
-        raise InvalidInputError(f"the stroke does not move across the surface: the scalpel meets it at "
-                                f"the same point {ends.points[0].tolist()} at both times (nothing to tear)")
-    if ends.status == NO_PLANE:
-        raise InvalidInputError("cannot place a tear plane: the scalpel at both times and the surface "
-                                "normal are all aligned with the stroke from S_i to S_{i+1}")
-
-
-def _torn_rig(rig, surface, path: Path, pieces: Pieces, faces, slit: Slit, plane, opening, posed):
-    """Step 7: the torn rig's vertex arrays (originals, new vertices, twins), labels and attributes."""
-    mesh = rig_cached(rig, "tear.arrays", _arrays)
-    affines = surface.affines if posed else np.zeros((1, 12))
-    n, n_new = rig.n_vertices, len(pieces.new_node)
-    added = n_new + len(slit.twins)
-    vertices, joints, weights, labels = (_extended(values, added) for values in mesh[:4])
-    residual = _vertex_data(vertices, joints, weights, labels, n, path.points, tuple(pieces), tuple(slit),
-                            opening, plane[:3].copy(), affines, posed)
-    if not residual <= tol.placement * surface.diagonal:
-        warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
-             f"blended transform is singular or nearly so)", PlacementWarning)
-    attributes, twin_of = {}, slit.twins[:, 0].copy()
-    for name, (values, tail) in mesh[4].items():
-        rows = _extended(values, added)
-        # new vertices interpolate their sources, and a twin has its vertex's data
-        interpolate_in_place(rows, n, pieces.new_src, pieces.new_coef, attribute_rule(name, rows.shape[1]),
-                             twin_of)
-        attributes[name] = rows.reshape((len(rows),) + tail)
-    if slit.split.any() or TEAR_LABEL in rig.attributes:
-        attributes[TEAR_LABEL] = labels[:, None].astype(np.float64)
-    return rig.with_mesh(vertices, faces, joints, weights, attributes)
-
-
-def _extended(values, rows: int) -> np.ndarray:
-    """``values`` (n, ...) followed by ``rows`` uninitialised rows, for a kernel to fill."""
-    out = np.empty((len(values) + rows,) + values.shape[1:], values.dtype)
-    out[:len(values)] = values
-    return out
-
-
-def _arrays(rig):
-    """The rig's arrays as the kernels take them (float64/int64, C-contiguous; attributes as ((n, c)
-    float64, their original trailing shape), without the tear label), converted once per rig."""
-    attributes = {}
-    for name, values in rig.attributes.items():
-        if name != TEAR_LABEL:
-            values = np.asarray(values, dtype=np.float64)
-            attributes[name] = (np.ascontiguousarray(values.reshape(len(values), -1)), values.shape[1:])
-    mesh = mesh_arrays(rig)
-    return mesh.vertices, mesh.joints, mesh.weights, _labels(rig), attributes
 
 
 def tear(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 0.0,

@@ -8,15 +8,16 @@ from ..new_vertices import _blended, _solve_linear, _to_rest, blend_weight_rows
 from .records import PIECES, SLIT
 
 
-@kernel((F2, I2, F2, I1, i8, F2, PIECES, SLIT, f8, F1, F2, b1), cost=3.4)
-def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, pieces, slit, opening, normal, affines, posed):
+@kernel((F2, I2, F2, I1, i8, i8, F2, PIECES, SLIT, f8, F1, F2, b1), cost=3.4)
+def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, opening, normal, affines, posed):
     """Step 7 and the vertex arrays of the torn mesh: originals, new vertices, twins.
 
     New vertices get interpolated weights (``_blend_weights``) and, at rest, their path point as
     position; in a pose, one rest position per path node, solved with the node's first copy's
     weights, so that all copies of a node (one per attribute-split copy of a seam edge) keep one
     position and stay welded even where their weights differ a little. Twins copy their vertex. The
-    far side of the slit gets the new tear label (``labels.max() + 1`` + rank). With ``opening`` > 0
+    far side of the slit gets the new tear label (``top + 1`` + rank, ``top`` the highest label of the
+    whole mesh, which the n rows here may be only a part of). With ``opening`` > 0
     the near side moves by +opening/2 along ``normal`` and the far side by -opening/2: in a pose, the
     offset goes through the inverse blended linear part of the node's first copy on that side (again
     one offset per node and side, for the same reason).
@@ -31,9 +32,6 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, path_float, pieces, slit, openin
     split, twins, moved, side_a, side_b = slit
     v, t = new_node.shape[0], twins.shape[0]
     new_joints, new_weights = blend_weight_rows(new_src, new_coef, out_j, out_w)
-    top = 0
-    for i in range(n):
-        top = max(top, out_l[i])
     k_nodes = path_float.shape[0]
     first = np.full(k_nodes, -1, np.int64)
     residual = 0.0

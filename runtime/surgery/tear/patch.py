@@ -1,0 +1,99 @@
+"""The part of the surface one stroke can reach, as a surface of its own.
+
+A stroke's path runs along the tear plane's section of the surface, within ``margin`` of the region
+the blade swept (``region.py``). Every face the walk can visit touches the plane (a corner within the
+snap distance of it, or corners on both sides) and touches the region; so do the faces around every
+path vertex (they share a vertex that lies on the plane), every face on a crossed edge, and the faces
+a jump across an opening crosses. The *patch* is the faces that come within ``delta`` (twice the snap
+distance) of the plane inside the region's bounding box widened by the margin: a few hundred faces on a
+mesh of millions. Its own welded topology, BVH and boundary are built per stroke, so that a stroke
+costs what it touches; what the patch cannot know by itself comes from the whole surface: which
+vertices lie on a boundary (``source.boundary``; a patch's outer rim is not one), the bounding-box
+diagonal that scales the tolerances, and the highest tear label.
+
+Faces outside the patch never matter: an edge between a patch face and another face lies on one side
+of the plane beyond the snap distance (or outside the box), so the walk can neither cross it nor
+stand on it, and no boundary vertex outside the patch lies on the plane inside the region.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ...tolerances import tol
+from ..bvh import TriangleBVH
+from ..surface import WeldedMesh, _Surface
+from ..topology import incidence, topology
+
+
+class Patch(NamedTuple):
+    """A stroke's part of the surface.
+
+    faces : (q,) int64 ids of its faces in the source, increasing
+    rows : (p,) int64 the source vertices they use, increasing (patch vertex i is source vertex rows[i])
+    surface : _Surface over the patch (vertices numbered 0..p-1, faces in the order of ``faces``)
+    """
+
+    faces: np.ndarray
+    rows: np.ndarray
+    surface: _Surface
+
+
+def plane_offset(plane) -> tuple[np.ndarray, float]:
+    """(normal (3,), offset) of a dual plane n̂ + d e∞: its signed distance is normal·x - offset."""
+    return np.ascontiguousarray(plane[:3]), float(plane[3])
+
+
+def region_box(blades, margin: float, snap: float) -> tuple[np.ndarray, np.ndarray]:
+    """The bounding box of the blade at both times ((4, 3) handle, tip, handle, tip) widened by
+    ``margin`` and a few snap distances (the region's test rounds; a face that touches the box is kept)."""
+    pad = margin + 4.0 * snap
+    return blades.min(axis=0) - pad, blades.max(axis=0) + pad
+
+
+def _tear_welding(positions, faces, labels):
+    """The label-aware welded topology of (positions, faces): as ``surface.tear_topology``."""
+    if not labels.any():
+        return topology(positions, faces)
+    by_position = topology(positions, faces).welded
+    _, pair = np.unique(np.stack([by_position, labels], axis=1), axis=0, return_inverse=True)
+    keys = np.zeros((len(positions), 3))
+    keys[:, 0] = pair.reshape(-1)
+    return topology(keys, faces)
+
+
+def patch_surface(source, face_ids) -> Patch:
+    """The surface of the faces ``face_ids`` (increasing ids into ``source.faces``) of ``source``.
+
+    source : a surgery source (``splice.py``): positions, faces, labels, boundary, diagonal, affines
+    """
+    corners = source.faces[face_ids]
+    rows, local = np.unique(corners, return_inverse=True)
+    faces = np.ascontiguousarray(local.reshape(-1, 3), dtype=np.int64)
+    positions = np.ascontiguousarray(source.positions[rows])
+    # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
+    # vertex skin alike, but rounding could part them)
+    topo = _tear_welding(source.vertices[rows], faces, source.labels[rows])
+    welded_positions = np.ascontiguousarray(positions[topo.representative])
+    vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
+    welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
+                        topo.edge_face_faces, vf_offsets, vf_faces)
+    boundary = np.unique(topo.welded[source.boundary[rows]])
+    bvh = TriangleBVH(positions, faces)
+    surface = _Surface(positions, faces, topo, welded, bvh, boundary, source.diagonal, source.affines)
+    return Patch(np.asarray(face_ids, np.int64), rows, surface)
+
+
+def select(source, plane, lo, hi) -> np.ndarray:
+    """Increasing ids of the faces of ``source`` within 2 snap distances of ``plane`` (any plane when
+    None) that touch the box [lo, hi]."""
+    snap = tol.snap * source.diagonal
+    if plane is None:
+        normal, offset, delta = np.zeros(3), 0.0, np.inf
+    else:
+        # (the rounding of normal·x - offset, which the classification computes otherwise, grows with
+        # the coordinates: a model far from the origin)
+        scale = source.diagonal + float(np.abs(np.concatenate((lo, hi))).max())
+        (normal, offset), delta = plane_offset(plane), 2.0 * snap + 16.0 * np.finfo(float).eps * scale
+    return source.near_plane(lo, hi, normal, offset, delta)

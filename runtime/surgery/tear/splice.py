@@ -1,0 +1,191 @@
+"""One tear stroke on a *source* of surface data, as a splice: the rows it changes and the rows it adds.
+
+Both the functional ``tear`` (a rig in, a new rig out) and the editing session ``cgaskin.Surgery``
+(mutable arrays kept across strokes) run a stroke through ``stroke_splice``; they differ only in the
+source they give it and in what they do with the splice (``stroke.py`` assembles a new rig, the
+session writes the rows into its arrays). A source is any object with:
+
+    positions (n, 3) float64   the surface (stored vertices, or skinned in a pose)
+    vertices (n, 3), joints (n, 4) int64, weights (n, 4) float64, labels (n,) int64 tear labels
+    attributes: dict name -> ((n, c) float64 rows, trailing shape), the tear label excluded
+    faces (m, 3) int64         rows that queries do not return may hold anything (removed faces)
+    boundary (n,) bool         whether each vertex lies on a boundary edge of the label-aware weld
+    boundary_vertices() -> (b,) int64, the flagged vertices
+    top_label int ; diagonal float ; affines (B, 12) float64 or None (rest)
+    first_hit(a, b) -> (face, t) ; near_plane(lo, hi, normal, offset, delta) -> increasing face ids
+
+The stroke itself is the module docstring of ``stroke.py``, run on the stroke's patch (``patch.py``).
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..._shared.jit import F1, F2, I1, f8, kernel
+from ..._shared.warn import warn
+from ...errors import MissesMeshError, PlacementWarning
+from ...generated.kernels import plane_from_points
+from ...tolerances import tol
+from ..new_vertices import attribute_rule, interpolate_in_place
+from .locate import _boundary_hit, locate
+from .patch import _tear_welding, patch_surface, region_box, select
+from .records import JUMP_CARRIER, VERTEX, Pieces, Slit, TornFaces
+from .retriangulate import _retriangulate
+from .slit import _open_slit, _torn_faces
+from .vertex_data import _vertex_data
+from .walk import walk
+
+
+class Splice(NamedTuple):
+    """What a stroke changes, in the source's numbering (n vertices, m face rows before it).
+
+    rows : (p,) int64 source vertices of the patch; vertices (p + v, 3), joints (p + v, 4), weights,
+        labels (p + v,), attributes {name: (p + v, c)}: those rows after the stroke, then the v new
+        vertices (source vertices n, n + 1, ...)
+    removed : (a,) int64 faces replaced by pieces ; kept : (k,) int64 the patch's other faces and
+        kept_corners (k, 3) int64 their corners after the stroke (the far side's now use twins)
+    pieces : (q, 3) int64 the new faces (source vertex ids), in order
+    boundary_rows : (b,) int64 vertices whose boundary flag the stroke sets to ``boundary_flags`` (b,)
+    stroke : dict of ``TearResult``'s fields other than ``rig`` (side_a, side_b in source ids)
+    """
+
+    rows: np.ndarray
+    vertices: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+    labels: np.ndarray
+    attributes: dict
+    removed: np.ndarray
+    kept: np.ndarray
+    kept_corners: np.ndarray
+    pieces: np.ndarray
+    boundary_rows: np.ndarray
+    boundary_flags: np.ndarray
+    stroke: dict
+
+
+@kernel((F1, F1, f8, I1, F2, f8))
+def _first_boundary(a, b, t_max, boundary, positions, snap):
+    """``locate._boundary_hit`` over the source's boundary vertices: (vertex, t) or (-1, t_max)."""
+    return _boundary_hit(a, b, t_max, boundary, positions, snap)
+
+
+def _guess(source, blades, snap):
+    """Where the blade meets the skin at both times, on the whole surface, and the plane through the
+    first point and the blade at t_(i+1) (None when they are aligned: the patch then takes every face
+    in the box, and the plane ``locate`` chooses selects it again); the margin of ``region.py`` with
+    the hit faces' edges. Raises MissesMeshError as ``locate`` does."""
+    points, longest = [], 0.0
+    boundary = source.boundary_vertices()
+    for i, name in ((0, "scalpel_from"), (1, "scalpel_to")):
+        a, b = blades[2 * i], blades[2 * i + 1]
+        face, t = source.first_hit(a, b)
+        w, t_w = _first_boundary(a, b, t if face >= 0 else 1.0, boundary, source.positions, snap)
+        if w >= 0:
+            points.append(source.positions[w])
+        elif face < 0:
+            raise MissesMeshError(f"the scalpel {name} (handle {a.tolist()} -> tip {b.tolist()}) does not "
+                                  f"meet the surface")
+        else:
+            points.append(a + t * (b - a))
+            corners = source.positions[source.faces[face]]
+            longest = max(longest, float(np.linalg.norm(corners - np.roll(corners, 1, axis=0), axis=1).max()))
+    s0, s1 = points
+    u, v = blades[2] - s0, blades[3] - s0
+    lu, lv = np.linalg.norm(u), np.linalg.norm(v)
+    plane = None
+    if lu > snap and lv > snap and np.linalg.norm(np.cross(u, v)) > tol.min_sine * lu * lv:
+        plane = np.asarray(plane_from_points(s0, blades[2], blades[3]))
+    return plane, float(np.linalg.norm(s1 - s0)) + longest + 2.0 * snap
+
+
+def _margin(surface, ends) -> float:
+    """``region._margin`` of the located ends on the patch: |S_(i+1) - S_i| plus the longest edge of
+    the two hit faces."""
+    corners = surface.welded.positions[surface.welded.faces[ends.hit_faces]]        # (2, 3, 3)
+    longest = float(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max())
+    return float(np.linalg.norm(ends.points[1] - ends.points[0])) + longest
+
+
+def _patch_and_ends(source, blades, check_ends):
+    """The stroke's patch and its located ends: the patch of the guessed plane and margin, again with
+    the plane and margin ``locate`` found on it until they agree (once, unless the guess was off)."""
+    snap = tol.snap * source.diagonal
+    plane, margin = _guess(source, blades, snap)
+    for _ in range(4):
+        patch = patch_surface(source, select(source, plane, *region_box(blades, margin, snap)))
+        ends = locate(patch.surface, patch.surface.faces, *blades)
+        check_ends(ends, patch.surface)
+        needed = _margin(patch.surface, ends)
+        if plane is not None and np.array_equal(ends.plane, plane) and needed <= margin:
+            return patch, ends
+        plane, margin = ends.plane, max(margin, needed)
+    raise AssertionError("the stroke's patch did not settle")      # the plane of a patch is its own
+
+
+def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice:
+    """One stroke on ``source``: ``blades`` (4, 3) float64 handle and tip at t_i, then at t_(i+1).
+
+    check_ends(ends, surface) raises the errors of steps 2-3 ; no_path(ends, path) raises when the walk
+    found no path (path None) or nothing to tear (no nodes).
+    """
+    patch, ends = _patch_and_ends(source, blades, check_ends)
+    surface, rows = patch.surface, patch.rows
+    path = walk(surface, ends, surface.bvh, (blades[0], blades[1]), (blades[2], blades[3]))
+    no_path(ends, path)
+    p, n = len(rows), len(source.positions)
+    pieces = Pieces(*_retriangulate(*path, surface.faces, tuple(surface.welded), p, tol.on_edge))
+    torn = TornFaces(*_torn_faces(*path, surface.faces, surface.topo.welded, tuple(surface.welded),
+                                  pieces.affected, pieces.tris, pieces.new_node))
+    slit = Slit(*_open_slit(torn.faces, torn.welded, torn.node_welded, surface.positions, torn.new_positions,
+                            ends.plane, torn.candidates))
+    added = len(pieces.new_node) + len(slit.twins)
+    vertices, joints, weights, labels = (_extended(values[rows], added) for values in
+                                         (source.vertices, source.joints, source.weights, source.labels))
+    posed = source.affines is not None
+    residual = _vertex_data(vertices, joints, weights, labels, p, source.top_label, path.points, tuple(pieces),
+                            tuple(slit), opening, ends.plane[:3].copy(),
+                            source.affines if posed else np.zeros((1, 12)), posed)
+    if not residual <= tol.placement * source.diagonal:
+        warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
+             f"blended transform is singular or nearly so)", PlacementWarning)
+    attributes, twin_of = {}, slit.twins[:, 0].copy()
+    for name, (values, _tail) in source.attributes.items():
+        values = _extended(values[rows], added)
+        # new vertices interpolate their sources, and a twin has its vertex's data
+        interpolate_in_place(values, p, pieces.new_src, pieces.new_coef, attribute_rule(name, values.shape[1]),
+                             twin_of)
+        attributes[name] = values
+    ids = np.concatenate((rows, n + np.arange(added, dtype=np.int64)))     # patch vertex -> source vertex
+    n_kept = len(patch.faces) - len(pieces.affected)
+    keep = np.ones(len(patch.faces), bool)
+    keep[pieces.affected] = False
+    boundary_rows, boundary_flags = _boundary_changes(torn.faces, vertices, labels, surface, path, p)
+    stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
+                  side_a=ids[slit.side_a], side_b=ids[slit.side_b], split=slit.split, hits=ends.hits,
+                  jumps=path.nodes[:, 2] == JUMP_CARRIER)
+    return Splice(rows, vertices, joints, weights, labels, attributes, patch.faces[pieces.affected],
+                  patch.faces[keep], ids[torn.faces[:n_kept]], ids[torn.faces[n_kept:]], ids[boundary_rows],
+                  boundary_flags, stroke)
+
+
+def _boundary_changes(faces, vertices, labels, surface, path, p):
+    """The patch vertices whose boundary flag a stroke can change -- the copies of the path's vertices
+    and the new vertices, whose fans the patch holds whole -- and their flags in the torn patch (welded
+    as ``surface.tear_topology`` welds: by rest position and label)."""
+    on_path = np.zeros(surface.topo.n_welded, bool)
+    on_path[path.nodes[path.nodes[:, 0] == VERTEX, 1]] = True
+    changed = np.concatenate((np.flatnonzero(on_path[surface.topo.welded]), np.arange(p, len(vertices))))
+    topo = _tear_welding(vertices, faces, labels)
+    flagged = np.zeros(topo.n_welded, bool)
+    flagged[topo.edges[topo.boundary_edges].reshape(-1)] = True
+    return changed, flagged[topo.welded[changed]]
+
+
+def _extended(values, rows: int) -> np.ndarray:
+    """``values`` (p, ...) followed by ``rows`` uninitialised rows, for a kernel to fill."""
+    out = np.empty((len(values) + rows,) + values.shape[1:], values.dtype)
+    out[:len(values)] = values
+    return out
