@@ -40,14 +40,7 @@ def _build_tear_topology(rig) -> Topology:
     labels = _labels(rig)
     if not labels.any():
         return rig_topology(rig)
-    # weld by position (the shared topology), then split each welded vertex by label: every distinct
-    # (welded id, label) pair gets its own number (a unique-rows pass: no arithmetic key can collide),
-    # fed to ``topology`` as one exact float per pair
-    by_position = rig_topology(rig).welded
-    _, pair = np.unique(np.stack([by_position, labels], axis=1), axis=0, return_inverse=True)
-    keys = np.zeros((rig.n_vertices, 3))
-    keys[:, 0] = pair.reshape(-1)
-    return topology(keys, rig.faces)
+    return topology(rig.vertices, rig.faces, labels)
 
 
 def tear_topology(rig) -> Topology:

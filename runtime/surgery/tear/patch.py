@@ -52,17 +52,6 @@ def region_box(blades, margin: float, snap: float) -> tuple[np.ndarray, np.ndarr
     return blades.min(axis=0) - pad, blades.max(axis=0) + pad
 
 
-def _tear_welding(positions, faces, labels):
-    """The label-aware welded topology of (positions, faces): as ``surface.tear_topology``."""
-    if not labels.any():
-        return topology(positions, faces)
-    by_position = topology(positions, faces).welded
-    _, pair = np.unique(np.stack([by_position, labels], axis=1), axis=0, return_inverse=True)
-    keys = np.zeros((len(positions), 3))
-    keys[:, 0] = pair.reshape(-1)
-    return topology(keys, faces)
-
-
 def patch_surface(source, face_ids) -> Patch:
     """The surface of the faces ``face_ids`` (increasing ids into ``source.faces``) of ``source``.
 
@@ -74,7 +63,7 @@ def patch_surface(source, face_ids) -> Patch:
     positions = np.ascontiguousarray(source.positions[rows])
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)
-    topo = _tear_welding(source.vertices[rows], faces, source.labels[rows])
+    topo = topology(source.vertices[rows], faces, source.labels[rows])
     welded_positions = np.ascontiguousarray(positions[topo.representative])
     vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
     welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,

@@ -71,7 +71,7 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
 
 
 @helper
-def _triangulate_face(f, path_int, wfaces, face_edges, edges, wpos, path_float, out, on_edge):
+def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_float, out, on_edge):
     """Split face ``f`` so that the path's pieces in it become edges.
 
     The face's boundary becomes a polygon: its corners (a path node where the corner is one) with the
@@ -82,22 +82,23 @@ def _triangulate_face(f, path_int, wfaces, face_edges, edges, wpos, path_float, 
     over the whole polygon, then each other inside node fanned within the fan triangle that holds it.
     Every piece keeps the face's winding.
 
+    ``nodes`` (increasing) are the path nodes that can concern f (``_face_nodes``): the others are not
+    looked at, so that a long path costs what each face holds of it.
     Rows of ``out`` get element codes: -1-k for corner k, j >= 0 for path node j. Returns the row count.
     """
-    k_nodes = path_int.shape[0]
-    poly = np.empty(k_nodes + 3, np.int64)
-    flat = np.zeros(k_nodes + 3, np.bool_)
-    along = np.empty(k_nodes + 3)
+    poly = np.empty(nodes.shape[0] + 3, np.int64)
+    flat = np.zeros(nodes.shape[0] + 3, np.bool_)
+    along = np.empty(nodes.shape[0] + 3)
     count = np.int64(0)
     for k in range(3):
         code = -1 - k
-        for j in range(k_nodes):
+        for j in nodes:
             if path_int[j, 0] == VERTEX and path_int[j, 1] == wfaces[f, k]:
                 code = j
         poly[count], flat[count] = code, False
         count += 1
         first = count
-        for j in range(k_nodes):
+        for j in nodes:
             if path_int[j, 0] == EDGE and path_int[j, 1] == face_edges[f, k]:
                 # in order along the side (several nodes lie on an edge in the plane)
                 e = face_edges[f, k]
@@ -112,12 +113,12 @@ def _triangulate_face(f, path_int, wfaces, face_edges, edges, wpos, path_float, 
     n_inner = np.int64(0)
     chord_a, chord_b = -1, -1
     hub_count = np.zeros(3, np.int64)
-    for j in range(k_nodes):
+    for j in nodes:
         if path_int[j, 0] == FACE and path_int[j, 1] == f:
             inner[n_inner] = j
             n_inner += 1
-    for j in range(1, k_nodes):
-        if path_int[j, 2] == FACE_CARRIER and path_int[j, 3] == f:
+    for j in nodes:
+        if j >= 1 and path_int[j, 2] == FACE_CARRIER and path_int[j, 3] == f:
             chord_a, chord_b = j - 1, j
             for q in range(n_inner):
                 if inner[q] == j - 1 or inner[q] == j:
@@ -206,15 +207,55 @@ def _insert_node(out, n_out, t, e, on_edge, k):
 
 
 @helper
-def _add_unique(values, count, value):
-    """Append ``value`` to ``values[:count]`` unless it is there (short lists); grows the array."""
-    for q in range(count):
-        if values[q] == value:
-            return values, count
+def _append(values, count, value, slot):
+    """Append ``value`` (a face) to ``values[:count]`` and record where (``slot``); grows the array."""
     if count == values.shape[0]:
         values = np.concatenate((values, np.empty_like(values)))
     values[count] = value
+    slot[value] = count
     return values, count + 1
+
+
+@helper
+def _face_nodes(path_int, slot, n_aff, ef_offsets, ef_faces, vf_offsets, vf_faces):
+    """For each affected face (``slot`` maps a face to its index, -1 for the others), the path nodes
+    that can concern it, increasing: a node inside it or with it as carrier, a crossing of one of its
+    edges, a path vertex at one of its corners. CSR (offsets (a + 1,), nodes)."""
+    k_nodes = path_int.shape[0]
+    offsets = np.zeros(n_aff + 1, np.int64)
+    last = np.full(n_aff, -1, np.int64)            # the last node counted for each face (no repeats)
+    nodes = np.empty(0, np.int64)
+    for fill in range(2):
+        if fill == 1:
+            for a in range(n_aff):
+                offsets[a + 1] += offsets[a]
+            nodes = np.empty(offsets[n_aff], np.int64)
+            count = offsets[:n_aff].copy()
+            last[:] = -1
+        for j in range(k_nodes):
+            kind, ident = path_int[j, 0], path_int[j, 1]
+            lo, hi, faces = np.int64(0), np.int64(0), ef_faces
+            if kind == EDGE:
+                lo, hi = ef_offsets[ident], ef_offsets[ident + 1]
+            elif kind == VERTEX:
+                lo, hi, faces = vf_offsets[ident], vf_offsets[ident + 1], vf_faces
+            for r in range(lo - 2, hi):
+                if r == lo - 2:
+                    g = path_int[j, 3] if path_int[j, 2] == FACE_CARRIER else -1
+                elif r == lo - 1:
+                    g = ident if kind == FACE else -1
+                else:
+                    g = faces[r]
+                if g < 0 or slot[g] < 0 or last[slot[g]] == j:
+                    continue
+                a = slot[g]
+                last[a] = j
+                if fill == 0:
+                    offsets[a + 1] += 1
+                else:
+                    nodes[count[a]] = j
+                    count[a] += 1
+    return offsets, nodes
 
 
 @helper
@@ -240,9 +281,9 @@ def _segment_coordinates(a, b, c, p):
 
 @helper
 def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges, wpos, new_node, new_src,
-                new_coef, n_new):
-    """The new vertex of path node ``code`` as face ``f`` uses it: found among the first ``n_new`` or
-    appended. An edge crossing has one per attribute-split copy of its edge (the pair of vertex ids
+                new_coef, n_new, head, chain):
+    """The new vertex of path node ``code`` as face ``f`` uses it: found among the first ``n_new`` (the
+    node's are chained from ``head[code]`` through ``chain``) or appended. An edge crossing has one per attribute-split copy of its edge (the pair of vertex ids
     of the face's corners there), with coefficients (1 - s, s) by the edge parameter from the face's
     own corner; a point inside the face has one, with its barycentric coordinates (generated
     kernel). returns (index among the new vertices, new count)."""
@@ -252,17 +293,17 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
         while face_edges[f, k] != e:
             k += 1
         va, vb = faces[f, k], faces[f, (k + 1) % 3]
-        for q in range(n_new):
-            if new_node[q] == code and ((new_src[q, 0] == va and new_src[q, 1] == vb)
-                                        or (new_src[q, 0] == vb and new_src[q, 1] == va)):
+        q = head[code]
+        while q >= 0:
+            if (new_src[q, 0] == va and new_src[q, 1] == vb) or (new_src[q, 0] == vb and new_src[q, 1] == va):
                 return q, n_new
+            q = chain[q]
         s = path_float[code, 0] if wfaces[f, k] == edges[e, 0] else 1.0 - path_float[code, 0]
         new_src[n_new, 0], new_src[n_new, 1], new_src[n_new, 2] = va, vb, va
         new_coef[n_new, 0], new_coef[n_new, 1], new_coef[n_new, 2] = 1.0 - s, s, 0.0
     else:
-        for q in range(n_new):
-            if new_node[q] == code:
-                return q, n_new
+        if head[code] >= 0:
+            return head[code], n_new
         la, lb, lc = barycentric(wpos[wfaces[f, 0]], wpos[wfaces[f, 1]], wpos[wfaces[f, 2]],
                                  path_float[code, 1:4])
         if not (math.isfinite(la) and math.isfinite(lb) and math.isfinite(lc)):
@@ -275,6 +316,8 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
         new_src[n_new, 0], new_src[n_new, 1], new_src[n_new, 2] = faces[f, 0], faces[f, 1], faces[f, 2]
         new_coef[n_new, 0], new_coef[n_new, 1], new_coef[n_new, 2] = la / total, lb / total, lc / total
     new_node[n_new] = code
+    chain[n_new] = head[code]
+    head[code] = n_new
     return n_new, n_new + 1
 
 
@@ -293,18 +336,26 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     """
     (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
     k_nodes = path_int.shape[0]
+    slot = np.full(faces.shape[0], -1, np.int64)     # index of each affected face in ``affected``
     affected = np.empty(4 * k_nodes + 8, np.int64)
     n_aff = np.int64(0)
     for j in range(k_nodes):
-        if path_int[j, 2] == FACE_CARRIER:
-            affected, n_aff = _add_unique(affected, n_aff, path_int[j, 3])
-        if path_int[j, 0] == FACE:
-            affected, n_aff = _add_unique(affected, n_aff, path_int[j, 1])
+        for r in range(3):
+            if r == 0:
+                g = path_int[j, 3] if path_int[j, 2] == FACE_CARRIER else -1
+            elif r == 1:
+                g = path_int[j, 1] if path_int[j, 0] == FACE else -1
+            else:
+                g = -1
+            if g >= 0 and slot[g] < 0:
+                affected, n_aff = _append(affected, n_aff, g, slot)
         if path_int[j, 0] == EDGE:
             e = path_int[j, 1]
             for r in range(ef_offsets[e], ef_offsets[e + 1]):
-                affected, n_aff = _add_unique(affected, n_aff, ef_faces[r])
+                if slot[ef_faces[r]] < 0:
+                    affected, n_aff = _append(affected, n_aff, ef_faces[r], slot)
     affected = affected[:n_aff]
+    node_offsets, node_list = _face_nodes(path_int, slot, n_aff, ef_offsets, ef_faces, vf_offsets, vf_faces)
 
     tris = np.empty(((k_nodes + 12) * n_aff, 3), np.int64)
     n_tris = np.int64(0)
@@ -312,10 +363,13 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     new_src = np.zeros((4 * k_nodes + 4, 3), np.int64)
     new_coef = np.zeros((4 * k_nodes + 4, 3))
     n_new = np.int64(0)
+    head = np.full(k_nodes, -1, np.int64)           # the new vertices of each node, chained
+    chain = np.empty(4 * k_nodes + 4, np.int64)
     local = np.empty((k_nodes + 16, 3), np.int64)
     for a in range(n_aff):
         f = affected[a]
-        n_local = _triangulate_face(f, path_int, wfaces, face_edges, edges, wpos, path_float, local, on_edge)
+        n_local = _triangulate_face(f, node_list[node_offsets[a]:node_offsets[a + 1]], path_int, wfaces,
+                                    face_edges, edges, wpos, path_float, local, on_edge)
         for i in range(n_local):
             for c in range(3):
                 code = local[i, c]
@@ -331,8 +385,9 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
                         new_node = np.concatenate((new_node, np.empty_like(new_node)))
                         new_src = np.concatenate((new_src, np.zeros_like(new_src)))
                         new_coef = np.concatenate((new_coef, np.zeros_like(new_coef)))
+                        chain = np.concatenate((chain, np.empty_like(chain)))
                     vid, n_new = _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
-                                             wpos, new_node, new_src, new_coef, n_new)
+                                             wpos, new_node, new_src, new_coef, n_new, head, chain)
                     tris[n_tris, c] = n_vertices + vid
             n_tris += 1
     return (affected, tris[:n_tris].copy(), new_node[:n_new].copy(), new_src[:n_new].copy(),

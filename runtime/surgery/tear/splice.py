@@ -30,7 +30,8 @@ from ...generated.kernels import plane_from_points
 from ...tolerances import tol
 from ..new_vertices import attribute_rule, interpolate_in_place
 from .locate import _boundary_hit, locate
-from .patch import _tear_welding, patch_surface, region_box, select
+from ..topology import topology
+from .patch import patch_surface, region_box, select
 from .records import JUMP_CARRIER, VERTEX, Pieces, Slit, TornFaces
 from .retriangulate import _retriangulate
 from .slit import _open_slit, _torn_faces
@@ -178,7 +179,7 @@ def _boundary_changes(faces, vertices, labels, surface, path, p):
     on_path = np.zeros(surface.topo.n_welded, bool)
     on_path[path.nodes[path.nodes[:, 0] == VERTEX, 1]] = True
     changed = np.concatenate((np.flatnonzero(on_path[surface.topo.welded]), np.arange(p, len(vertices))))
-    topo = _tear_welding(vertices, faces, labels)
+    topo = topology(vertices, faces, labels)
     flagged = np.zeros(topo.n_welded, bool)
     flagged[topo.edges[topo.boundary_edges].reshape(-1)] = True
     return changed, flagged[topo.welded[changed]]
