@@ -361,10 +361,16 @@ def topology(vertices, faces, labels=None) -> Topology:
     faces = np.ascontiguousarray(faces, dtype=np.int64)
     if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
         raise InvalidInputError(f"faces hold indices outside [0, {len(vertices)})")
+    if not np.isfinite(vertices).all():
+        raise InvalidInputError("vertices hold non-finite values (NaN or inf)")
+    return checked_topology(vertices, faces, labels)
+
+
+def checked_topology(vertices, faces, labels=None) -> Topology:
+    """``topology`` of input already checked (finite (n, 3) float vertices, (m, 3) int64 faces that
+    index them): a tear stroke builds one per patch, where the checks would cost more than the build."""
     # bitwise equality of positions, with -0.0 == 0.0 (adding +0.0 turns -0.0 into +0.0)
     positions = np.ascontiguousarray(vertices, dtype=np.float64) + 0.0
-    if not np.isfinite(positions).all():
-        raise InvalidInputError("vertices hold non-finite values (NaN or inf)")
     bits = positions.view(np.uint64)
     if labels is not None and np.any(labels):
         bits = np.concatenate((bits, np.asarray(labels, np.int64).reshape(-1, 1).view(np.uint64)), axis=1)

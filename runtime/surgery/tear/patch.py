@@ -24,7 +24,7 @@ import numpy as np
 from ...tolerances import tol
 from ..bvh import TriangleBVH
 from ..surface import WeldedMesh, _Surface
-from ..topology import incidence, topology
+from ..topology import checked_topology, incidence
 
 
 class Patch(NamedTuple):
@@ -63,7 +63,7 @@ def patch_surface(source, face_ids) -> Patch:
     positions = np.ascontiguousarray(source.positions[rows])
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)
-    topo = topology(source.vertices[rows], faces, source.labels[rows])
+    topo = checked_topology(source.vertices[rows], faces, source.labels[rows])
     welded_positions = np.ascontiguousarray(positions[topo.representative])
     vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
     welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
