@@ -12,10 +12,12 @@ i+1's blade at t_i, so every stroke continues the slit.
 
 Columns: the median milliseconds per stroke over the first and the last tenth of the strokes (a flat
 cost shows that a stroke costs what it touches, a growing one that it costs the whole mesh), the median
-over all, and the process's peak resident memory against the bytes of the mesh's own arrays (positions,
-faces, joints, weights, attributes) before the first stroke. Each model runs in its own process, so the
-peak is its own. Today each stroke is ``cgaskin.tear`` on the rig the previous stroke returned (the
-functional API: a new rig, its welded topology and BVH rebuilt from scratch per stroke).
+over all, and the memory the strokes took at their peak (the process's peak resident memory from the
+moment the model was built, less its resident memory then; Linux ``clear_refs``) against the bytes of
+the mesh's own arrays (positions, faces, joints, weights, attributes). Two ways per model, each run in
+its own process after a warm-up that compiles every kernel: the functional API (``cgaskin.tear`` on the
+rig the previous stroke returned: a new rig per stroke, whose BVH is built again) and the editing
+session (``cgaskin.Surgery(rig).tear``: arrays with spare capacity, a BVH updated in place).
 """
 from __future__ import annotations
 
@@ -96,19 +98,53 @@ def mesh_bytes(rig) -> int:
     return int(sum(np.asarray(a).nbytes for a in arrays))
 
 
-def run_one(name: str, strokes: int, faces: int) -> dict:
-    """One model, in this process: per-stroke seconds of the functional API."""
+def _rss(field: str) -> int:
+    """Bytes of /proc/self/status's ``field`` (VmRSS now, VmHWM the peak since the last reset)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1]) * 1024
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def _warm_up(api) -> None:
+    """Compile every kernel a stroke runs (on the built-in capsule), so that no stroke times it."""
     import cgaskin
+    rig = cgaskin.capsule_arm()
+    blades = incision(rig, 3)
+    session = cgaskin.Surgery(rig)
+    for i in range(3):
+        api(rig, session, blades[i], blades[i + 1])
+
+
+def _functional(rig, _session, scalpel_from, scalpel_to):
+    import cgaskin
+    return cgaskin.tear(rig, scalpel_from, scalpel_to)
+
+
+def _in_session(rig, session, scalpel_from, scalpel_to):
+    session.tear(scalpel_from, scalpel_to)
+    return rig
+
+
+def run_one(name: str, strokes: int, faces: int, api_name: str) -> dict:
+    """One model and one API, in this process: per-stroke seconds and the strokes' peak memory."""
+    import cgaskin
+    api = {"functional": _functional, "session": _in_session}[api_name]
+    _warm_up(api)
     rig, label = _model(name, faces)
     blades = incision(rig, strokes)
     base = mesh_bytes(rig)
+    Path("/proc/self/clear_refs").write_text("5")         # VmHWM := VmRSS from here on
+    resident = _rss("VmRSS")
+    session = cgaskin.Surgery(rig) if api_name == "session" else None
     seconds = []
     for i in range(strokes):
         start = time.perf_counter()
-        rig = cgaskin.tear(rig, blades[i], blades[i + 1])
+        rig = api(rig, session, blades[i], blades[i + 1])
         seconds.append(time.perf_counter() - start)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-    return {"label": label, "faces": int(rig.n_faces), "seconds": seconds, "mesh_bytes": base, "peak": peak}
+    n_faces = session.n_faces if session is not None else rig.n_faces
+    return {"label": label, "faces": int(n_faces), "seconds": seconds, "mesh_bytes": base,
+            "peak": _rss("VmHWM") - resident}
 
 
 def main(argv=None) -> None:
@@ -116,28 +152,31 @@ def main(argv=None) -> None:
     parser.add_argument("--strokes", type=int, default=200)
     parser.add_argument("--large-strokes", type=int, default=20)
     parser.add_argument("--large-faces", type=int, default=1_500_000)
-    parser.add_argument("--one", nargs=3, metavar=("MODEL", "STROKES", "FACES"), help=argparse.SUPPRESS)
+    parser.add_argument("--one", nargs=4, metavar=("MODEL", "STROKES", "FACES", "API"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.one:                                   # the child process of one row
-        print(json.dumps(run_one(args.one[0], int(args.one[1]), int(args.one[2]))))
+        print(json.dumps(run_one(args.one[0], int(args.one[1]), int(args.one[2]), args.one[3])))
         return
     rows = []
     for name, strokes in (("arm5", args.strokes), ("large", args.large_strokes)):
-        out = subprocess.run([sys.executable, "-m", "benchmarks.bench_progressive", "--one", name, str(strokes),
-                              str(args.large_faces)], capture_output=True, text=True,
-                             cwd=Path(__file__).resolve().parent.parent)
-        if out.returncode:
-            print(out.stderr, file=sys.stderr)
-            raise SystemExit(f"bench_progressive: the {name} run failed")
-        r = json.loads(out.stdout.strip().splitlines()[-1])
-        ms = np.array(r["seconds"]) * 1e3
-        tenth = max(1, len(ms) // 10)
-        rows.append([r["label"], r["faces"], len(ms), float(np.median(ms[:tenth])), float(np.median(ms[-tenth:])),
-                     float(np.median(ms)), r["peak"] / 2**20, r["mesh_bytes"] / 2**20,
-                     r["peak"] / r["mesh_bytes"]])
-    print_table("progressive incision, functional API (cgaskin.tear on the previous stroke's rig)",
-                ["model", "faces after", "strokes", "first 10% ms", "last 10% ms", "median ms", "peak MiB",
-                 "mesh MiB", "peak / mesh"], rows)
+        medians = {}
+        for api in ("functional", "session"):
+            out = subprocess.run([sys.executable, "-m", "benchmarks.bench_progressive", "--one", name, str(strokes),
+                                  str(args.large_faces), api], capture_output=True, text=True,
+                                 cwd=Path(__file__).resolve().parent.parent)
+            if out.returncode:
+                print(out.stderr, file=sys.stderr)
+                raise SystemExit(f"bench_progressive: the {name} {api} run failed")
+            r = json.loads(out.stdout.strip().splitlines()[-1])
+            ms = np.array(r["seconds"]) * 1e3
+            tenth = max(1, len(ms) // 10)
+            medians[api] = float(np.median(ms))
+            rows.append([r["label"], api, r["faces"], len(ms), float(np.median(ms[:tenth])),
+                         float(np.median(ms[-tenth:])), medians[api], medians["functional"] / medians[api],
+                         r["peak"] / 2**20, r["mesh_bytes"] / 2**20, r["peak"] / r["mesh_bytes"]])
+    print_table("progressive incision: each stroke continues the last",
+                ["model", "API", "faces after", "strokes", "first 10% ms", "last 10% ms", "median ms",
+                 "speed-up", "strokes' peak MiB", "mesh MiB", "peak / mesh"], rows)
 
 
 if __name__ == "__main__":

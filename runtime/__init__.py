@@ -15,6 +15,7 @@ from .surgery.bvh import TriangleBVH
 from .surgery.cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
 from .surgery.tear import TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
 from .surgery.topology import Topology, rig_topology
+from .surgery.session import StrokeResult, Surgery
 from .app.precompile import precompile
 
 _sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move

@@ -340,10 +340,21 @@ class TriangleBVH:
         faces = np.ascontiguousarray(index_array(faces, "faces", len(positions)), dtype=np.int64)
         if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
             raise InvalidInputError(f"faces must have shape (m, 3) with m >= 1, got {faces.shape}")
-        self._arrays = BVHArrays(*_build(positions, faces, LEAF_SIZE, BOX_PADDING))
+        self._build(positions, faces)
 
+    def _build(self, positions, faces) -> None:
+        self._arrays = BVHArrays(*_build(positions, faces, LEAF_SIZE, BOX_PADDING))
         self._slot = np.empty(len(faces), np.int64)
         self._slot[self._arrays.order] = np.arange(len(faces))
+
+    @classmethod
+    def of_checked(cls, positions, faces) -> "TriangleBVH":
+        """The BVH of input already checked: (n, 3) C-contiguous finite float64 positions, (m >= 1, 3)
+        C-contiguous int64 faces that index them (a tear stroke builds one per patch, where the checks
+        would cost more than the build)."""
+        bvh = cls.__new__(cls)
+        bvh._build(positions, faces)
+        return bvh
 
     @property
     def n_nodes(self) -> int:

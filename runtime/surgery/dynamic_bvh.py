@@ -14,24 +14,24 @@ times the scene extent at build). Dense face id -> slot and slot -> leaf maps fi
 
 Degradation: the SAH cost (inner nodes weigh 1, leaves their count; over the root's area), kept at
 every change, over its value after the last build; an edit rebuilds past ``REBUILD_AT`` (or when dead
-slots outnumber live faces). Measured (``CGASKIN_BENCH=1 pytest tests/surgery/test_dynamic_bvh.py -k
-benchmark -s``, 2 cores, capsule_arm 850 x 294 = 1.58M faces): build 1.2 s (static 0.7 s), memory
+slots outnumber live faces). Measured (``python -m benchmarks.bench_dynamic_bvh``, 2 cores,
+capsule_arm 850 x 294 = 1.58M faces): build 1.2 s (static 0.7 s), memory
 1.20x the static arrays; first_hit on 20k random segments 3.5 us (static 3.7 us); faces_near_plane
 over 2352 faces 0.23 ms; a stroke (remove 30, insert 90 pieces, move 40) 0.25 ms median; 300 strokes
 of an incision leave the degradation at 1.000 (first_hit 3.50 us, 3.42 us rebuilt). Strokes at random
 places that also throw 40 faces ~20 face widths: degradation 1.35 / 1.86 / 2.29 / 2.78 / 4.13 / 7.58
 after 150 / 300 / 450 / 600 / 1000 / 2000 strokes, first_hit 1.02 / 1.08 / 1.06 / 1.14 / 1.19 / 1.39x
-that of a rebuilt tree (the SAH ratio also counts the faces' own growth, which no rebuild undoes).
-At 3 (``REBUILD_AT``) queries are ~15 % slower than rebuilt; a rebuild costs ~300k queries.
+that of a rebuilt tree (the SAH ratio also counts the faces' own growth, which no rebuild undoes):
+at 3 (``REBUILD_AT``) queries are ~15 % slower than rebuilt; a rebuild costs ~300k queries.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from .._shared.checks import float_array, index_array, real_number
-from .._shared.jit import helper, kernel
+from .._shared.jit import F1, F2, I1, b1, f8, helper, kernel, record
 from ..errors import InvalidInputError
-from .bvh import (BOX_PADDING, LEAF_SIZE, TriangleBVH, _all_hits, _build, _segment_box, _shear,
+from .bvh import (BOX_PADDING, BVH_ARRAYS, LEAF_SIZE, TriangleBVH, _all_hits, _build, _segment_box, _shear,
                   _watertight)
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
@@ -40,6 +40,8 @@ __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "R
 LEAF_MAX = 8
 #: ``degradation`` (SAH relative to the last build) past which an edit rebuilds (measured above)
 REBUILD_AT = 3.0
+#: the numba type of ``DynamicBVH._st`` (for precompile signatures)
+STATE = record(F2, F2, I1, I1, I1, I1, I1, I1, I1, I1, F2, I1, I1, F1)
 
 
 # ---- edits (st: the fields of ``DynamicBVH._st``, see there) ----------------------------------------
@@ -98,7 +100,7 @@ def _refit(st, node, n):
         node = parent[node]
 
 
-@kernel()
+@kernel((STATE,), cost=0.2)
 def _cost(st):
     """The SAH cost: the SAH sum over the root's area (0 for an empty tree)."""
     area = _area(st[0], st[1], 0)
@@ -111,7 +113,7 @@ def _put(st, s, leaf, face, corners):
     st[10][s, :] = corners
 
 
-@kernel()
+@kernel((STATE, I1, F2, b1), cost=0.6)
 def _edit(st, faces, corners, remove):
     """Remove ``faces`` (``remove``) or give them new ``corners``, refitting their leaves."""
     start, count, slot_face, slot_leaf, tri, face_slot = st[5], st[6], st[8], st[9], st[10], st[11]
@@ -129,7 +131,7 @@ def _edit(st, faces, corners, remove):
         _refit(st, leaf, count[leaf] - 1 if remove else count[leaf])
 
 
-@kernel()
+@kernel((STATE, I1, F2), cost=1.2)
 def _insert(st, faces, corners):
     nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
     box = np.empty((2, 3))
@@ -188,7 +190,7 @@ def _split(st, leaf, face, corners):
 
 
 # ---- queries: kernels that Python and other kernels call with ``DynamicBVH.arrays`` --------------
-@kernel()
+@kernel((BVH_ARRAYS, F1, F1), cost=0.5)
 def dyn_first_hit(arrays, a, b):
     """(face, t) of the first crossing of segment a -> b with a live triangle, the lowest face id
     among equal t; (-1, nan) if none. arrays : ``DynamicBVH.arrays`` ; a, b : (3,) float64."""
@@ -224,7 +226,7 @@ def dyn_first_hit(arrays, a, b):
     return (best_f, best_t) if best_f >= 0 else (-1, np.nan)
 
 
-@kernel()
+@kernel((BVH_ARRAYS, F1, F1, F1, f8, f8), cost=0.4)
 def dyn_faces_near_plane(arrays, lo, hi, normal, offset, delta):
     """Sorted live faces whose triangle box meets the closed box [lo, hi] and whose corners'
     s = normal . x - offset have min(s) <= delta, max(s) >= -delta. arrays : ``DynamicBVH.arrays``."""

@@ -1,5 +1,5 @@
-"""cgaskin.precompile: the kernel list is complete (after it, skinning, cutting and tearing compile
-nothing), the work is shared out evenly, and the command line runs it."""
+"""cgaskin.precompile: the kernel list is complete (after it, skinning, cutting and tearing, also in
+an editing session, compile nothing), the work is shared out evenly, and the command line runs it."""
 import importlib
 import os
 import subprocess
@@ -50,6 +50,13 @@ WORKLOAD = textwrap.dedent("""
             torn = cgaskin.tear(rig, blade[0], blade[1], pose=pose, opening=0.01)
             torn = cgaskin.tear(torn, blade[1], blade[2], pose=pose)
             cgaskin.skin(torn, posed)
+            session = cgaskin.Surgery(rig, pose)
+            session.tear(blade[0], blade[1], opening=0.01)
+            session.tear(blade[1], blade[2])
+            session.undo()
+            session.cut([0.3, 1, 0.1], centre)
+            session.undo()
+            cgaskin.skin(session.rig, posed)
     print(" ".join(sorted(set(compiled))))
 """)
 

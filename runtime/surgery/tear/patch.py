@@ -69,7 +69,7 @@ def patch_surface(source, face_ids) -> Patch:
     welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
                         topo.edge_face_faces, vf_offsets, vf_faces)
     boundary = np.unique(topo.welded[source.boundary[rows]])
-    bvh = TriangleBVH(positions, faces)
+    bvh = TriangleBVH.of_checked(positions, faces)
     surface = _Surface(positions, faces, topo, welded, bvh, boundary, source.diagonal, source.affines)
     return Patch(np.asarray(face_ids, np.int64), rows, surface)
 

@@ -15,7 +15,8 @@ from ..._shared.cache import rig_cached, seed
 from ...animation.skinning import check_pose, skin
 from ...errors import InvalidInputError
 from ..bvh import TriangleBVH, _first_hit
-from ..surface import TEAR_LABEL, _labels, mesh_arrays, tear_topology
+from ..surface import TEAR_LABEL, _labels, mesh_arrays
+from ..topology import topology
 
 #: posed surfaces kept per rig: a few poses per rig are plenty
 POSED_SURFACES = 8
@@ -34,8 +35,9 @@ def _arrays(rig):
 
 
 def _boundary_flags(rig) -> np.ndarray:
-    """(n,) bool: the vertices on a boundary edge of the label-aware weld (``tear_topology``)."""
-    topo = tear_topology(rig)
+    """(n,) bool: the vertices on a boundary edge of the label-aware weld (``tear_topology``, built
+    here and let go: a stroke needs no more of the whole mesh's topology)."""
+    topo = topology(rig.vertices, rig.faces, _labels(rig))
     flagged = np.zeros(topo.n_welded, bool)
     flagged[topo.edges[topo.boundary_edges].reshape(-1)] = True
     return flagged[topo.welded]
@@ -47,13 +49,20 @@ def _top_label(rig) -> int:
 
 
 class _Positions:
-    """The surface of a rig in one pose: positions, BVH, bounding-box diagonal, bone maps."""
+    """The surface of a rig in one pose: positions, bounding-box diagonal, bone maps, and its BVH
+    (built on first use: an editing session keeps a BVH of its own)."""
 
     def __init__(self, positions, faces, affines):
         self.positions = np.ascontiguousarray(positions, dtype=np.float64)
-        self.bvh = TriangleBVH(self.positions, faces)
         self.diagonal = float(np.linalg.norm(self.positions.max(axis=0) - self.positions.min(axis=0)))
         self.affines = affines
+        self._faces, self._bvh = faces, None
+
+    @property
+    def bvh(self) -> TriangleBVH:
+        if self._bvh is None:
+            self._bvh = TriangleBVH(self.positions, self._faces)
+        return self._bvh
 
 
 def _posed(rig, pose) -> _Positions:
@@ -83,14 +92,18 @@ class RigSource:
         self.positions, self.diagonal, self.affines = surface.positions, surface.diagonal, surface.affines
         if bvh is not None and (not isinstance(bvh, TriangleBVH) or bvh.n_faces != len(self.faces)):
             raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {len(self.faces)} faces")
-        self._bvh, self._user_bvh = (surface.bvh, False) if bvh is None else (bvh, True)
+        self._surface, self._user_bvh = surface, bvh
+
+    @property
+    def _bvh(self) -> TriangleBVH:
+        return self._surface.bvh if self._user_bvh is None else self._user_bvh
 
     def boundary_vertices(self) -> np.ndarray:
         return np.flatnonzero(self.boundary)
 
     def first_hit(self, a, b):
         face, t = _first_hit(tuple(self._bvh._arrays), a, b)
-        if self._user_bvh and face >= 0 and not np.array_equal(self._bvh.triangle(face),
+        if self._user_bvh is not None and face >= 0 and not np.array_equal(self._bvh.triangle(face),
                                                                self.positions[self.faces[face]]):
             raise InvalidInputError("bvh was built from other positions than the surface being torn "
                                     "(the stored vertices, or the skinned positions in the given pose)")

@@ -188,7 +188,8 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     n_kept = len(patch.faces) - len(pieces.affected)
     keep = np.ones(len(patch.faces), bool)
     keep[pieces.affected] = False
-    boundary_rows, boundary_flags = _boundary_changes(torn.faces, vertices, labels, surface, path, p)
+    boundary_rows, boundary_flags = _boundary_changes(torn.faces[torn.candidates], vertices, labels, surface,
+                                                      path, p)
     stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
                   side_a=ids[slit.side_a], side_b=ids[slit.side_b], split=slit.split, hits=ends.hits,
                   jumps=path.nodes[:, 2] == JUMP_CARRIER)
@@ -199,8 +200,9 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
 
 def _boundary_changes(faces, vertices, labels, surface, path, p):
     """The patch vertices whose boundary flag a stroke can change -- the copies of the path's vertices
-    and the new vertices, whose fans the patch holds whole -- and their flags in the torn patch (welded
-    as ``surface.tear_topology`` welds: by rest position and label)."""
+    and the new vertices -- and their flags in the torn patch (welded as ``surface.tear_topology``
+    welds: by rest position and label). ``faces`` are the torn faces that can touch a path node (the
+    pieces and the kept faces around path vertices): the whole fan of every vertex asked about."""
     on_path = np.zeros(surface.topo.n_welded, bool)
     on_path[path.nodes[path.nodes[:, 0] == VERTEX, 1]] = True
     changed = np.concatenate((np.flatnonzero(on_path[surface.topo.welded]), np.arange(p, len(vertices))))

@@ -1,0 +1,335 @@
+"""An editing session: many tears (and cuts) on one model, each costing what it touches.
+
+``cgaskin.tear(rig, ...)`` returns a new rig, and the next stroke on it builds that rig's BVH again:
+the whole mesh per stroke. A ``Surgery`` keeps the mutable state across operations instead:
+
+* the mesh in arrays with spare capacity (``rows.Rows``): a stroke rewrites the rows of its patch
+  and appends its new vertices and faces, amortised, never copying the mesh;
+* removed faces become tombstones (``alive`` False), so face ids stay stable for the BVH;
+* a ``DynamicBVH`` of the surface, updated for the faces a stroke removes, adds and moves (refit and
+  local insertion; it rebuilds itself only past its measured degradation threshold);
+* per vertex, whether it lies on a boundary edge of the label-aware weld, which is all a stroke needs
+  of the whole mesh's topology (its patch has its own: ``tear/patch.py``), updated for the path's
+  vertices;
+* an undo log of the rows each operation changed.
+
+A stroke is ``tear/splice.py`` run on the session as its source, exactly as the functional ``tear``
+runs it on a rig, so a session's mesh after k strokes is the functional chain's (tests check it).
+``rig`` is an immutable snapshot, copied on export (once per state; O(mesh)). ``cut`` cuts the whole
+mesh (a global operation: its cost is the mesh's) and keeps both halves in the session, apart.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import NamedTuple
+
+import numpy as np
+
+from .._shared.cache import seed
+from .._shared.jit import B1, I1, kernel
+from ..animation.skinning import skin_affine
+from ..errors import InvalidInputError
+from .cut import cut as cut_rig
+from .dynamic_bvh import DynamicBVH
+from .rows import Rows
+from .surface import TEAR_LABEL
+from .tear.rig_source import RigSource
+from .tear.splice import stroke_splice
+from .tear.stroke import check_blades, check_ends, check_opening, check_path
+
+__all__ = ["Surgery", "StrokeResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class StrokeResult:
+    """A session's tear stroke: ``TearResult`` without the rig (``Surgery.rig`` gives it); vertex ids
+    (side_a, side_b) are the session's, which are the snapshot's."""
+
+    plane: np.ndarray
+    points: np.ndarray
+    kinds: np.ndarray
+    side_a: np.ndarray
+    side_b: np.ndarray
+    split: np.ndarray
+    hits: np.ndarray
+    jumps: np.ndarray
+
+
+class _Undo(NamedTuple):
+    """What one stroke changed: counts before it, and the old values of the rows it rewrote."""
+
+    n: int
+    m: int
+    rows: np.ndarray
+    old_rows: dict
+    moved: np.ndarray
+    old_positions: np.ndarray
+    removed: np.ndarray
+    kept: np.ndarray
+    old_kept: np.ndarray
+    moved_faces: np.ndarray
+    boundary_rows: np.ndarray
+    old_flags: np.ndarray
+    scalars: tuple
+
+
+class Surgery:
+    """An editing session on ``rig`` (torn as posed in ``pose``; default the stored vertices).
+
+    Methods: ``tear(scalpel_from, scalpel_to, opening=0.0)``, ``cut(normal, point, cap=False)``,
+    ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``, ``n_faces``,
+    ``n_operations``. The caller's rig is never modified.
+    """
+
+    def __init__(self, rig, pose=None):
+        self.pose = pose
+        self._history: list = []
+        self._reset(rig)
+
+    # ---- state ----------------------------------------------------------------------------------
+    def _reset(self, rig) -> None:
+        source = RigSource(rig, self.pose, None)                 # checks the rig (and the pose)
+        self._template = rig
+        self._arrays = {"vertices": Rows(source.vertices), "joints": Rows(source.joints),
+                        "weights": Rows(source.weights), "labels": Rows(source.labels),
+                        "boundary": Rows(source.boundary)}
+        if source.affines is not None:
+            self._arrays["positions"] = Rows(source.positions)
+        self._attributes = {name: (Rows(values), tail) for name, (values, tail) in source.attributes.items()}
+        self._faces, self._alive = Rows(source.faces), Rows(np.ones(len(source.faces), bool))
+        self._bvh = DynamicBVH(source.positions, source.faces)
+        self.affines, self.top_label = source.affines, source.top_label
+        self._labelled = TEAR_LABEL in rig.attributes
+        self._boundary_list = np.flatnonzero(source.boundary)     # (b,) the flagged vertices, kept sorted
+        self._bounds = np.stack([source.positions.min(axis=0), source.positions.max(axis=0)])
+        self._snapshot = None
+
+    def _state(self) -> tuple:
+        return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
+                self.affines, self.top_label, self._labelled, self._bounds, self._boundary_list)
+
+    # ---- the source interface of tear/splice.py -------------------------------------------------------
+    vertices = property(lambda self: self._arrays["vertices"].view)
+    joints = property(lambda self: self._arrays["joints"].view)
+    weights = property(lambda self: self._arrays["weights"].view)
+    labels = property(lambda self: self._arrays["labels"].view)
+    boundary = property(lambda self: self._arrays["boundary"].view)
+    faces = property(lambda self: self._faces.view)
+
+    @property
+    def positions(self) -> np.ndarray:
+        return self._arrays["positions" if self.affines is not None else "vertices"].view
+
+    @property
+    def attributes(self) -> dict:
+        return {name: (rows.view, tail) for name, (rows, tail) in self._attributes.items()}
+
+    @property
+    def diagonal(self) -> float:
+        return self._diagonal
+
+    @property
+    def _bounds(self) -> np.ndarray:
+        return self._box
+
+    @_bounds.setter
+    def _bounds(self, box) -> None:
+        """(2, 3) the surface's bounding box, and its diagonal with it (read by every stroke)."""
+        self._box = box
+        self._diagonal = float(np.linalg.norm(box[1] - box[0]))
+
+    def boundary_vertices(self) -> np.ndarray:
+        return self._boundary_list
+
+    def first_hit(self, a, b):
+        return self._bvh.first_hit(a, b)
+
+    def near_plane(self, lo, hi, normal, offset, delta) -> np.ndarray:
+        if not np.isfinite(delta):
+            return self._bvh.faces_in_box(lo, hi)
+        return self._bvh.faces_near_plane(lo, hi, normal, offset, delta)
+
+    # ---- operations -------------------------------------------------------------------------------
+    def tear(self, scalpel_from, scalpel_to, opening: float = 0.0) -> StrokeResult:
+        """One scalpel stroke (as ``cgaskin.tear_stroke``: the same arguments but the rig and pose, the
+        same errors); the session keeps the torn mesh. A stroke that raises changes nothing."""
+        blades = check_blades(scalpel_from, scalpel_to)
+        splice = stroke_splice(self, blades, check_opening(opening), check_ends, check_path)
+        self._history.append(self._apply(splice))
+        self._labelled = self._labelled or bool(splice.stroke["split"].any())
+        self._snapshot = None
+        return StrokeResult(**splice.stroke)
+
+    def cut(self, normal, point, cap: bool = False) -> None:
+        """Cut the whole mesh with the plane through ``point`` with normal ``normal`` (``cgaskin.cut``
+        in the session's pose); both halves stay in the session, apart (the negative half's tear labels
+        are moved past the positive half's, so that the halves do not weld along the cut)."""
+        positive, negative = cut_rig(self.rig, normal, point, pose=self.pose, cap=cap)
+        previous = self._state()
+        self._reset(replace(_joined(positive, negative), name=self._template.name))
+        self._history.append(previous)
+
+    def undo(self) -> None:
+        """Take back the last operation (raises InvalidInputError when there is none)."""
+        if not self._history:
+            raise InvalidInputError("nothing to undo: the session has no operation left to take back")
+        record = self._history.pop()
+        if isinstance(record, _Undo):
+            self._revert(record)
+        else:
+            (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
+             self.affines, self.top_label, self._labelled, self._bounds, self._boundary_list) = record
+        self._snapshot = None
+
+    @property
+    def n_operations(self) -> int:
+        return len(self._history)
+
+    @property
+    def n_vertices(self) -> int:
+        return self._arrays["vertices"].n
+
+    @property
+    def n_faces(self) -> int:
+        return self._bvh.n_faces
+
+    @property
+    def rig(self):
+        """The session's mesh now, as a Rig of its own arrays (a copy: later operations leave it as
+        it is); the same object until the next operation."""
+        if self._snapshot is None:
+            n = self.n_vertices
+            attributes = {name: rows.view.reshape((n,) + tail).copy() for name, (rows, tail) in
+                          self._attributes.items()}
+            if self._labelled:
+                attributes[TEAR_LABEL] = self.labels[:, None].astype(np.float64)
+            rig = self._template.with_mesh(self.vertices.copy(), self.faces[self._alive.view],
+                                           self.joints.copy(), self.weights.copy(), attributes)
+            seed(rig, "tear.boundary", self.boundary.copy())
+            seed(rig, "tear.top_label", self.top_label)
+            self._snapshot = rig
+        return self._snapshot
+
+    def __repr__(self) -> str:
+        return (f"Surgery({self._template.name!r}: {self.n_vertices} vertices, {self.n_faces} faces, "
+                f"{self.n_operations} operations)")
+
+    # ---- a stroke's rows in, and out again ------------------------------------------------------------
+    def _apply(self, splice) -> _Undo:
+        rows, p = splice.rows, len(splice.rows)
+        n, m = self.n_vertices, self._faces.n
+        named = {"vertices": splice.vertices, "joints": splice.joints, "weights": splice.weights,
+                 "labels": splice.labels}
+        old_rows = {name: self._arrays[name].view[rows].copy() for name in named}
+        old_rows.update({name: rows_.view[rows].copy() for name, (rows_, _) in self._attributes.items()})
+        moved = rows[(splice.vertices[:p] != old_rows["vertices"]).any(axis=1)]     # (an opening)
+        old_positions = self.positions[moved].copy()
+        for name, values in named.items():
+            self._arrays[name].view[rows] = values[:p]
+            self._arrays[name].append(values[p:])
+        for name, (buffer, _) in self._attributes.items():
+            buffer.view[rows] = splice.attributes[name][:p]
+            buffer.append(splice.attributes[name][p:])
+        if self.affines is not None:                 # the posed surface of the new and moved rows
+            new = np.concatenate((moved, np.arange(n, self.n_vertices)))
+            skinned = skin_affine(self.vertices[new], self.joints[new], self.weights[new], self.affines)
+            self._arrays["positions"].append(skinned[len(moved):])
+            self._arrays["positions"].view[moved] = skinned[:len(moved)]
+        flags = self._arrays["boundary"]
+        flags.append(np.zeros(self.n_vertices - n, bool))
+        old_flags = flags.view[splice.boundary_rows].copy()
+        flags.view[splice.boundary_rows] = splice.boundary_flags
+        scalars = (self.top_label, self._labelled, self._bounds.copy(), self._boundary_list)
+        self._boundary_list = _merged(self._boundary_list, splice.boundary_rows, splice.boundary_flags)
+        self.top_label = max(self.top_label, int(splice.labels.max(initial=0)))
+        # faces: tombstones, the far side's new corners, the pieces appended
+        old_kept = self.faces[splice.kept].copy()
+        self._alive.view[splice.removed] = False
+        self.faces[splice.kept] = splice.kept_corners
+        self._faces.append(splice.pieces)
+        self._alive.append(np.ones(len(splice.pieces), bool))
+        changed = ((old_kept != splice.kept_corners).any(axis=1)
+                   | np.isin(splice.kept_corners, moved).any(axis=1))
+        moved_faces = splice.kept[changed]
+        self._bvh.remove(splice.removed)
+        self._bvh.insert(np.arange(m, self._faces.n), self.positions[splice.pieces])
+        if len(moved_faces):
+            self._bvh.update(moved_faces, self.positions[self.faces[moved_faces]])
+        self._grow_bounds(np.concatenate((moved, np.arange(n, self.n_vertices))), old_positions)
+        return _Undo(n, m, rows, old_rows, moved, old_positions, splice.removed, splice.kept, old_kept, moved_faces,
+                     splice.boundary_rows, old_flags, scalars)
+
+    def _grow_bounds(self, rows, old) -> None:
+        """The bounding box of the surface after ``rows`` moved (from ``old`` positions) or appeared:
+        grown by their new positions, or found again from every vertex when a moved one was on the old
+        box's side."""
+        if not len(rows):
+            return
+        if len(old) and ((old == self._bounds[0]) | (old == self._bounds[1])).any():
+            positions = self.positions
+        else:
+            positions = np.concatenate((self.positions[rows], self._bounds))
+        self._bounds = np.stack([positions.min(axis=0), positions.max(axis=0)])
+
+    def _revert(self, record: _Undo) -> None:
+        rows = record.rows
+        self._bvh.remove(np.arange(record.m, self._faces.n))
+        self._faces.truncate(record.m)
+        self._alive.truncate(record.m)
+        self.faces[record.kept] = record.old_kept
+        self._alive.view[record.removed] = True
+        for name in ("vertices", "joints", "weights", "labels"):
+            self._arrays[name].truncate(record.n)
+            self._arrays[name].view[rows] = record.old_rows[name]
+        for name, (buffer, _) in self._attributes.items():
+            buffer.truncate(record.n)
+            buffer.view[rows] = record.old_rows[name]
+        flags = self._arrays["boundary"]
+        flags.truncate(record.n)
+        valid = record.boundary_rows < record.n
+        flags.view[record.boundary_rows[valid]] = record.old_flags[valid]
+        if self.affines is not None:
+            positions = self._arrays["positions"]
+            positions.truncate(record.n)
+            positions.view[record.moved] = record.old_positions
+        self.top_label, self._labelled, self._bounds, self._boundary_list = record.scalars
+        self._bvh.insert(record.removed, self.positions[self.faces[record.removed]])
+        if len(record.moved_faces):
+            self._bvh.update(record.moved_faces, self.positions[self.faces[record.moved_faces]])
+
+
+@kernel((I1, I1, B1))
+def _merged(listed, rows, flags):
+    """The sorted list ``listed`` (b,) with the sorted distinct ``rows`` (r,) in it where ``flags``
+    (r,) and out of it where not: one merge, O(b + r)."""
+    out = np.empty(listed.shape[0] + rows.shape[0], np.int64)
+    i, j, k = 0, 0, 0
+    while i < listed.shape[0] or j < rows.shape[0]:
+        if j == rows.shape[0] or (i < listed.shape[0] and listed[i] < rows[j]):
+            out[k] = listed[i]
+            i += 1
+            k += 1
+            continue
+        if i < listed.shape[0] and listed[i] == rows[j]:
+            i += 1                                  # rows[j] is decided by its flag, below
+        if flags[j]:
+            out[k] = rows[j]
+            k += 1
+        j += 1
+    return out[:k].copy()
+
+
+def _joined(positive, negative):
+    """One rig holding both halves of a cut, apart: the negative half's vertices after the positive
+    half's, its tear labels past the positive half's."""
+    n = positive.n_vertices
+    labels = [np.asarray(r.attributes.get(TEAR_LABEL, np.zeros((r.n_vertices, 1))), np.float64).reshape(-1, 1)
+              for r in (positive, negative)]
+    labels[1] = labels[1] + (labels[0].max(initial=0.0) + 1.0)
+    attributes = {name: np.concatenate((np.asarray(values), np.asarray(negative.attributes[name])))
+                  for name, values in positive.attributes.items() if name != TEAR_LABEL}
+    attributes[TEAR_LABEL] = np.concatenate(labels)
+    return positive.with_mesh(np.concatenate((positive.vertices, negative.vertices)),
+                              np.concatenate((positive.faces, np.asarray(negative.faces) + n)),
+                              np.concatenate((positive.joints, negative.joints)),
+                              np.concatenate((positive.weights, negative.weights)), attributes)

@@ -1,0 +1,203 @@
+"""The editing session ``cgaskin.Surgery``: after any sequence of operations its mesh is what the
+functional API gives after the same operations (same faces, positions to 1e-12 of the model's size,
+weights, attributes, tear labels), the caller's rig and earlier snapshots never change, undo takes an
+operation back exactly, a failed operation changes nothing, and a session continues from a saved file.
+"""
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, event, given, settings, strategies as st
+
+import cgaskin
+from cgaskin import InvalidInputError, MissesMeshError, Surgery, TearPathError
+from cgaskin.surgery.tear import TEAR_LABEL
+from cgaskin.surgery.tear.rig_source import _boundary_flags
+
+from tests.helpers.tear_checks import diagonal, pieces, some_pose, strokes, surface
+
+SETTINGS = dict(suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+                deadline=None)
+#: what a stroke may raise on a random blade: the same error from the session and the functional API
+STROKE_ERRORS = (TearPathError, MissesMeshError, InvalidInputError)
+
+
+def assert_same_mesh(a, b, scale):
+    """Two rigs hold the same mesh: faces, joints and weights equal, positions and attributes to 1e-12
+    of ``scale`` (they are equal bit for bit today; the tolerance is the promise)."""
+    np.testing.assert_array_equal(np.asarray(a.faces), np.asarray(b.faces))
+    np.testing.assert_allclose(a.vertices, b.vertices, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_array_equal(a.joints, b.joints)
+    np.testing.assert_allclose(a.weights, b.weights, rtol=0, atol=1e-12)
+    assert a.attributes.keys() == b.attributes.keys()
+    for name in a.attributes:
+        np.testing.assert_allclose(a.attributes[name], b.attributes[name], rtol=0, atol=1e-12 * max(scale, 1))
+
+
+def assert_same_boundary(session, rig):
+    """The session's boundary flags, updated stroke by stroke, are those of the whole mesh built anew."""
+    expected = _boundary_flags(rig)
+    np.testing.assert_array_equal(session.boundary, expected)
+    np.testing.assert_array_equal(session.boundary_vertices(), np.flatnonzero(expected))
+
+
+def _stroke_after(last, draw, rig, pose):
+    """A random stroke (``strokes``); half the time moved to continue the previous one (its blade at
+    t_i is the last stroke's blade at t_(i+1))."""
+    scalpel_from, scalpel_to = (np.asarray(b, float) for b in draw(strokes(rig, surface(rig, pose))))
+    if last is not None and draw(st.booleans()):
+        scalpel_from, scalpel_to = last, last + (scalpel_to - scalpel_from)
+    return scalpel_from, scalpel_to
+
+
+@settings(max_examples=12, **SETTINGS)
+@given(data=st.data(), posed=st.booleans())
+def test_session_equals_the_functional_chain(tear_model, data, posed):
+    name, rig = tear_model
+    pose = some_pose(name, rig) if posed else None
+    scale = diagonal(surface(rig, pose))
+    original = copy.deepcopy((rig.vertices, rig.faces, rig.weights, rig.attributes))
+    session = Surgery(rig, pose)
+    chain, last, snapshots = [rig], None, []
+    for _ in range(data.draw(st.integers(1, 6), label="operations")):
+        if len(chain) > 1 and data.draw(st.integers(0, 4)) == 0:
+            session.undo()
+            chain.pop()
+            last = None
+        else:
+            blades = _stroke_after(last, data.draw, chain[-1], pose)
+            opening = data.draw(st.sampled_from([0.0, 0.0, 0.003])) * scale
+            try:
+                expected = cgaskin.tear(chain[-1], *blades, pose=pose, opening=opening)
+            except STROKE_ERRORS as error:
+                event(f"a stroke raises {type(error).__name__}")
+                before = session.rig
+                with pytest.raises(type(error)):
+                    session.tear(*blades, opening=opening)
+                assert session.rig is before and session.n_operations == len(chain) - 1
+                continue
+            session.tear(*blades, opening=opening)
+            event("a stroke tears")
+            chain.append(expected)
+            last = blades[1]
+        snapshots.append((session.rig, chain[-1]))
+        assert_same_mesh(session.rig, chain[-1], scale)
+        assert_same_boundary(session, chain[-1])
+    for snapshot, expected in snapshots:            # later operations leave earlier snapshots alone
+        assert_same_mesh(snapshot, expected, scale)
+    for before, after in zip(original, (rig.vertices, rig.faces, rig.weights, rig.attributes)):
+        if isinstance(before, dict):
+            assert before.keys() == after.keys() and all(np.array_equal(before[k], after[k]) for k in before)
+        else:
+            np.testing.assert_array_equal(before, after)
+
+
+def capsule_incision(count, x0=0.1, step=0.014, offset=np.zeros(3)):
+    """The issue's incision along the top of the built-in capsule: blades (handle, tip) at x0, x0 +
+    step, ... (the plane z = 0.02 runs near rows of vertices)."""
+    return [np.array([[x0 + step * i, 0.35, 0.02], [x0 + step * i, 0.0, 0.02]]) + offset for i in range(count)]
+
+
+def test_a_long_incision_undone_and_redone():
+    rig = cgaskin.capsule_arm()
+    blades = capsule_incision(31)
+    session, chain = Surgery(rig), [rig]
+    for i in range(30):
+        session.tear(blades[i], blades[i + 1], opening=0.002 * (i % 3 == 0))
+        chain.append(cgaskin.tear(chain[-1], blades[i], blades[i + 1], opening=0.002 * (i % 3 == 0)))
+    assert_same_mesh(session.rig, chain[-1], 1.0)
+    assert_same_boundary(session, chain[-1])
+    assert session.n_operations == 30 and len(chain[-1].faces) == session.n_faces
+    for _ in range(12):
+        session.undo()
+    assert_same_mesh(session.rig, chain[18], 1.0)
+    assert_same_boundary(session, chain[18])
+    for i in range(18, 30):                              # the same strokes again, from the undone state
+        session.tear(blades[i], blades[i + 1], opening=0.002 * (i % 3 == 0))
+    assert_same_mesh(session.rig, chain[-1], 1.0)
+    for _ in range(30):
+        session.undo()
+    assert_same_mesh(session.rig, rig, 1.0)
+    with pytest.raises(InvalidInputError, match="nothing to undo"):
+        session.undo()
+
+
+@pytest.mark.parametrize("where", ["far from the origin", "posed"])
+def test_far_from_the_origin_and_posed(where):
+    """The capsule moved 1e4 away, and the capsule torn in a pose: the session still follows the
+    functional chain."""
+    rig, pose, offset = cgaskin.capsule_arm(), None, np.zeros(3)
+    if where == "posed":
+        pose = rig.pose("wave", 0.4)
+    else:
+        offset = np.array([1e4, -2e4, 3e4])
+        rig = rig.with_mesh(rig.vertices + offset, rig.faces, rig.joints, rig.weights, rig.attributes)
+    points = surface(rig, pose)
+    start = points[np.argmax(points[:, 1] - np.abs(points[:, 0] - offset[0] - 0.4))]   # on top, near x = 0.4
+    blades = [np.array([start + [dx, 0.3, 0.013], start + [dx, -0.1, 0.013]]) for dx in np.linspace(0, 0.3, 8)]
+    session, current = Surgery(rig, pose), rig
+    for i in range(7):
+        session.tear(blades[i], blades[i + 1])
+        current = cgaskin.tear(current, blades[i], blades[i + 1], pose=pose)
+    assert current.n_faces > rig.n_faces + 7
+    assert_same_mesh(session.rig, current, 1.0)
+
+
+def test_a_session_continues_from_a_saved_file(tmp_path):
+    """Save the session's rig, load it, start a new session from the file and go on: the same mesh as
+    going on in the first session (the tear labels travel in the file)."""
+    rig = cgaskin.capsule_arm()
+    blades = capsule_incision(12)
+    session = Surgery(rig)
+    for i in range(6):
+        session.tear(blades[i], blades[i + 1])
+    cgaskin.save(session.rig, tmp_path / "torn.glb")
+    loaded = cgaskin.load(tmp_path / "torn.glb")
+    assert TEAR_LABEL in loaded.attributes
+    again = Surgery(loaded)
+    for i in range(6, 11):
+        session.tear(blades[i], blades[i + 1])
+        again.tear(blades[i], blades[i + 1])
+    a, b = session.rig, again.rig
+    np.testing.assert_array_equal(a.faces, b.faces)
+    np.testing.assert_allclose(a.vertices, b.vertices, atol=1e-6)     # (the file stores float32)
+    np.testing.assert_array_equal(a.attributes[TEAR_LABEL], b.attributes[TEAR_LABEL])
+
+
+def test_cut_keeps_both_halves_apart_and_undoes():
+    rig = cgaskin.capsule_arm()
+    blades = capsule_incision(6)
+    session = Surgery(rig)
+    session.tear(blades[0], blades[1])
+    before = session.rig
+    session.cut([1.0, 0.0, 0.0], [1.5, 0.0, 0.0])
+    positive, negative = cgaskin.cut(before, [1.0, 0.0, 0.0], [1.5, 0.0, 0.0])
+    assert session.n_faces == positive.n_faces + negative.n_faces
+    assert session.n_vertices == positive.n_vertices + negative.n_vertices
+    assert pieces(session.rig) == pieces(positive) + pieces(negative)      # the halves do not weld
+    for i in range(1, 5):                                 # the incision goes on in the negative half
+        session.tear(blades[i], blades[i + 1])
+    for _ in range(5):                                    # four strokes, then the cut
+        session.undo()
+    assert_same_mesh(session.rig, before, 1.0)
+
+
+def test_bad_input_and_failed_strokes_change_nothing():
+    rig = cgaskin.capsule_arm()
+    session = Surgery(rig)
+    blades = capsule_incision(3)
+    session.tear(blades[0], blades[1])
+    before = session.rig
+    with pytest.raises(MissesMeshError, match="scalpel_to"):
+        session.tear(blades[1], [[5.0, 5.0, 5.0], [6.0, 6.0, 6.0]])
+    with pytest.raises(InvalidInputError, match="opening"):
+        session.tear(blades[1], blades[2], opening=-1.0)
+    with pytest.raises(InvalidInputError, match="scalpel_from"):
+        session.tear([[0.0, 0.0, 0.0]], blades[2])
+    assert session.rig is before and session.n_operations == 1
+    with pytest.raises(InvalidInputError, match="Rig"):
+        Surgery("not a rig")
+    session.tear(blades[1], blades[2])                    # and it goes on
+    assert session.n_operations == 2
