@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.checks import float_array, index_array
-from .._shared.jit import F2, I1, I2, f8, helper, i8, kernel, record
+from .._shared.jit import F1, F2, I1, I2, f8, helper, i8, kernel, record
 from ..errors import InvalidInputError
 from ..tolerances import tol
 
@@ -232,7 +232,7 @@ def _shear(d):
     return kx, ky, kz, d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]
 
 
-@kernel()
+@kernel((BVH_ARRAYS, F1, F1), cost=0.5)
 def _first_hit(bvh, a, b):
     """Smallest t in [0, 1] where segment a -> b meets a triangle of ``bvh`` (BVHArrays as a tuple);
     returns (face, t), face -1 if none."""

@@ -31,8 +31,7 @@ import numpy as np
 from .._shared.checks import float_array, index_array, real_number
 from .._shared.jit import F1, F2, I1, b1, f8, helper, kernel, record
 from ..errors import InvalidInputError
-from .bvh import (BOX_PADDING, BVH_ARRAYS, LEAF_SIZE, TriangleBVH, _all_hits, _build, _segment_box, _shear,
-                  _watertight)
+from .bvh import BOX_PADDING, BVH_ARRAYS, LEAF_SIZE, TriangleBVH, _all_hits, _build, _first_hit
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
 
@@ -131,15 +130,17 @@ def _edit(st, faces, corners, remove):
         _refit(st, leaf, count[leaf] - 1 if remove else count[leaf])
 
 
-@kernel((STATE, I1, F2), cost=1.2)
-def _insert(st, faces, corners):
+@kernel((STATE, I1, F2, I1), cost=1.2)
+def _insert(st, faces, corners, near):
+    """Insert ``faces`` with ``corners``, each into the leaf of the live face ``near[i]`` (a piece of
+    it: no descent) or, where near[i] is -1, into the leaf the least-growth descent finds."""
     nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
     box = np.empty((2, 3))
     for i in range(faces.shape[0]):
         for k in range(3):
             box[0, k] = min(corners[i, k], min(corners[i, 3 + k], corners[i, 6 + k])) - sah[1]
             box[1, k] = max(corners[i, k], max(corners[i, 3 + k], corners[i, 6 + k])) + sah[1]
-        node = 0
+        node = 0 if near[i] < 0 else slot_leaf[face_slot[near[i]]]
         while left[node] >= 0:
             gl, al = _growth(nlo, nhi, left[node], box)
             gr, ar = _growth(nlo, nhi, right[node], box)
@@ -190,40 +191,9 @@ def _split(st, leaf, face, corners):
 
 
 # ---- queries: kernels that Python and other kernels call with ``DynamicBVH.arrays`` --------------
-@kernel((BVH_ARRAYS, F1, F1), cost=0.5)
-def dyn_first_hit(arrays, a, b):
-    """(face, t) of the first crossing of segment a -> b with a live triangle, the lowest face id
-    among equal t; (-1, nan) if none. arrays : ``DynamicBVH.arrays`` ; a, b : (3,) float64."""
-    node_lo, node_hi, node_left, node_right, node_start, node_count, slot_face, tri = arrays
-    d = b - a
-    kx, ky, kz, sx, sy, sz = _shear(d)
-    best_t, best_f, top = np.inf, -1, 0
-    stack = np.empty(128, np.int64)
-    stack[0] = 0
-    while top >= 0:
-        node = stack[top]
-        top -= 1
-        # a box entered exactly at best_t may hold a tie of lower id: the slab test keeps it
-        if not _segment_box(node_lo[node], node_hi[node], a, d, min(1.0, best_t))[0]:
-            continue
-        if node_left[node] < 0:
-            for i in range(node_start[node], node_start[node] + node_count[node]):
-                t = _watertight(tri, i, a, kx, ky, kz, sx, sy, sz)
-                if t >= 0.0 and t <= 1.0 and (t < best_t or (t == best_t and slot_face[i] < best_f)):
-                    best_t, best_f = t, slot_face[i]
-            continue
-        left, right = node_left[node], node_right[node]
-        hl, tl = _segment_box(node_lo[left], node_hi[left], a, d, min(1.0, best_t))
-        hr, tr = _segment_box(node_lo[right], node_hi[right], a, d, min(1.0, best_t))
-        if top + 3 > stack.shape[0]:
-            stack = np.concatenate((stack, np.empty_like(stack)))
-        if hl and hr:     # the nearer child on top, so that best_t shrinks early
-            stack[top + 1], stack[top + 2] = (right, left) if tl <= tr else (left, right)
-            top += 2
-        elif hl or hr:
-            top += 1
-            stack[top] = left if hl else right
-    return (best_f, best_t) if best_f >= 0 else (-1, np.nan)
+#: (face, t) of the first crossing of segment a -> b, the lowest face id among equal t, (-1, nan) if
+#: none: ``bvh._first_hit`` reads ``arrays`` (leaves hold no dead slot; slot_face is its leaf order)
+dyn_first_hit = _first_hit
 
 
 @kernel((BVH_ARRAYS, F1, F1, F1, f8, f8), cost=0.4)
@@ -355,11 +325,12 @@ class DynamicBVH:
         """Give live faces (k,) new corners (k, 3, 3)."""
         self._apply(face_ids, corners, True)
 
-    def insert(self, face_ids, corners):
-        """Add faces with new ids (k,), none live, and corners (k, 3, 3)."""
-        self._apply(face_ids, corners, False)
+    def insert(self, face_ids, corners, near=None):
+        """Add faces with new ids (k,), none live, and corners (k, 3, 3); ``near`` (k,) optional live
+        faces whose leaves take them (the faces they are pieces of; -1: descend from the root)."""
+        self._apply(face_ids, corners, False, near)
 
-    def _apply(self, face_ids, corners, live):
+    def _apply(self, face_ids, corners, live, near=None):
         ids = self._ids(face_ids, "face_ids", live)
         k = len(ids)
         if corners is not None:
@@ -380,7 +351,14 @@ class DynamicBVH:
             for j, fill in ((8, -1), (9, -1), (10, 0.0)):
                 st[j] = _grown(st[j], st[12][1] + LEAF_MAX * k, fill)
             self._st = tuple(st)
-            _insert(self._st, ids, corners)
+            if near is None:
+                near = np.full(k, -1, np.int64)
+            else:
+                near = np.ascontiguousarray(near, dtype=np.int64)
+                given = near[near >= 0]
+                if near.shape != (k,) or (given >= len(st[11])).any() or (st[11][given] < 0).any():
+                    raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
+            _insert(self._st, ids, corners, near)
         if self.degradation > REBUILD_AT or self._st[12][2] > max(self._st[12][3], 1024):
             self.rebuild()
 

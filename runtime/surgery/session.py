@@ -251,8 +251,9 @@ class Surgery:
         changed = ((old_kept != splice.kept_corners).any(axis=1)
                    | np.isin(splice.kept_corners, moved).any(axis=1))
         moved_faces = splice.kept[changed]
+        # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
+        self._bvh.insert(np.arange(m, self._faces.n), self.positions[splice.pieces], near=splice.parents)
         self._bvh.remove(splice.removed)
-        self._bvh.insert(np.arange(m, self._faces.n), self.positions[splice.pieces])
         if len(moved_faces):
             self._bvh.update(moved_faces, self.positions[self.faces[moved_faces]])
         self._grow_bounds(np.concatenate((moved, np.arange(n, self.n_vertices))), old_positions)

@@ -60,6 +60,7 @@ class Pieces(NamedTuple):
     new_node : (v,) int64 path node of each new vertex
     new_src : (v, 3) int64, new_coef : (v, 3) float64 what each new vertex interpolates
         (``new_vertices.NewVertices``)
+    parent : (q,) int64 index in ``affected`` of the face each piece lies in
     """
 
     affected: np.ndarray
@@ -67,6 +68,7 @@ class Pieces(NamedTuple):
     new_node: np.ndarray
     new_src: np.ndarray
     new_coef: np.ndarray
+    parent: np.ndarray
 
 
 class TornFaces(NamedTuple):
@@ -102,5 +104,5 @@ class Slit(NamedTuple):
 
 
 #: numba types of the records that kernels take
-PIECES = record(I1, I2, I1, I2, F2)
+PIECES = record(I1, I2, I1, I2, F2, I1)
 SLIT = record(B1, I2, I2, I1, I1)

@@ -333,6 +333,7 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
         new_node (v,) int64 path node of each new vertex
         new_src (v, 3) int64, new_coef (v, 3) float64: each new vertex interpolates the data of the
             vertices new_src with coefficients new_coef (``_new_vertex``)
+        parent (q,) int64 the index in ``affected`` of the face each piece is a piece of
     """
     (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
     k_nodes = path_int.shape[0]
@@ -357,7 +358,9 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     affected = affected[:n_aff]
     node_offsets, node_list = _face_nodes(path_int, slot, n_aff, ef_offsets, ef_faces, vf_offsets, vf_faces)
 
-    tris = np.empty(((k_nodes + 12) * n_aff, 3), np.int64)
+    # (a face's pieces are at most its own nodes and 12: the fans of its polygon and inner nodes)
+    tris = np.empty((node_offsets[n_aff] + 12 * n_aff, 3), np.int64)
+    parent = np.empty(tris.shape[0], np.int64)
     n_tris = np.int64(0)
     new_node = np.empty(4 * k_nodes + 4, np.int64)
     new_src = np.zeros((4 * k_nodes + 4, 3), np.int64)
@@ -389,6 +392,7 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
                     vid, n_new = _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
                                              wpos, new_node, new_src, new_coef, n_new, head, chain)
                     tris[n_tris, c] = n_vertices + vid
+            parent[n_tris] = a
             n_tris += 1
     return (affected, tris[:n_tris].copy(), new_node[:n_new].copy(), new_src[:n_new].copy(),
-            new_coef[:n_new].copy())
+            new_coef[:n_new].copy(), parent[:n_tris].copy())

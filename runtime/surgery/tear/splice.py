@@ -49,7 +49,8 @@ class Splice(NamedTuple):
         vertices (source vertices n, n + 1, ...)
     removed : (a,) int64 faces replaced by pieces ; kept : (k,) int64 the patch's other faces and
         kept_corners (k, 3) int64 their corners after the stroke (the far side's now use twins)
-    pieces : (q, 3) int64 the new faces (source vertex ids), in order
+    pieces : (q, 3) int64 the new faces (source vertex ids), in order ; parents (q,) int64 the removed
+        face each lies in
     boundary_rows : (b,) int64 vertices (increasing) whose boundary flag the stroke sets to
         ``boundary_flags`` (b,) bool
     stroke : dict of ``TearResult``'s fields other than ``rig`` (side_a, side_b in source ids)
@@ -65,6 +66,7 @@ class Splice(NamedTuple):
     kept: np.ndarray
     kept_corners: np.ndarray
     pieces: np.ndarray
+    parents: np.ndarray
     boundary_rows: np.ndarray
     boundary_flags: np.ndarray
     stroke: dict
@@ -194,7 +196,8 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
                   side_a=ids[slit.side_a], side_b=ids[slit.side_b], split=slit.split, hits=ends.hits,
                   jumps=path.nodes[:, 2] == JUMP_CARRIER)
     return Splice(rows, vertices, joints, weights, labels, attributes, patch.faces[pieces.affected],
-                  patch.faces[keep], ids[torn.faces[:n_kept]], ids[torn.faces[n_kept:]], ids[boundary_rows],
+                  patch.faces[keep], ids[torn.faces[:n_kept]], ids[torn.faces[n_kept:]],
+                  patch.faces[pieces.affected[pieces.parent]], ids[boundary_rows],
                   boundary_flags, stroke)
 
 

@@ -28,7 +28,7 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
     path_float : (k, 4) Path.points ; pieces : Pieces, slit : Slit (as tuples)
     returns the largest placement residual |skinned new vertex - its posed path point| (0 at rest)
     """
-    affected, tris, new_node, new_src, new_coef = pieces
+    affected, tris, new_node, new_src, new_coef, _ = pieces
     split, twins, moved, side_a, side_b = slit
     v, t = new_node.shape[0], twins.shape[0]
     new_joints, new_weights = blend_weight_rows(new_src, new_coef, out_j, out_w)
