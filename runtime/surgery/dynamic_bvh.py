@@ -343,6 +343,10 @@ class DynamicBVH:
         if live:
             _edit(self._st, ids, np.empty((0, 9)) if corners is None else corners, corners is None)
         else:
+            near = np.full(k, -1, np.int64) if near is None else np.ascontiguousarray(near, dtype=np.int64)
+            given, face_slot = near[near >= 0], self._st[11]
+            if near.shape != (k,) or (given >= len(face_slot)).any() or (face_slot[given] < 0).any():
+                raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
             # room for the worst case: per face two nodes and a new block of LEAF_MAX slots
             st = list(self._st)
             st[11] = _grown(st[11], int(ids.max()) + 1, -1)
@@ -351,13 +355,6 @@ class DynamicBVH:
             for j, fill in ((8, -1), (9, -1), (10, 0.0)):
                 st[j] = _grown(st[j], st[12][1] + LEAF_MAX * k, fill)
             self._st = tuple(st)
-            if near is None:
-                near = np.full(k, -1, np.int64)
-            else:
-                near = np.ascontiguousarray(near, dtype=np.int64)
-                given = near[near >= 0]
-                if near.shape != (k,) or (given >= len(st[11])).any() or (st[11][given] < 0).any():
-                    raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
             _insert(self._st, ids, corners, near)
         if self.degradation > REBUILD_AT or self._st[12][2] > max(self._st[12][3], 1024):
             self.rebuild()

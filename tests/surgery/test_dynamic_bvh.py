@@ -58,8 +58,12 @@ def random_edits(bvh, model, rng, steps, scale):
         centre = tri[rng.integers(len(ids))].reshape(3, 3).mean(axis=0)
         near = ids[np.argsort(np.abs(tri.reshape(-1, 3, 3).mean(axis=1) - centre).sum(axis=1))]
         removed = near[:rng.integers(1, 6)]
-        bvh.remove(removed)
-        new_ids, new_tri = [], []
+        # half the strokes insert each piece into the leaf of its face (a session's ``near``), before
+        # that face goes; the others remove first and let the pieces descend from the root
+        beside = rng.integers(2) == 0
+        if not beside:
+            bvh.remove(removed)
+        new_ids, new_tri, parents = [], [], []
         for f in removed:
             c = model.tri.pop(f)
             w = rng.dirichlet(np.ones(3))
@@ -67,9 +71,14 @@ def random_edits(bvh, model, rng, steps, scale):
             for j in range(rng.integers(1, 4)):
                 new_ids.append(model.next_id)
                 new_tri.append(np.array([c[j], c[(j + 1) % 3], m]))
+                parents.append(f)
                 model.tri[model.next_id] = new_tri[-1]
                 model.next_id += rng.integers(1, 50)     # sparse ids, never reused
-        bvh.insert(np.array(new_ids), np.array(new_tri))
+        if beside:
+            bvh.insert(np.array(new_ids), np.array(new_tri), near=np.array(parents))
+            bvh.remove(removed)
+        else:
+            bvh.insert(np.array(new_ids), np.array(new_tri))
         moved = near[len(removed):len(removed) + rng.integers(0, 5)]
         if len(moved):
             corners = np.array([model.tri[f] for f in moved]) + rng.normal(0, scale, (len(moved), 3, 3))
@@ -245,6 +254,8 @@ def test_invalid_input_raises_and_leaves_the_bvh_alone():
         (lambda: bvh.insert([10 ** 7, 10 ** 7 + 1], nan), "non-finite"),
         (lambda: bvh.insert([10 ** 7], good), "corners"),
         (lambda: bvh.insert([2 ** 40], good[:1]), "face_ids"),
+        (lambda: bvh.insert([10 ** 7], good[:1], near=[len(faces) + 9]), "near"),
+        (lambda: bvh.insert([10 ** 7], good[:1], near=[0, 1]), "near"),
         (lambda: bvh.update([1, 2], good[:, :, :2]), "corners"),
         (lambda: bvh.update([1, 2], np.full((2, 3, 3), np.inf)), "non-finite"),
         (lambda: bvh.update([len(faces) + 5, 2], good), "not live"),
