@@ -30,7 +30,8 @@ from .._shared.jit import B1, I1, kernel
 from ..animation.skinning import skin_affine
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
-from .dynamic_bvh import DynamicBVH
+from .bvh import _first_hit
+from .dynamic_bvh import DynamicBVH, dyn_faces_near_plane
 from .rows import Rows
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
@@ -141,13 +142,13 @@ class Surgery:
     def boundary_vertices(self) -> np.ndarray:
         return self._boundary_list
 
+    # (the BVH's compiled queries directly: the splice passes checked (3,) float64 points)
     def first_hit(self, a, b):
-        return self._bvh.first_hit(a, b)
+        face, t = _first_hit(self._bvh.arrays, a, b)
+        return int(face), float(t)
 
     def near_plane(self, lo, hi, normal, offset, delta) -> np.ndarray:
-        if not np.isfinite(delta):
-            return self._bvh.faces_in_box(lo, hi)
-        return self._bvh.faces_near_plane(lo, hi, normal, offset, delta)
+        return dyn_faces_near_plane(self._bvh.arrays, lo, hi, normal, float(offset), float(delta))
 
     # ---- operations -------------------------------------------------------------------------------
     def tear(self, scalpel_from, scalpel_to, opening: float = 0.0) -> StrokeResult:
@@ -248,14 +249,12 @@ class Surgery:
         self.faces[splice.kept] = splice.kept_corners
         self._faces.append(splice.pieces)
         self._alive.append(np.ones(len(splice.pieces), bool))
-        changed = ((old_kept != splice.kept_corners).any(axis=1)
-                   | np.isin(splice.kept_corners, moved).any(axis=1))
-        moved_faces = splice.kept[changed]
+        # the faces whose corners moved (an opening moves vertices; the far side's twins sit where the
+        # vertices they copy are)
+        moved_faces = splice.kept[np.isin(splice.kept_corners, moved).any(axis=1)] if len(moved) else moved
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
-        self._bvh.insert(np.arange(m, self._faces.n), self.positions[splice.pieces], near=splice.parents)
-        self._bvh.remove(splice.removed)
-        if len(moved_faces):
-            self._bvh.update(moved_faces, self.positions[self.faces[moved_faces]])
+        self._bvh.edit(splice.removed, np.arange(m, self._faces.n), self._corners(splice.pieces), splice.parents,
+                       moved_faces, self._corners(self.faces[moved_faces]))
         self._grow_bounds(np.concatenate((moved, np.arange(n, self.n_vertices))), old_positions)
         return _Undo(n, m, rows, old_rows, moved, old_positions, splice.removed, splice.kept, old_kept, moved_faces,
                      splice.boundary_rows, old_flags, scalars)
@@ -273,8 +272,7 @@ class Surgery:
         self._bounds = np.stack([positions.min(axis=0), positions.max(axis=0)])
 
     def _revert(self, record: _Undo) -> None:
-        rows = record.rows
-        self._bvh.remove(np.arange(record.m, self._faces.n))
+        rows, m = record.rows, self._faces.n
         self._faces.truncate(record.m)
         self._alive.truncate(record.m)
         self.faces[record.kept] = record.old_kept
@@ -294,9 +292,13 @@ class Surgery:
             positions.truncate(record.n)
             positions.view[record.moved] = record.old_positions
         self.top_label, self._labelled, self._bounds, self._boundary_list = record.scalars
-        self._bvh.insert(record.removed, self.positions[self.faces[record.removed]])
-        if len(record.moved_faces):
-            self._bvh.update(record.moved_faces, self.positions[self.faces[record.moved_faces]])
+        self._bvh.edit(np.arange(record.m, m), record.removed, self._corners(self.faces[record.removed]),
+                       np.full(len(record.removed), -1), record.moved_faces,
+                       self._corners(self.faces[record.moved_faces]))
+
+    def _corners(self, faces) -> np.ndarray:
+        """(k, 9) the surface corners of ``faces`` (k, 3) vertex ids, as the BVH takes them."""
+        return self.positions[faces].reshape(len(faces), 9)
 
 
 @kernel((I1, I1, B1))
