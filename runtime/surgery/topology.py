@@ -366,15 +366,35 @@ def topology(vertices, faces, labels=None) -> Topology:
     return checked_topology(vertices, faces, labels)
 
 
-def checked_topology(vertices, faces, labels=None) -> Topology:
-    """``topology`` of input already checked (finite (n, 3) float vertices, (m, 3) int64 faces that
-    index them): a tear stroke builds one per patch, where the checks would cost more than the build."""
+def _weld(vertices, labels):
+    """(welded (n,), representative (w,)) of finite vertices, by bitwise-equal position (and label)."""
     # bitwise equality of positions, with -0.0 == 0.0 (adding +0.0 turns -0.0 into +0.0)
     positions = np.ascontiguousarray(vertices, dtype=np.float64) + 0.0
     bits = positions.view(np.uint64)
     if labels is not None and np.any(labels):
         bits = np.concatenate((bits, np.asarray(labels, np.int64).reshape(-1, 1).view(np.uint64)), axis=1)
-    welded, representative = _weld_positions(bits)
+    return _weld_positions(bits)
+
+
+def boundary_flags(vertices, faces, labels=None) -> np.ndarray:
+    """(n,) bool: the vertices on a boundary edge (one face) of the welded mesh (checked input, as
+    ``checked_topology``): what ``topology(...).boundary_edges`` gives, in a third of its memory."""
+    welded, representative = _weld(vertices, labels)
+    corner = welded[faces]                                         # (m, 3)
+    a, b = corner.reshape(-1), np.roll(corner, -1, axis=1).reshape(-1)
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    keys, counts = np.unique(low * len(representative) + high, return_counts=True)
+    on_boundary = np.zeros(len(representative), bool)
+    single = keys[counts == 1]
+    on_boundary[single // len(representative)] = True
+    on_boundary[single % len(representative)] = True
+    return on_boundary[welded]
+
+
+def checked_topology(vertices, faces, labels=None) -> Topology:
+    """``topology`` of input already checked (finite (n, 3) float vertices, (m, 3) int64 faces that
+    index them): a tear stroke builds one per patch, where the checks would cost more than the build."""
+    welded, representative = _weld(vertices, labels)
     welded_faces = welded[faces]
     m = len(faces)
     ident = np.arange(len(vertices), dtype=np.int64)

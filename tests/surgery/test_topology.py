@@ -8,7 +8,7 @@ import pytest
 import cgaskin
 from cgaskin import capsule_arm, rig_topology
 from cgaskin.errors import InvalidInputError
-from cgaskin.surgery.topology import clear_topology_cache, topology
+from cgaskin.surgery.topology import boundary_flags, clear_topology_cache, topology
 
 from tests.helpers.cut_checks import model, orientation_defects
 
@@ -55,6 +55,30 @@ def test_topology_boundary_loops(models_dir):
     plane = model(models_dir, "PlaneWith3Bones.glb")
     loops = topology(plane.vertices, plane.faces).boundary_loops()
     assert [len(loop) for loop in loops] == [16]
+
+
+@pytest.mark.parametrize("name", ["PlaneWith3Bones.glb", "Fox.glb", "labelled capsule", "torn capsule"])
+def test_boundary_flags_are_the_topologys(models_dir, name):
+    """``boundary_flags`` (the tear's per-vertex boundary, without the whole topology) marks exactly
+    the ends of the topology's boundary edges, with and without tear labels."""
+    labels = None
+    if name == "labelled capsule":           # labels that split nothing (one vertex per position)
+        rig = capsule_arm()
+        labels = np.random.default_rng(3).integers(-2, 3, rig.n_vertices)
+    elif name == "torn capsule":
+        rig = capsule_arm()
+        rig = cgaskin.tear(rig, [[0.4, 0.35, 0.02], [0.4, 0.0, 0.02]], [[0.6, 0.35, 0.02], [0.6, 0.0, 0.02]])
+        labels = np.rint(rig.attributes["_TEAR"][:, 0]).astype(np.int64)
+    else:
+        rig = model(models_dir, name)
+    vertices, faces = np.asarray(rig.vertices, float), np.asarray(rig.faces, np.int64)
+    topo = topology(vertices, faces, labels)
+    expected = np.zeros(topo.n_welded, bool)
+    expected[topo.edges[topo.boundary_edges].reshape(-1)] = True
+    flags = boundary_flags(vertices, faces, labels)
+    np.testing.assert_array_equal(flags, expected[topo.welded])
+    if name in ("PlaneWith3Bones.glb", "torn capsule"):       # open meshes: something to find
+        assert flags.any()
 
 
 def test_rig_topology_is_cached():

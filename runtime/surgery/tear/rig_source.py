@@ -16,7 +16,7 @@ from ...animation.skinning import check_pose, skin
 from ...errors import InvalidInputError
 from ..bvh import TriangleBVH, _first_hit
 from ..surface import TEAR_LABEL, _labels, mesh_arrays
-from ..topology import topology
+from ..topology import boundary_flags
 
 #: posed surfaces kept per rig: a few poses per rig are plenty
 POSED_SURFACES = 8
@@ -35,12 +35,10 @@ def _arrays(rig):
 
 
 def _boundary_flags(rig) -> np.ndarray:
-    """(n,) bool: the vertices on a boundary edge of the label-aware weld (``tear_topology``, built
-    here and let go: a stroke needs no more of the whole mesh's topology)."""
-    topo = topology(rig.vertices, rig.faces, _labels(rig))
-    flagged = np.zeros(topo.n_welded, bool)
-    flagged[topo.edges[topo.boundary_edges].reshape(-1)] = True
-    return flagged[topo.welded]
+    """(n,) bool: the vertices on a boundary edge of the label-aware weld (``tear_topology``), found
+    without building the whole topology (a stroke needs no more of it)."""
+    mesh = mesh_arrays(rig)
+    return boundary_flags(mesh.vertices, mesh.faces, _labels(rig))
 
 
 def _top_label(rig) -> int:
