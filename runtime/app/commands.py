@@ -178,16 +178,17 @@ def _blades(args) -> list:
 
 def _tear(args) -> int:
     from ..rigs import load, save
-    from ..surgery.tear import tear
+    from ..surgery.session import Surgery
     rig = load(args.model)
     blades = _blades(args)
     pose = _pose_of(rig, args)
-    torn = rig
-    steps = zip(blades[:-1], blades[1:])
+    session = Surgery(rig, pose)                    # one progressive tear: each stroke continues the slit,
+    steps = zip(blades[:-1], blades[1:])            # at the cost of what it touches
     if len(blades) > 2:
         steps = progress(steps, len(blades) - 1, "tearing")
-    for blade_from, blade_to in steps:              # one progressive tear: each stroke continues the slit
-        torn = tear(torn, blade_from, blade_to, pose=pose, opening=args.opening)
+    for blade_from, blade_to in steps:
+        session.tear(blade_from, blade_to, opening=args.opening)
+    torn = session.rig
     save(torn, args.out)
     print(f"wrote {args.out}: {len(blades) - 1} stroke(s), {torn.n_vertices} vertices "
           f"({torn.n_vertices - rig.n_vertices} new), {torn.n_faces} faces")

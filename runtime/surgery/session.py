@@ -219,17 +219,17 @@ class Surgery:
     def _apply(self, splice) -> _Undo:
         rows, p = splice.rows, len(splice.rows)
         n, m = self.n_vertices, self._faces.n
-        named = {"vertices": splice.vertices, "joints": splice.joints, "weights": splice.weights,
-                 "labels": splice.labels}
-        old_rows = {name: self._arrays[name].view[rows].copy() for name in named}
-        old_rows.update({name: rows_.view[rows].copy() for name, (rows_, _) in self._attributes.items()})
-        moved = rows[(splice.vertices[:p] != old_rows["vertices"]).any(axis=1)]     # (an opening)
+        # a stroke changes the labels (the far side) and positions (an opening) of its patch's rows;
+        # their weights and attributes stay: those are only appended
+        old_rows = {name: self._arrays[name].view[rows].copy() for name in ("vertices", "labels")}
+        moved = rows[(splice.vertices[:p] != old_rows["vertices"]).any(axis=1)]
         old_positions = self.positions[moved].copy()
-        for name, values in named.items():
+        for name, values in (("vertices", splice.vertices), ("labels", splice.labels)):
             self._arrays[name].view[rows] = values[:p]
+        for name, values in (("vertices", splice.vertices), ("joints", splice.joints),
+                             ("weights", splice.weights), ("labels", splice.labels)):
             self._arrays[name].append(values[p:])
         for name, (buffer, _) in self._attributes.items():
-            buffer.view[rows] = splice.attributes[name][:p]
             buffer.append(splice.attributes[name][p:])
         if self.affines is not None:                 # the posed surface of the new and moved rows
             new = np.concatenate((moved, np.arange(n, self.n_vertices)))
@@ -279,10 +279,10 @@ class Surgery:
         self._alive.view[record.removed] = True
         for name in ("vertices", "joints", "weights", "labels"):
             self._arrays[name].truncate(record.n)
-            self._arrays[name].view[rows] = record.old_rows[name]
-        for name, (buffer, _) in self._attributes.items():
+        for name, values in record.old_rows.items():
+            self._arrays[name].view[rows] = values
+        for buffer, _ in self._attributes.values():
             buffer.truncate(record.n)
-            buffer.view[rows] = record.old_rows[name]
         flags = self._arrays["boundary"]
         flags.truncate(record.n)
         valid = record.boundary_rows < record.n

@@ -46,7 +46,8 @@ class Splice(NamedTuple):
 
     rows : (p,) int64 source vertices of the patch; vertices (p + v, 3), joints (p + v, 4), weights,
         labels (p + v,), attributes {name: (p + v, c)}: those rows after the stroke, then the v new
-        vertices (source vertices n, n + 1, ...)
+        vertices (source vertices n, n + 1, ...). Of the patch's rows a stroke changes only labels
+        (the far side's) and vertices (an opening moves the sides apart).
     removed : (a,) int64 faces replaced by pieces ; kept : (k,) int64 the patch's other faces and
         kept_corners (k, 3) int64 their corners after the stroke (the far side's now use twins)
     pieces : (q, 3) int64 the new faces (source vertex ids), in order ; parents (q,) int64 the removed
