@@ -168,6 +168,29 @@ def _build(positions, faces, leaf_size, padding):
             order, tri)
 
 
+@kernel((F2, I2, f8), cost=0.3)
+def _one_leaf(positions, faces, padding):
+    """The fields of ``BVHArrays`` for a single leaf holding every face (m >= 1) in order."""
+    m = faces.shape[0]
+    lo = np.full((1, 3), np.inf)
+    hi = np.full((1, 3), -np.inf)
+    tri = np.empty((m, 9))
+    for f in range(m):
+        for c in range(3):
+            for k in range(3):
+                x = positions[faces[f, c], k]
+                tri[f, 3 * c + k] = x
+                lo[0, k] = min(lo[0, k], x)
+                hi[0, k] = max(hi[0, k], x)
+    extent = max(hi[0, 0] - lo[0, 0], max(hi[0, 1] - lo[0, 1], hi[0, 2] - lo[0, 2]))
+    pad = padding * max(extent, 1e-300)
+    for k in range(3):
+        lo[0, k] -= pad
+        hi[0, k] += pad
+    return (lo, hi, np.full(1, -1, np.int64), np.full(1, -1, np.int64), np.zeros(1, np.int64),
+            np.full(1, m, np.int64), np.arange(m), tri)
+
+
 # ---- queries ------------------------------------------------------------------------------------
 @helper
 def _segment_box(lo, hi, a, d, t_max):
@@ -346,6 +369,16 @@ class TriangleBVH:
         self._arrays = BVHArrays(*_build(positions, faces, LEAF_SIZE, BOX_PADDING))
         self._slot = np.empty(len(faces), np.int64)
         self._slot[self._arrays.order] = np.arange(len(faces))
+
+    @classmethod
+    def one_leaf(cls, positions, faces) -> "TriangleBVH":
+        """A BVH of one leaf that holds every face (checked input, as ``of_checked``): its queries test
+        every triangle, which for a few thousand faces costs less than building a tree (a tear
+        stroke's patch); the answers are a tree's (the first hit: the lowest t, then face id)."""
+        bvh = cls.__new__(cls)
+        bvh._arrays = BVHArrays(*_one_leaf(positions, faces, BOX_PADDING))
+        bvh._slot = bvh._arrays.order
+        return bvh
 
     @classmethod
     def of_checked(cls, positions, faces) -> "TriangleBVH":

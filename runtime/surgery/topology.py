@@ -380,14 +380,9 @@ def boundary_flags(vertices, faces, labels=None) -> np.ndarray:
     """(n,) bool: the vertices on a boundary edge (one face) of the welded mesh (checked input, as
     ``checked_topology``): what ``topology(...).boundary_edges`` gives, in a third of its memory."""
     welded, representative = _weld(vertices, labels)
-    corner = welded[faces]                                         # (m, 3)
-    a, b = corner.reshape(-1), np.roll(corner, -1, axis=1).reshape(-1)
-    low, high = np.minimum(a, b), np.maximum(a, b)
-    keys, counts = np.unique(low * len(representative) + high, return_counts=True)
+    edge, edges = _unique_pairs(*_corner_pairs(faces, welded))    # the welded edge of each corner edge
     on_boundary = np.zeros(len(representative), bool)
-    single = keys[counts == 1]
-    on_boundary[single // len(representative)] = True
-    on_boundary[single % len(representative)] = True
+    on_boundary[edges[np.bincount(edge, minlength=len(edges)) == 1].reshape(-1)] = True
     return on_boundary[welded]
 
 

@@ -21,10 +21,15 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..._shared.jit import I1, I2, kernel
 from ...tolerances import tol
 from ..bvh import TriangleBVH
 from ..surface import WeldedMesh, _Surface
 from ..topology import checked_topology, incidence
+
+
+#: patches of at most this many faces get a BVH of one leaf (a stroke queries it a few times)
+ONE_LEAF = 4096
 
 
 class Patch(NamedTuple):
@@ -52,14 +57,50 @@ def region_box(blades, margin: float, snap: float) -> tuple[np.ndarray, np.ndarr
     return blades.min(axis=0) - pad, blades.max(axis=0) + pad
 
 
+@kernel((I2, I1), cost=0.3)
+def _compact(faces, face_ids):
+    """The vertices rows (p,) (increasing) that faces[face_ids] use, and those faces (q, 3) over
+    0..p-1: a hash map from vertex to slot, then the p vertices sorted (``np.unique``'s sort of all
+    3q corners costs several times more)."""
+    q = face_ids.shape[0]
+    size = 16
+    while size < 6 * q:
+        size *= 2
+    keys = np.full(size, -1, np.int64)
+    slots = np.empty(size, np.int64)
+    found = np.empty(3 * q, np.int64)
+    local = np.empty((q, 3), np.int64)
+    p = 0
+    for i in range(q):
+        for c in range(3):
+            v = faces[face_ids[i], c]
+            h = (v * 0x9E3779B1) & (size - 1)
+            while keys[h] != v and keys[h] >= 0:
+                h = (h + 1) & (size - 1)
+            if keys[h] < 0:
+                keys[h], slots[h] = v, p
+                found[p] = v
+                p += 1
+            local[i, c] = h                       # the slot, renumbered below
+    order = np.argsort(found[:p])
+    rank = np.empty(p, np.int64)
+    for r in range(p):
+        rank[order[r]] = r
+    rows = np.empty(p, np.int64)
+    for r in range(p):
+        rows[r] = found[order[r]]
+    for i in range(q):
+        for c in range(3):
+            local[i, c] = rank[slots[local[i, c]]]
+    return rows, local
+
+
 def patch_surface(source, face_ids) -> Patch:
     """The surface of the faces ``face_ids`` (increasing ids into ``source.faces``) of ``source``.
 
     source : a surgery source (``splice.py``): positions, faces, labels, boundary, diagonal, affines
     """
-    corners = source.faces[face_ids]
-    rows, local = np.unique(corners, return_inverse=True)
-    faces = np.ascontiguousarray(local.reshape(-1, 3), dtype=np.int64)
+    rows, faces = _compact(source.faces, face_ids)
     positions = np.ascontiguousarray(source.positions[rows])
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)
@@ -69,7 +110,8 @@ def patch_surface(source, face_ids) -> Patch:
     welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
                         topo.edge_face_faces, vf_offsets, vf_faces)
     boundary = np.unique(topo.welded[source.boundary[rows]])
-    bvh = TriangleBVH.of_checked(positions, faces)
+    # (a few thousand faces: testing each of them beats building a tree)
+    bvh = (TriangleBVH.one_leaf if len(faces) <= ONE_LEAF else TriangleBVH.of_checked)(positions, faces)
     surface = _Surface(positions, faces, topo, welded, bvh, boundary, source.diagonal, source.affines)
     return Patch(np.asarray(face_ids, np.int64), rows, surface)
 

@@ -32,7 +32,7 @@ from ...tolerances import tol
 from ..new_vertices import attribute_rule, interpolate_in_place
 from .locate import _boundary_hit, locate
 from .region import _margin as _margin_helper
-from ..topology import checked_topology
+from ..topology import boundary_flags
 from .patch import patch_surface, region_box, select
 from .records import JUMP_CARRIER, VERTEX, Pieces, Slit, TornFaces
 from .retriangulate import _retriangulate
@@ -210,10 +210,7 @@ def _boundary_changes(faces, vertices, labels, surface, path, p):
     on_path = np.zeros(surface.topo.n_welded, bool)
     on_path[path.nodes[path.nodes[:, 0] == VERTEX, 1]] = True
     changed = np.concatenate((np.flatnonzero(on_path[surface.topo.welded]), np.arange(p, len(vertices))))
-    topo = checked_topology(vertices, faces, labels)
-    flagged = np.zeros(topo.n_welded, bool)
-    flagged[topo.edges[topo.boundary_edges].reshape(-1)] = True
-    return changed, flagged[topo.welded[changed]]
+    return changed, boundary_flags(vertices, faces, labels)[changed]
 
 
 def _extended(values, rows: int) -> np.ndarray:
