@@ -48,8 +48,8 @@ class Splice(NamedTuple):
         labels (p + v,), attributes {name: (p + v, c)}: those rows after the stroke, then the v new
         vertices (source vertices n, n + 1, ...). Of the patch's rows a stroke changes only labels
         (the far side's) and vertices (an opening moves the sides apart).
-    removed : (a,) int64 faces replaced by pieces ; kept : (k,) int64 the patch's other faces and
-        kept_corners (k, 3) int64 their corners after the stroke (the far side's now use twins)
+    removed : (a,) int64 faces replaced by pieces ; kept : (k,) int64 the other faces that touch the
+        path and kept_corners (k, 3) int64 their corners after the stroke (the far side's use twins)
     pieces : (q, 3) int64 the new faces (source vertex ids), in order ; parents (q,) int64 the removed
         face each lies in
     boundary_rows : (b,) int64 vertices (increasing) whose boundary flag the stroke sets to
@@ -188,16 +188,19 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
                              twin_of)
         attributes[name] = values
     ids = np.concatenate((rows, n + np.arange(added, dtype=np.int64)))     # patch vertex -> source vertex
+    # the kept faces the far side's twins can reach: those around the path's vertices (the candidates
+    # before the pieces); the others keep their corners
     n_kept = len(patch.faces) - len(pieces.affected)
     keep = np.ones(len(patch.faces), bool)
     keep[pieces.affected] = False
+    near = torn.candidates[torn.candidates < n_kept]
     boundary_rows, boundary_flags = _boundary_changes(torn.faces[torn.candidates], vertices, labels, surface,
                                                       path, p)
     stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
                   side_a=ids[slit.side_a], side_b=ids[slit.side_b], split=slit.split, hits=ends.hits,
                   jumps=path.nodes[:, 2] == JUMP_CARRIER)
     return Splice(rows, vertices, joints, weights, labels, attributes, patch.faces[pieces.affected],
-                  patch.faces[keep], ids[torn.faces[:n_kept]], ids[torn.faces[n_kept:]],
+                  patch.faces[keep][near], ids[torn.faces[near]], ids[torn.faces[n_kept:]],
                   patch.faces[pieces.affected[pieces.parent]], ids[boundary_rows],
                   boundary_flags, stroke)
 
