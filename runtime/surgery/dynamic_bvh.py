@@ -31,7 +31,8 @@ import numpy as np
 from .._shared.checks import float_array, index_array, real_number
 from .._shared.jit import F1, F2, I1, b1, f8, helper, kernel, record
 from ..errors import InvalidInputError
-from .bvh import BOX_PADDING, BVH_ARRAYS, LEAF_SIZE, TriangleBVH, _all_hits, _build, _first_hit
+from .bvh import BOX_PADDING, BVH_ARRAYS, LEAF_SIZE, TriangleBVH, _all_hits, _first_hit
+from .bvh_build import _build
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
 

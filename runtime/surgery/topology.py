@@ -392,9 +392,7 @@ def checked_topology(vertices, faces, labels=None) -> Topology:
     welded, representative = _weld(vertices, labels)
     welded_faces = welded[faces]
     m = len(faces)
-    ident = np.arange(len(vertices), dtype=np.int64)
-    a, b = _corner_pairs(faces, ident)
-    vertex_edge_ids, vertex_edges = _unique_pairs(a, b)
+    vertex_edge_ids, vertex_edges = _unique_pairs(*_corner_pairs(faces, np.arange(len(vertices))))
     # the welded edge of each vertex edge: its pair of welded ids, deduplicated the same way
     vertex_edge_edge, edges = _unique_pairs(welded[vertex_edges[:, 0]], welded[vertex_edges[:, 1]])
     face_vertex_edges = vertex_edge_ids.reshape(m, 3)
