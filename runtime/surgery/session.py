@@ -27,6 +27,7 @@ import numpy as np
 
 from .._shared.cache import seed
 from .._shared.jit import B1, I1, kernel
+from .._shared.memory import release_free_memory
 from ..animation.skinning import skin_affine
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
@@ -104,6 +105,7 @@ class Surgery:
         self._boundary_list = np.flatnonzero(source.boundary)     # (b,) the flagged vertices, kept sorted
         self._bounds = np.stack([source.positions.min(axis=0), source.positions.max(axis=0)])
         self._snapshot = None
+        release_free_memory()          # the builds' temporaries (a tenth of a second on 1.6M faces)
 
     def _state(self) -> tuple:
         return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
