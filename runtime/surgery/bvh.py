@@ -123,7 +123,7 @@ def _shear(d):
     return kx, ky, kz, d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]
 
 
-@kernel((BVH_ARRAYS, F1, F1), cost=0.5)
+@kernel((BVH_ARRAYS, F1, F1), cost=1.4)
 def _first_hit(bvh, a, b):
     """Smallest t in [0, 1] where segment a -> b meets a triangle of ``bvh`` (BVHArrays as a tuple);
     returns (face, t), face -1 if none."""

@@ -11,6 +11,7 @@ block to the end with twice the room, up to LEAF_MAX (the old block is dead unti
 leaf that would pass LEAF_MAX faces splits at the median centroid along the longest axis. An edit
 refits its leaf and the ancestors up to the first unchanged box, padded like bvh.py (BOX_PADDING
 times the scene extent at build). Dense face id -> slot and slot -> leaf maps find a face's leaf.
+The edits are compiled in ``dynamic_bvh_edits.py``, as one kernel.
 
 Degradation: the SAH cost (inner nodes weigh 1, leaves their count; over the root's area), kept at
 every change, over its value after the last build; an edit rebuilds past ``REBUILD_AT`` (or when dead
@@ -29,166 +30,23 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.checks import float_array, index_array, real_number
-from .._shared.jit import F1, F2, I1, b1, f8, helper, kernel, record
+from .._shared.jit import F1, f8, kernel
 from ..errors import InvalidInputError
 from .bvh import BOX_PADDING, BVH_ARRAYS, LEAF_SIZE, TriangleBVH, _all_hits, _first_hit
 from .bvh_build import _build
+from .dynamic_bvh_edits import LEAF_MAX, _change
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
 
-#: a leaf that would hold more live faces than this is split
-LEAF_MAX = 8
 #: ``degradation`` (SAH relative to the last build) past which an edit rebuilds (measured above)
 REBUILD_AT = 3.0
-#: the numba type of ``DynamicBVH._st`` (for precompile signatures)
-STATE = record(F2, F2, I1, I1, I1, I1, I1, I1, I1, I1, F2, I1, I1, F1)
 
 
-# ---- edits (st: the fields of ``DynamicBVH._st``, see there) ----------------------------------------
-@helper
-def _area(lo, hi, i):
-    """Surface area of box i of lo, hi (N, 3); 0 for an empty box (lo = inf, hi = -inf). Scalar
-    reads: a row view would cost a reference count, which dominated the descent."""
-    dx, dy, dz = hi[i, 0] - lo[i, 0], hi[i, 1] - lo[i, 1], hi[i, 2] - lo[i, 2]
-    return 2.0 * (dx * dy + dy * dz + dz * dx) if dx >= 0.0 else 0.0
-
-
-@helper
-def _growth(lo, hi, i, b):
-    """How much box i's area grows when it takes in box b (2, 3) (rows lo, hi); and box i's area."""
-    area = _area(lo, hi, i)
-    if lo[i, 0] > hi[i, 0]:
-        return _area(b[:1], b[1:], 0), area
-    ux = max(hi[i, 0], b[1, 0]) - min(lo[i, 0], b[0, 0])
-    uy = max(hi[i, 1], b[1, 1]) - min(lo[i, 1], b[0, 1])
-    uz = max(hi[i, 2], b[1, 2]) - min(lo[i, 2], b[0, 2])
-    return 2.0 * (ux * uy + uy * uz + uz * ux) - area, area
-
-
-@helper
-def _refit(st, node, n):
-    """Give leaf ``node`` the live count n, recompute its box and its ancestors' up to the first
-    that does not change; keeps the SAH sum (inner nodes weigh 1, leaves their count)."""
-    nlo, nhi, left, right, parent, start, count, _, _, _, tri, _, _, sah = st
-    sah[0] += (n - count[node]) * _area(nlo, nhi, node)
-    count[node] = n
-    box = np.empty((2, 3))
-    while node >= 0:
-        if left[node] < 0:
-            box[0], box[1] = np.inf, -np.inf
-            for s in range(start[node], start[node] + count[node]):
-                for j in range(9):
-                    box[0, j % 3] = min(box[0, j % 3], tri[s, j])
-                    box[1, j % 3] = max(box[1, j % 3], tri[s, j])
-            if count[node] > 0:
-                box[0] -= sah[1]        # the padding, as bvh._build pads
-                box[1] += sah[1]
-        else:
-            for k in range(3):
-                box[0, k] = min(nlo[left[node], k], nlo[right[node], k])
-                box[1, k] = max(nhi[left[node], k], nhi[right[node], k])
-        same = True
-        for k in range(3):
-            same = same and box[0, k] == nlo[node, k] and box[1, k] == nhi[node, k]
-        if same:
-            return
-        w = 1.0 if left[node] >= 0 else float(count[node])
-        sah[0] -= w * _area(nlo, nhi, node)
-        for k in range(3):
-            nlo[node, k], nhi[node, k] = box[0, k], box[1, k]
-        sah[0] += w * _area(nlo, nhi, node)
-        node = parent[node]
-
-
-@kernel((STATE,), cost=0.2)
-def _cost(st):
+def _cost(st) -> float:
     """The SAH cost: the SAH sum over the root's area (0 for an empty tree)."""
-    area = _area(st[0], st[1], 0)
-    return st[13][0] / area if area > 0.0 else 0.0
-
-
-@helper
-def _put(st, s, leaf, face, corners):
-    st[8][s], st[9][s], st[11][face] = face, leaf, s
-    st[10][s, :] = corners
-
-
-@kernel((STATE, I1, F2, b1), cost=0.6)
-def _edit(st, faces, corners, remove):
-    """Remove ``faces`` (``remove``) or give them new ``corners``, refitting their leaves."""
-    start, count, slot_face, slot_leaf, tri, face_slot = st[5], st[6], st[8], st[9], st[10], st[11]
-    for i in range(faces.shape[0]):
-        s = face_slot[faces[i]]
-        leaf = slot_leaf[s]
-        if not remove:
-            tri[s, :] = corners[i]
-        else:
-            last = start[leaf] + count[leaf] - 1
-            if s != last:    # keep the leaf's live triangles first: its last one fills the hole
-                _put(st, s, leaf, slot_face[last], tri[last].copy())
-            slot_face[last] = face_slot[faces[i]] = -1
-            st[12][3] -= 1
-        _refit(st, leaf, count[leaf] - 1 if remove else count[leaf])
-
-
-@kernel((STATE, I1, F2, I1), cost=1.2)
-def _insert(st, faces, corners, near):
-    """Insert ``faces`` with ``corners``, each into the leaf of the live face ``near[i]`` (a piece of
-    it: no descent) or, where near[i] is -1, into the leaf the least-growth descent finds."""
-    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
-    box = np.empty((2, 3))
-    for i in range(faces.shape[0]):
-        for k in range(3):
-            box[0, k] = min(corners[i, k], min(corners[i, 3 + k], corners[i, 6 + k])) - sah[1]
-            box[1, k] = max(corners[i, k], max(corners[i, 3 + k], corners[i, 6 + k])) + sah[1]
-        node = 0 if near[i] < 0 else slot_leaf[face_slot[near[i]]]
-        while left[node] >= 0:
-            gl, al = _growth(nlo, nhi, left[node], box)
-            gr, ar = _growth(nlo, nhi, right[node], box)
-            node = left[node] if gl < gr or (gl == gr and al <= ar) else right[node]
-        n = count[node]
-        if n == LEAF_MAX:
-            _split(st, node, faces[i], corners[i])
-        else:
-            if n == cap[node]:
-                # move the full block to the end with twice the room (amortised O(1) per face)
-                room = min(max(2 * cap[node], 2), LEAF_MAX)
-                for j in range(n):
-                    _put(st, meta[1] + j, node, slot_face[start[node] + j], tri[start[node] + j].copy())
-                    slot_face[start[node] + j] = -1
-                meta[2] += cap[node]
-                start[node], cap[node] = meta[1], room
-                meta[1] += room
-            _put(st, start[node] + n, node, faces[i], corners[i])
-            _refit(st, node, n + 1)
-        meta[3] += 1
-
-
-@helper
-def _split(st, leaf, face, corners):
-    """Split a full leaf plus one new face into two new leaves at the median centroid."""
-    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
-    n, at = count[leaf] + 1, start[leaf]
-    ids = np.append(slot_face[at:at + n - 1], face)
-    cs = np.vstack((tri[at:at + n - 1], corners.reshape(1, 9)))
-    cen = cs[:, 0:3] + cs[:, 3:6] + cs[:, 6:9]
-    extent = np.array([cen[:, k].max() - cen[:, k].min() for k in range(3)])
-    order = np.argsort(cen[:, np.argmax(extent)], kind="mergesort")
-    sah[0] += (1 - count[leaf]) * _area(nlo, nhi, leaf)    # an inner node weighs 1, a leaf its count
-    a, new = meta[0], meta[1]
-    meta[0], meta[1] = a + 2, new + LEAF_MAX
-    left[leaf], right[leaf], count[leaf] = a, a + 1, 0
-    nlo[a:a + 2], nhi[a:a + 2] = np.inf, -np.inf     # empty until filled: the first refit sees no junk
-    for c in range(2):
-        at, room, lo_i, hi_i = start[leaf], cap[leaf], 0, n // 2
-        if c == 1:
-            at, room, lo_i, hi_i = new, LEAF_MAX, n // 2, n
-        left[a + c], right[a + c], parent[a + c] = -1, -1, leaf
-        start[a + c], cap[a + c], count[a + c] = at, room, 0
-        for j in range(lo_i, hi_i):
-            _put(st, at + j - lo_i, a + c, ids[order[j]], cs[order[j]])
-        slot_face[at + hi_i - lo_i:at + room] = -1
-        _refit(st, a + c, hi_i - lo_i)
+    d = st[1][0] - st[0][0]
+    area = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]) if d[0] >= 0.0 else 0.0
+    return float(st[13][0] / area) if area > 0.0 else 0.0
 
 
 # ---- queries: kernels that Python and other kernels call with ``DynamicBVH.arrays`` --------------
@@ -197,9 +55,9 @@ def _split(st, leaf, face, corners):
 dyn_first_hit = _first_hit
 
 
-@kernel((BVH_ARRAYS, F1, F1, F1, f8, f8), cost=0.4)
+@kernel((BVH_ARRAYS, F1, F1, F1, f8, f8), cost=0.8)
 def dyn_faces_near_plane(arrays, lo, hi, normal, offset, delta):
-    """Sorted live faces whose triangle box meets the closed box [lo, hi] and whose corners'
+    """The live faces (unsorted: np.sort compiles for seconds; callers sort) whose triangle box meets the closed box [lo, hi] and whose corners'
     s = normal . x - offset have min(s) <= delta, max(s) >= -delta. arrays : ``DynamicBVH.arrays``."""
     node_lo, node_hi, node_left, node_right, node_start, node_count, slot_face, tri = arrays
     out = np.empty(64, np.int64)
@@ -236,7 +94,7 @@ def dyn_faces_near_plane(arrays, lo, hi, normal, offset, delta):
                 out[n] = slot_face[i]
                 n += 1
             meets = True
-    return np.sort(out[:n])
+    return out[:n].copy()
 
 
 # ---- public object --------------------------------------------------------------------------------
@@ -341,15 +199,18 @@ class DynamicBVH:
             corners = np.ascontiguousarray(corners.reshape(k, 9))
         if not k:
             return
-        if live:
-            _edit(self._st, ids, np.empty((0, 9)) if corners is None else corners, corners is None)
+        none, none9 = np.empty(0, np.int64), np.empty((0, 9))
+        if live and corners is None:
+            _change(self._st, none, none9, none, ids, none, none9)
+        elif live:
+            _change(self._st, none, none9, none, none, ids, corners)
         else:
             near = np.full(k, -1, np.int64) if near is None else np.ascontiguousarray(near, dtype=np.int64)
             given, face_slot = near[near >= 0], self._st[11]
             if near.shape != (k,) or (given >= len(face_slot)).any() or (face_slot[given] < 0).any():
                 raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
             self._make_room(k, int(ids.max()))
-            _insert(self._st, ids, corners, near)
+            _change(self._st, ids, corners, near, none, none, none9)
         self._rebuild_if_degraded()
 
     def _make_room(self, k: int, top_id: int) -> None:
@@ -375,11 +236,7 @@ class DynamicBVH:
         moved_corners (u, 9). All int64 / float64, C-contiguous."""
         if len(inserted):
             self._make_room(len(inserted), int(inserted.max()))
-            _insert(self._st, inserted, corners, near)
-        if len(removed):
-            _edit(self._st, removed, corners[:0], True)
-        if len(moved):
-            _edit(self._st, moved, moved_corners, False)
+        _change(self._st, inserted, corners, near, removed, moved, moved_corners)
         self._rebuild_if_degraded()
 
     def rebuild(self):
@@ -411,7 +268,8 @@ class DynamicBVH:
                           for x, name in ((lo, "lo"), (hi, "hi"), (normal, "normal")))
         if real_number(delta, "delta") < 0:
             raise InvalidInputError(f"delta must be >= 0, got {delta}")
-        return dyn_faces_near_plane(self.arrays, lo, hi, normal, real_number(offset, "offset"), float(delta))
+        return np.sort(dyn_faces_near_plane(self.arrays, lo, hi, normal, real_number(offset, "offset"),
+                                            float(delta)))
 
     def faces_in_box(self, lo, hi) -> np.ndarray:
         """Sorted live faces whose triangle box meets the closed box [lo, hi]."""

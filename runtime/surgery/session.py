@@ -152,7 +152,7 @@ class Surgery:
         return int(face), float(t)
 
     def near_plane(self, lo, hi, normal, offset, delta) -> np.ndarray:
-        return dyn_faces_near_plane(self._bvh.arrays, lo, hi, normal, float(offset), float(delta))
+        return np.sort(dyn_faces_near_plane(self._bvh.arrays, lo, hi, normal, float(offset), float(delta)))
 
     # ---- operations -------------------------------------------------------------------------------
     def tear(self, scalpel_from, scalpel_to, opening: float = 0.0) -> StrokeResult:
@@ -307,7 +307,7 @@ class Surgery:
         return self.positions[faces].reshape(len(faces), 9)
 
 
-@kernel((I1, I1, B1))
+@kernel((I1, I1, B1), cost=0.2)
 def _merged(listed, rows, flags):
     """The sorted list ``listed`` (b,) with the sorted distinct ``rows`` (r,) in it where ``flags``
     (r,) and out of it where not: one merge, O(b + r)."""

@@ -59,9 +59,9 @@ def region_box(blades, margin: float, snap: float) -> tuple[np.ndarray, np.ndarr
 
 @kernel((I2, I1), cost=0.3)
 def _compact(faces, face_ids):
-    """The vertices rows (p,) (increasing) that faces[face_ids] use, and those faces (q, 3) over
-    0..p-1: a hash map from vertex to slot, then the p vertices sorted (``np.unique``'s sort of all
-    3q corners costs several times more)."""
+    """The vertices (p,) that faces[face_ids] use, in order of first use, and those faces (q, 3)
+    over 0..p-1: a hash map from vertex to slot (``np.unique`` sorts all 3q corners, several times
+    slower)."""
     q = face_ids.shape[0]
     size = 16
     while size < 6 * q:
@@ -82,17 +82,20 @@ def _compact(faces, face_ids):
                 found[p] = v
                 p += 1
             local[i, c] = h                       # the slot, renumbered below
-    order = np.argsort(found[:p])
-    rank = np.empty(p, np.int64)
-    for r in range(p):
-        rank[order[r]] = r
-    rows = np.empty(p, np.int64)
-    for r in range(p):
-        rows[r] = found[order[r]]
     for i in range(q):
         for c in range(3):
-            local[i, c] = rank[slots[local[i, c]]]
-    return rows, local
+            local[i, c] = slots[local[i, c]]
+    return found[:p].copy(), local
+
+
+def _sorted_compact(faces, face_ids):
+    """``_compact`` with the vertices in increasing order (the sort in numpy: numba compiles its
+    argsort for seconds)."""
+    found, local = _compact(faces, face_ids)
+    order = np.argsort(found)
+    rank = np.empty(len(found), np.int64)
+    rank[order] = np.arange(len(found))
+    return found[order], rank[local]
 
 
 def patch_surface(source, face_ids) -> Patch:
@@ -100,7 +103,7 @@ def patch_surface(source, face_ids) -> Patch:
 
     source : a surgery source (``splice.py``): positions, faces, labels, boundary, diagonal, affines
     """
-    rows, faces = _compact(source.faces, face_ids)
+    rows, faces = _sorted_compact(source.faces, face_ids)
     positions = np.ascontiguousarray(source.positions[rows])
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)

@@ -1,0 +1,183 @@
+"""The edits of ``dynamic_bvh.DynamicBVH`` in compiled code (the design is in dynamic_bvh.py): insert
+beside a face or by least-growth descent, remove by moving a leaf's last triangle into the hole,
+move corners, refit up to the first unchanged box, split a full leaf at its median centroid. ``st``
+is the tuple ``DynamicBVH._st`` (its fields are listed there)."""
+import numpy as np
+
+from .._shared.jit import F1, F2, I1, helper, kernel, record
+
+#: a leaf that would hold more live faces than this is split
+LEAF_MAX = 8
+#: the numba type of ``DynamicBVH._st`` (for precompile signatures)
+STATE = record(F2, F2, I1, I1, I1, I1, I1, I1, I1, I1, F2, I1, I1, F1)
+
+
+@helper
+def _area(lo, hi, i):
+    """Surface area of box i of lo, hi (N, 3); 0 for an empty box (lo = inf, hi = -inf). Scalar
+    reads: a row view would cost a reference count, which dominated the descent."""
+    dx, dy, dz = hi[i, 0] - lo[i, 0], hi[i, 1] - lo[i, 1], hi[i, 2] - lo[i, 2]
+    return 2.0 * (dx * dy + dy * dz + dz * dx) if dx >= 0.0 else 0.0
+
+
+@helper
+def _growth(lo, hi, i, b):
+    """How much box i's area grows when it takes in box b (2, 3) (rows lo, hi); and box i's area."""
+    area = _area(lo, hi, i)
+    if lo[i, 0] > hi[i, 0]:
+        return _area(b[:1], b[1:], 0), area
+    ux = max(hi[i, 0], b[1, 0]) - min(lo[i, 0], b[0, 0])
+    uy = max(hi[i, 1], b[1, 1]) - min(lo[i, 1], b[0, 1])
+    uz = max(hi[i, 2], b[1, 2]) - min(lo[i, 2], b[0, 2])
+    return 2.0 * (ux * uy + uy * uz + uz * ux) - area, area
+
+
+@helper
+def _refit(st, node, n):
+    """Give leaf ``node`` the live count n, recompute its box and its ancestors' up to the first
+    that does not change; keeps the SAH sum (inner nodes weigh 1, leaves their count)."""
+    nlo, nhi, left, right, parent, start, count, _, _, _, tri, _, _, sah = st
+    sah[0] += (n - count[node]) * _area(nlo, nhi, node)
+    count[node] = n
+    box = np.empty((2, 3))
+    while node >= 0:
+        if left[node] < 0:
+            box[0], box[1] = np.inf, -np.inf
+            for s in range(start[node], start[node] + count[node]):
+                for j in range(9):
+                    box[0, j % 3] = min(box[0, j % 3], tri[s, j])
+                    box[1, j % 3] = max(box[1, j % 3], tri[s, j])
+            if count[node] > 0:
+                box[0] -= sah[1]        # the padding, as bvh._build pads
+                box[1] += sah[1]
+        else:
+            for k in range(3):
+                box[0, k] = min(nlo[left[node], k], nlo[right[node], k])
+                box[1, k] = max(nhi[left[node], k], nhi[right[node], k])
+        same = True
+        for k in range(3):
+            same = same and box[0, k] == nlo[node, k] and box[1, k] == nhi[node, k]
+        if same:
+            return
+        w = 1.0 if left[node] >= 0 else float(count[node])
+        sah[0] -= w * _area(nlo, nhi, node)
+        for k in range(3):
+            nlo[node, k], nhi[node, k] = box[0, k], box[1, k]
+        sah[0] += w * _area(nlo, nhi, node)
+        node = parent[node]
+
+
+@kernel((STATE, I1, F2, I1, I1, I1, F2), cost=8.0)
+def _change(st, inserted, corners, near, removed, moved, moved_corners):
+    """Every edit of the tree, in one kernel: insert ``inserted`` (k,) with corners (k, 9) beside
+    ``near`` (k,), then remove ``removed``, then give ``moved`` new corners."""
+    _insert(st, inserted, corners, near)
+    _edit(st, removed, corners[:0], True)
+    _edit(st, moved, moved_corners, False)
+
+
+@helper
+def _put(st, s, leaf, face, corners):
+    st[8][s], st[9][s], st[11][face] = face, leaf, s
+    st[10][s, :] = corners
+
+
+@helper
+def _edit(st, faces, corners, remove):
+    """Remove ``faces`` (``remove``) or give them new ``corners``, refitting their leaves."""
+    start, count, slot_face, slot_leaf, tri, face_slot = st[5], st[6], st[8], st[9], st[10], st[11]
+    for i in range(faces.shape[0]):
+        s = face_slot[faces[i]]
+        leaf = slot_leaf[s]
+        if not remove:
+            tri[s, :] = corners[i]
+        else:
+            last = start[leaf] + count[leaf] - 1
+            if s != last:    # keep the leaf's live triangles first: its last one fills the hole
+                _put(st, s, leaf, slot_face[last], tri[last].copy())
+            slot_face[last] = face_slot[faces[i]] = -1
+            st[12][3] -= 1
+        _refit(st, leaf, count[leaf] - 1 if remove else count[leaf])
+
+
+@helper
+def _insert(st, faces, corners, near):
+    """Insert ``faces`` with ``corners``, each into the leaf of the live face ``near[i]`` (a piece of
+    it: no descent) or, where near[i] is -1, into the leaf the least-growth descent finds."""
+    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
+    box = np.empty((2, 3))
+    for i in range(faces.shape[0]):
+        for k in range(3):
+            box[0, k] = min(corners[i, k], min(corners[i, 3 + k], corners[i, 6 + k])) - sah[1]
+            box[1, k] = max(corners[i, k], max(corners[i, 3 + k], corners[i, 6 + k])) + sah[1]
+        node = 0 if near[i] < 0 else slot_leaf[face_slot[near[i]]]
+        while left[node] >= 0:
+            gl, al = _growth(nlo, nhi, left[node], box)
+            gr, ar = _growth(nlo, nhi, right[node], box)
+            node = left[node] if gl < gr or (gl == gr and al <= ar) else right[node]
+        n = count[node]
+        if n == LEAF_MAX:
+            _split(st, node, faces[i], corners[i])
+        else:
+            if n == cap[node]:
+                # move the full block to the end with twice the room (amortised O(1) per face)
+                room = min(max(2 * cap[node], 2), LEAF_MAX)
+                for j in range(n):
+                    _put(st, meta[1] + j, node, slot_face[start[node] + j], tri[start[node] + j].copy())
+                    slot_face[start[node] + j] = -1
+                meta[2] += cap[node]
+                start[node], cap[node] = meta[1], room
+                meta[1] += room
+            _put(st, start[node] + n, node, faces[i], corners[i])
+            _refit(st, node, n + 1)
+        meta[3] += 1
+
+
+@helper
+def _split(st, leaf, face, corners):
+    """Split a full leaf plus one new face into two new leaves at the median centroid."""
+    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
+    n, at = count[leaf] + 1, start[leaf]
+    ids = np.empty(n, np.int64)
+    cs = np.empty((n, 9))
+    for j in range(n - 1):
+        ids[j] = slot_face[at + j]
+        for c in range(9):
+            cs[j, c] = tri[at + j, c]
+    ids[n - 1] = face
+    for c in range(9):
+        cs[n - 1, c] = corners[c]
+    # the longest axis of the centroids (3 x each), then a stable insertion sort along it (n <= 9):
+    # loops, not numpy calls, which numba compiles in seconds
+    axis, widest = 0, -1.0
+    for k in range(3):
+        lo_k, hi_k = np.inf, -np.inf
+        for j in range(n):
+            x = cs[j, k] + cs[j, 3 + k] + cs[j, 6 + k]
+            lo_k, hi_k = min(lo_k, x), max(hi_k, x)
+        if hi_k - lo_k > widest:
+            axis, widest = k, hi_k - lo_k
+    order = np.arange(n)
+    for j in range(1, n):
+        o = order[j]
+        key = cs[o, axis] + cs[o, 3 + axis] + cs[o, 6 + axis]
+        i = j
+        while i > 0 and cs[order[i - 1], axis] + cs[order[i - 1], 3 + axis] + cs[order[i - 1], 6 + axis] > key:
+            order[i] = order[i - 1]
+            i -= 1
+        order[i] = o
+    sah[0] += (1 - count[leaf]) * _area(nlo, nhi, leaf)    # an inner node weighs 1, a leaf its count
+    a, new = meta[0], meta[1]
+    meta[0], meta[1] = a + 2, new + LEAF_MAX
+    left[leaf], right[leaf], count[leaf] = a, a + 1, 0
+    nlo[a:a + 2], nhi[a:a + 2] = np.inf, -np.inf     # empty until filled: the first refit sees no junk
+    for c in range(2):
+        at, room, lo_i, hi_i = start[leaf], cap[leaf], 0, n // 2
+        if c == 1:
+            at, room, lo_i, hi_i = new, LEAF_MAX, n // 2, n
+        left[a + c], right[a + c], parent[a + c] = -1, -1, leaf
+        start[a + c], cap[a + c], count[a + c] = at, room, 0
+        for j in range(lo_i, hi_i):
+            _put(st, at + j - lo_i, a + c, ids[order[j]], cs[order[j]])
+        slot_face[at + hi_i - lo_i:at + room] = -1
+        _refit(st, a + c, hi_i - lo_i)
