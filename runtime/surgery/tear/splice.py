@@ -18,6 +18,7 @@ The stroke itself is the module docstring of ``stroke.py``, run on the stroke's 
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -84,27 +85,32 @@ def _guess(source, blades, snap):
     and the plane ``locate`` chooses selects it again), and the margin of ``region.py`` with the hit
     faces' edges, widened (``locate`` may snap the points a little further). Raises MissesMeshError
     as ``locate`` does. (Plain Python: a kernel saves 0.05 ms a stroke and costs 3 s of compiling.)"""
+    # (3-vectors as Python floats: numpy's per-call cost would double the guess)
     points, longest = [], 0.0
+    boundary = source.boundary_vertices()
     for i, name in enumerate(("scalpel_from", "scalpel_to")):
         a, b = blades[2 * i], blades[2 * i + 1]
         face, t = source.first_hit(a, b)
-        w, _ = _first_boundary(a, b, t if face >= 0 else 1.0, source.boundary_vertices(), source.positions, snap)
+        w, _ = _first_boundary(a, b, t if face >= 0 else 1.0, boundary, source.positions, snap)
         if w >= 0:
-            points.append(source.positions[w])
+            points.append(source.positions[w].tolist())
             continue
         if face < 0:
             raise MissesMeshError(f"the scalpel {name} (handle {a.tolist()} -> tip {b.tolist()}) does not "
                                   f"meet the surface")
-        hit, corners = a + t * (b - a), source.positions[source.faces[face]]
-        near = np.linalg.norm(corners - hit, axis=1)
-        points.append(corners[near.argmin()] if near.min() <= snap else hit)
-        longest = max(longest, float(np.linalg.norm(corners - np.roll(corners, 1, axis=0), axis=1).max()))
-    u, v = blades[2] - points[0], blades[3] - points[0]
-    lu, lv = np.linalg.norm(u), np.linalg.norm(v)
+        hit = [p + t * (q - p) for p, q in zip(a.tolist(), b.tolist())]
+        corners = source.positions[source.faces[face]].tolist()
+        nearest = min(corners, key=lambda c: math.dist(c, hit))
+        points.append(nearest if math.dist(nearest, hit) <= snap else hit)
+        longest = max(longest, *(math.dist(corners[k], corners[k - 1]) for k in range(3)))
+    s0 = points[0]
+    u, v = ([x - y for x, y in zip(blades[j].tolist(), s0)] for j in (2, 3))
+    lu, lv = math.hypot(*u), math.hypot(*v)
+    normal = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
     plane = None
-    if lu > snap and lv > snap and np.linalg.norm(np.cross(u, v)) > tol.min_sine * lu * lv:
-        plane = np.asarray(plane_from_points(np.ascontiguousarray(points[0]), blades[2], blades[3]))
-    return plane, 1.25 * (float(np.linalg.norm(points[1] - points[0])) + longest) + 4.0 * snap
+    if lu > snap and lv > snap and math.hypot(*normal) > tol.min_sine * lu * lv:
+        plane = np.asarray(plane_from_points(np.array(s0), blades[2], blades[3]))
+    return plane, 1.25 * (math.dist(points[0], points[1]) + longest) + 4.0 * snap
 
 
 @kernel((F2, I2, I1, F1, F1), cost=0.1)
