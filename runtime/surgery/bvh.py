@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.checks import float_array, index_array
-from .._shared.jit import F1, F2, I1, helper, kernel, record
+from .._shared.jit import F1, F2, I1, f8, helper, kernel, record
 from ..errors import InvalidInputError
 from ..tolerances import tol
 from .bvh_build import _build, _one_leaf
@@ -205,6 +205,49 @@ def _all_hits(bvh, a, b):
         stack[top + 1], stack[top + 2] = node_right[node], node_left[node]
         top += 2
     return faces[:n].copy(), ts[:n].copy()
+
+
+@kernel((BVH_ARRAYS, F1, F1, F1, f8, f8), cost=0.8)
+def _faces_near_plane(arrays, lo, hi, normal, offset, delta):
+    """The live faces (unsorted: np.sort compiles for seconds; callers sort) whose triangle box meets the closed box [lo, hi] and whose corners'
+    s = normal . x - offset have min(s) <= delta, max(s) >= -delta. arrays : ``BVHArrays`` (as a tuple), of a
+    TriangleBVH or a DynamicBVH (whose ``slot_face`` is the leaf order)."""
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = arrays
+    out = np.empty(64, np.int64)
+    n = top = 0
+    stack = np.empty(128, np.int64)
+    stack[0] = 0
+    while top >= 0:
+        node = stack[top]
+        top -= 1
+        # the padded box holds its triangles with room to spare for the rounding of s
+        smin = smax = -offset
+        meets = True
+        for k in range(3):
+            meets = meets and node_lo[node, k] <= hi[k] and node_hi[node, k] >= lo[k]
+            u, v = normal[k] * node_lo[node, k], normal[k] * node_hi[node, k]
+            smin, smax = smin + min(u, v), smax + max(u, v)
+        if not meets or smin > delta or smax < -delta:
+            continue
+        if node_left[node] >= 0:
+            if top + 3 > stack.shape[0]:
+                stack = np.concatenate((stack, np.empty_like(stack)))
+            stack[top + 1], stack[top + 2] = node_right[node], node_left[node]
+            top += 2
+            continue
+        for i in range(node_start[node], node_start[node] + node_count[node]):
+            s0, s1, s2 = -offset, -offset, -offset
+            for k in range(3):
+                c0, c1, c2 = tri[i, k], tri[i, 3 + k], tri[i, 6 + k]
+                meets = meets and min(c0, min(c1, c2)) <= hi[k] and max(c0, max(c1, c2)) >= lo[k]
+                s0, s1, s2 = s0 + normal[k] * c0, s1 + normal[k] * c1, s2 + normal[k] * c2
+            if meets and min(s0, min(s1, s2)) <= delta and max(s0, max(s1, s2)) >= -delta:
+                if n == out.shape[0]:
+                    out = np.concatenate((out, np.empty_like(out)))
+                out[n] = order[i]
+                n += 1
+            meets = True
+    return out[:n].copy()
 
 
 # ---- public object --------------------------------------------------------------------------------

@@ -31,8 +31,8 @@ from .._shared.memory import release_free_memory
 from ..animation.skinning import skin_affine
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
-from .bvh import _first_hit
-from .dynamic_bvh import DynamicBVH, dyn_faces_near_plane
+from .bvh import _faces_near_plane, _first_hit
+from .dynamic_bvh import DynamicBVH
 from .rows import Rows
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
@@ -152,7 +152,7 @@ class Surgery:
         return int(face), float(t)
 
     def near_plane(self, lo, hi, normal, offset, delta) -> np.ndarray:
-        return np.sort(dyn_faces_near_plane(self._bvh.arrays, lo, hi, normal, float(offset), float(delta)))
+        return np.sort(_faces_near_plane(self._bvh.arrays, lo, hi, normal, float(offset), float(delta)))
 
     # ---- operations -------------------------------------------------------------------------------
     def tear(self, scalpel_from, scalpel_to, opening: float = 0.0) -> StrokeResult:

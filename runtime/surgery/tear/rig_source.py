@@ -14,7 +14,7 @@ import numpy as np
 from ..._shared.cache import rig_cached, seed
 from ...animation.skinning import check_pose, skin
 from ...errors import InvalidInputError
-from ..bvh import TriangleBVH, _first_hit
+from ..bvh import TriangleBVH, _faces_near_plane, _first_hit
 from ..surface import TEAR_LABEL, _labels, mesh_arrays
 from ..topology import boundary_flags
 
@@ -108,14 +108,7 @@ class RigSource:
         return int(face), float(t)
 
     def near_plane(self, lo, hi, normal, offset, delta) -> np.ndarray:
-        """The faces within ``delta`` of the plane normal·x = offset touching the box [lo, hi], by a
-        scan of every face (a functional tear is a whole new rig anyway)."""
-        corners = self.positions[self.faces]                               # (m, 3, 3)
-        inside = ((corners.max(axis=1) >= lo) & (corners.min(axis=1) <= hi)).all(axis=1)
-        if np.isfinite(delta):
-            s = corners @ normal - offset                                  # (m, 3)
-            inside &= (s.min(axis=1) <= delta) & (s.max(axis=1) >= -delta)
-        return np.flatnonzero(inside)
+        return np.sort(_faces_near_plane(tuple(self._bvh._arrays), lo, hi, normal, float(offset), float(delta)))
 
 
 def torn_rig(rig, source: RigSource, splice):
@@ -124,16 +117,16 @@ def torn_rig(rig, source: RigSource, splice):
     n, rows = len(source.vertices), splice.rows
     added = len(splice.vertices) - len(rows)
 
-    def merged(values, changed):
+    def merged(values, changed, rewritten=False):
         out = np.empty((n + added,) + values.shape[1:], values.dtype)
         out[:n] = values
         out[n:] = changed[len(rows):]
-        out[rows] = changed[:len(rows)]
+        if rewritten:                 # (a stroke rewrites only the labels and positions of its rows)
+            out[rows] = changed[:len(rows)]
         return out
 
-    vertices, joints, weights, labels = (merged(values, changed) for values, changed in (
-        (source.vertices, splice.vertices), (source.joints, splice.joints), (source.weights, splice.weights),
-        (source.labels, splice.labels)))
+    vertices, labels = merged(source.vertices, splice.vertices, True), merged(source.labels, splice.labels, True)
+    joints, weights = merged(source.joints, splice.joints), merged(source.weights, splice.weights)
     attributes = {name: merged(values, splice.attributes[name]).reshape((n + added,) + tail)
                   for name, (values, tail) in source.attributes.items()}
     if splice.stroke["split"].any() or TEAR_LABEL in rig.attributes:
