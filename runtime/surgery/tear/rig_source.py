@@ -90,14 +90,14 @@ class RigSource:
         self.positions, self.diagonal, self.affines = surface.positions, surface.diagonal, surface.affines
         if bvh is not None and (not isinstance(bvh, TriangleBVH) or bvh.n_faces != len(self.faces)):
             raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {len(self.faces)} faces")
-        self._surface, self._user_bvh = surface, bvh
+        self._surface, self._user_bvh, self._rig = surface, bvh, rig
 
     @property
     def _bvh(self) -> TriangleBVH:
         return self._surface.bvh if self._user_bvh is None else self._user_bvh
 
     def boundary_vertices(self) -> np.ndarray:
-        return np.flatnonzero(self.boundary)
+        return rig_cached(self._rig, "tear.boundary_list", lambda _rig: np.flatnonzero(self.boundary))
 
     def first_hit(self, a, b):
         face, t = _first_hit(tuple(self._bvh._arrays), a, b)
