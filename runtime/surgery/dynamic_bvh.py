@@ -91,6 +91,8 @@ class DynamicBVH:
         lo, hi, left, right, start, count, order, tri = _build(positions, faces, LEAF_SIZE, BOX_PADDING)
         m, rows, spare = len(order), len(lo) + self._spare // 2 + 16, self._spare
         pad = BOX_PADDING * max(float(np.ptp(tri.reshape(-1, 3), axis=0).max()), 1e-300)  # as _build
+        corners = _grown(tri, m + spare, 0.0, 1)
+        del tri                # (the largest array: let it go before the others are copied)
         parent = np.full(len(lo), -1)
         parent[left[left >= 0]] = parent[right[left >= 0]] = np.flatnonzero(left >= 0)
         leaves = np.flatnonzero(left < 0)[np.argsort(start[left < 0])]
@@ -102,7 +104,8 @@ class DynamicBVH:
         # (slots); slot of each face id; [nodes, slots, dead slots, live faces]; [SAH sum, padding]
         self._st = tuple(_grown(x, rows if len(x) == len(lo) else m + spare, fill, 1) for x, fill in (
             (lo, np.inf), (hi, -np.inf), (left, -1), (right, -1), (parent, -1), (start, -1), (count, 0),
-            (count, 0), (ids[order], -1), (np.repeat(leaves, count[leaves]), -1), (tri, 0.0))) + (
+            (count, 0), (ids[order], -1), (np.repeat(leaves, count[leaves]), -1))) + (
+            corners,
             face_slot, np.array([len(lo), m, 0, m]), np.array([sah, pad]))
         self._sah0 = _cost(self._st)
 

@@ -102,6 +102,9 @@ class Surgery:
     # ---- state ----------------------------------------------------------------------------------
     def _reset(self, rig) -> None:
         source = RigSource(rig, self._pose, None)                 # checks the rig (and the pose)
+        # the BVH first: its build's temporaries are gone before the arrays are copied (a lower peak)
+        self._bvh = DynamicBVH(source.positions, source.faces)
+        release_free_memory()
         self._template = rig
         self._arrays = {"vertices": Rows(source.vertices), "joints": Rows(source.joints),
                         "weights": Rows(source.weights), "labels": Rows(source.labels),
@@ -110,7 +113,6 @@ class Surgery:
             self._arrays["positions"] = Rows(source.positions)
         self._attributes = {name: (Rows(values), tail) for name, (values, tail) in source.attributes.items()}
         self._faces, self._alive = Rows(source.faces), Rows(np.ones(len(source.faces), bool))
-        self._bvh = DynamicBVH(source.positions, source.faces)
         self.affines, self.top_label = source.affines, source.top_label
         self._labelled = TEAR_LABEL in rig.attributes
         self._boundary_list = np.flatnonzero(source.boundary)     # (b,) the flagged vertices, kept sorted
