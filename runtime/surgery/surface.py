@@ -1,8 +1,8 @@
-"""The surface a tear walks on: welded topology (label-aware), positions, BVH, boundary; cached per
-rig and pose."""
+"""What cut and tear take of a rig: its checked mesh arrays (cached per rig), its label-aware welded
+topology, and the records of the surface a tear stroke walks on (built per stroke for its patch:
+``tear/patch.py``)."""
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -11,10 +11,9 @@ import numpy as np
 from .._shared.cache import rig_cached
 from .._shared.jit import F2, I1, I2, record
 from ..animation.rig import Rig
-from ..animation.skinning import check_pose, skin
 from ..errors import InvalidInputError
 from .bvh import TriangleBVH
-from .topology import Topology, incidence, rig_topology, topology
+from .topology import Topology, rig_topology, topology
 
 #: per-vertex attribute that tells slit copies apart from seam copies (see the module docstring)
 TEAR_LABEL = "_TEAR"
@@ -163,38 +162,3 @@ def mesh_arrays(rig) -> MeshArrays:
     if not isinstance(rig, Rig):
         raise InvalidInputError(f"rig must be a cgaskin.Rig, got {type(rig).__name__}")
     return rig_cached(rig, "surgery.mesh", _checked_mesh)
-
-
-def _build_surface(rig, positions, affines) -> _Surface:
-    topo = tear_topology(rig)
-    positions = np.ascontiguousarray(positions, dtype=np.float64)
-    welded_positions = np.ascontiguousarray(positions[topo.representative])
-    vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
-    welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
-                        topo.edge_face_faces, vf_offsets, vf_faces)
-    faces = mesh_arrays(rig).faces
-    bvh = TriangleBVH(positions, faces)
-    boundary = np.unique(topo.edges[topo.boundary_edges])
-    diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0)))
-    return _Surface(positions, faces, topo, welded, bvh, boundary, diagonal, affines)
-
-
-#: posed surfaces kept per rig: a few poses per rig are plenty
-POSED_SURFACES = 8
-
-
-def _surface(rig, pose) -> _Surface:
-    """The surface of ``rig`` as stored (``pose`` None) or skinned in ``pose``; cached per rig and
-    pose (poses are compared by identity, and an entry goes with its pose)."""
-    if pose is None:       # the build checks the mesh first (mesh_arrays), once per rig
-        return rig_cached(rig, "tear.surface", lambda r: _build_surface(r, mesh_arrays(r).vertices, None))
-    mesh_arrays(rig)
-    check_pose(rig, pose)
-    posed = rig_cached(rig, "tear.posed", lambda _rig: weakref.WeakKeyDictionary())
-    surface = posed.get(pose)
-    if surface is None:
-        surface = _build_surface(rig, skin(rig, pose), pose.bone_affines())
-        if len(posed) >= POSED_SURFACES:
-            posed.popitem()
-        posed[pose] = surface
-    return surface

@@ -14,7 +14,8 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from cgaskin import TearPathError, tear_stroke
-from cgaskin.surgery.surface import _surface, mesh_arrays
+from cgaskin.surgery.tear.patch import patch_surface
+from cgaskin.surgery.tear.rig_source import RigSource
 from cgaskin.surgery.tear import tear_topology
 from cgaskin.surgery.tear.locate import locate
 
@@ -29,7 +30,8 @@ def run_random_stroke(name, rig, pose, data, opening=0.0):
     scalpel_from, scalpel_to = data.draw(strokes(rig, points))
     original = copy.deepcopy((rig.vertices, rig.faces, rig.joints, rig.weights, rig.attributes))
     blades = np.asarray(scalpel_from, np.float64), np.asarray(scalpel_to, np.float64)
-    ends = locate(_surface(rig, pose), mesh_arrays(rig).faces, *blades[0], *blades[1])
+    whole = patch_surface(RigSource(rig, pose, None), np.arange(rig.n_faces)).surface     # the whole mesh
+    ends = locate(whole, whole.faces, *blades[0], *blades[1])
     within = blades, margin(points, rig.faces, ends.hit_faces, *ends.points)
     try:
         result = tear_stroke(rig, scalpel_from, scalpel_to, pose=pose, opening=opening)
