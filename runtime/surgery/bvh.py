@@ -14,7 +14,8 @@ Segment–triangle test: the watertight test of Woop, Benthin and Wald (JCGT 2(1
 hits at least one of them, so a scalpel cannot slip between two faces.
 
 A ``TriangleBVH`` keeps the positions it was built from; build another one when the positions
-change (the tear keeps one per rig and pose: ``surgery/surface.py``).
+change (a functional tear keeps one per rig and pose: ``tear/rig_source.py``; an editing session
+updates a ``DynamicBVH`` in place).
 """
 from __future__ import annotations
 

@@ -6,8 +6,12 @@ The scalpel is a segment from its handle ``a`` to its tip ``b``; ``scalpel_from 
 blade at time t_i and ``scalpel_to = (a1, b1)`` at t_{i+1}. Steps (design.md section 4, "Tear"):
 
 1. **Surface.** The stored vertices (``pose=None``), or the skinned positions in ``pose`` (a posed
-   tear). Its welded topology (attribute-split copies of a vertex are one, so that the tear crosses
-   UV/normal seams) and a BVH over its triangles are built once per rig (and pose) and cached.
+   tear). A BVH over its triangles is built once per rig (and pose) and cached, and so are the
+   vertices that lie on a boundary. The stroke then works on its *patch* (``patch.py``): the faces
+   that come within the snap distance of the tear plane inside the region the blade swept, with
+   their own welded topology (attribute-split copies of a vertex are one, so that the tear crosses
+   UV/normal seams), so that it costs what it touches (``splice.py``; an editing session,
+   ``cgaskin.Surgery``, runs the same stroke on its own mutable arrays).
 2. **Where the blade meets the skin.** S_i is the *first* crossing of segment a0 -> b0 with the
    surface going from the handle a0 towards the tip b0 (the skin the blade enters); S_{i+1} likewise
    for a1 -> b1. The BVH query is two-sided and watertight (``surgery/bvh.py``). A hit within
