@@ -13,9 +13,9 @@ from .animation.skinning import skin, skin_affine, skin_normals, skin_vertices
 from .animation.validate import check_mesh
 from .surgery.bvh import TriangleBVH
 from .surgery.cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
-from .surgery.tear import TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
+from .surgery.tear import StrokeResult, TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
 from .surgery.topology import Topology, rig_topology
-from .surgery.session import StrokeResult, Surgery
+from .surgery.session import Surgery
 from .app.precompile import precompile
 
 _sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move

@@ -20,7 +20,7 @@ mesh (a global operation: its cost is the mesh's) and keeps both halves in the s
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -37,24 +37,9 @@ from .rows import Rows
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
 from .tear.splice import stroke_splice
-from .tear.stroke import check_blades, check_ends, check_opening, check_path
+from .tear.stroke import StrokeResult, check_blades, check_ends, check_opening, check_path
 
-__all__ = ["Surgery", "StrokeResult"]
-
-
-@dataclass(frozen=True, eq=False)
-class StrokeResult:
-    """A session's tear stroke: ``TearResult`` without the rig (``Surgery.rig`` gives it); vertex ids
-    (side_a, side_b) are the session's, which are the snapshot's."""
-
-    plane: np.ndarray
-    points: np.ndarray
-    kinds: np.ndarray
-    side_a: np.ndarray
-    side_b: np.ndarray
-    split: np.ndarray
-    hits: np.ndarray
-    jumps: np.ndarray
+__all__ = ["Surgery"]
 
 
 class _Undo(NamedTuple):

@@ -86,8 +86,8 @@ from .records import Ends
 from .rig_source import RigSource, torn_rig
 from .splice import stroke_splice
 
-__all__ = ["tear", "tear_stroke", "TearResult", "TearPathError", "TearPlacementWarning", "tear_topology",
-           "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]
+__all__ = ["tear", "tear_stroke", "TearResult", "StrokeResult", "TearPathError", "TearPlacementWarning",
+           "tear_topology", "TEAR_LABEL", "SNAP_TOLERANCE", "PLACEMENT_TOLERANCE"]
 
 #: the tolerances a tear uses (``cgaskin.tolerances.tol``), under their former names
 SNAP_TOLERANCE, PLACEMENT_TOLERANCE = tol.snap, tol.placement
@@ -103,15 +103,15 @@ class TearPathError(CgaskinError, ValueError):
 
 
 @dataclass(frozen=True, eq=False)
-class TearResult:
-    """A tear stroke with its bookkeeping.
+class StrokeResult:
+    """A tear stroke's bookkeeping (an editing session's ``Surgery.tear`` returns it; ``tear_stroke``
+    returns it with the torn rig, as ``TearResult``).
 
-    rig : Rig, the torn rig
     plane : (4,) float64 dual plane n̂ + d e∞ of the tear, in the surface's space (posed if posed)
     points : (k, 3) float64 path points in the surface's space, S_i first and S_{i+1} last
     kinds : (k,) int64 what each path point is: 0 an existing vertex, 1 an edge crossing, 2 a point
         inside a face (the ends, or the midpoint of a one-segment path)
-    side_a, side_b : (k,) int64 one vertex of each path point in the torn rig on the side the plane
+    side_a, side_b : (k,) int64 one vertex of each path point in the torn mesh on the side the plane
         normal points to, and one on the other side (equal where the point was not split: the
         slit's ends inside the surface); other attribute-split copies may exist
     split : (k,) bool, whether the path point was split into two sides
@@ -120,7 +120,6 @@ class TearResult:
         opening of the surface (where it crosses an existing slit: both points lie on its sides)
     """
 
-    rig: Rig
     plane: np.ndarray
     points: np.ndarray
     kinds: np.ndarray
@@ -129,6 +128,13 @@ class TearResult:
     split: np.ndarray
     hits: np.ndarray
     jumps: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class TearResult(StrokeResult):
+    """A tear stroke with its bookkeeping: ``StrokeResult`` and rig : Rig, the torn rig."""
+
+    rig: Rig
 
 
 def _scalpel(value, name):
