@@ -17,23 +17,16 @@ import numpy as np
 import cgaskin.surgery.dynamic_bvh as dyn
 from cgaskin import TriangleBVH, capsule_arm
 from cgaskin._shared.jit import kernel
-from cgaskin.surgery.bvh import _first_hit as static_first_hit
-from cgaskin.surgery.dynamic_bvh import DynamicBVH, dyn_first_hit
+from cgaskin.surgery.bvh import _first_hit
+from cgaskin.surgery.dynamic_bvh import DynamicBVH
 
 
 @kernel()
-def _dyn_loop(arrays, a, b):
+def _query_loop(arrays, a, b):
+    """first_hit on every segment a[i] -> b[i] (the same traversal reads either tree's arrays)."""
     n = 0
     for i in range(a.shape[0]):
-        n += dyn_first_hit(arrays, a[i], b[i])[0] >= 0
-    return n
-
-
-@kernel()
-def _static_loop(arrays, a, b):
-    n = 0
-    for i in range(a.shape[0]):
-        n += static_first_hit(arrays, a[i], b[i])[0] >= 0
+        n += _first_hit(arrays, a[i], b[i])[0] >= 0
     return n
 
 
@@ -83,11 +76,11 @@ def main():
     rng = np.random.default_rng(1)
     lo, hi = points.min(axis=0), points.max(axis=0)
     a, b = rng.uniform(lo, hi, (20000, 3)), rng.uniform(lo, hi, (20000, 3))
-    _dyn_loop(bvh.arrays, a, b), _static_loop(tuple(static._arrays), a, b)
+    _query_loop(bvh.arrays, a, b), _query_loop(tuple(static._arrays), a, b)
 
     def per_query():
-        return _best(lambda: _dyn_loop(bvh.arrays, a, b)) / len(a) * 1e6
-    q_static = _best(lambda: _static_loop(tuple(static._arrays), a, b)) / len(a) * 1e6
+        return _best(lambda: _query_loop(bvh.arrays, a, b)) / len(a) * 1e6
+    q_static = _best(lambda: _query_loop(tuple(static._arrays), a, b)) / len(a) * 1e6
     q_dyn = per_query()
     print(f"first_hit: static {q_static:.2f} us, dynamic {q_dyn:.2f} us ({q_dyn / q_static:.2f}x)")
     plane = (lo - 1, hi + 1, np.array([1.0, 0, 0]), 1.5, 0.0017)
