@@ -301,6 +301,11 @@ def topology(vertices, faces, labels=None) -> Topology:
         raise InvalidInputError(f"faces hold indices outside [0, {len(vertices)})")
     if not np.isfinite(vertices).all():
         raise InvalidInputError("vertices hold non-finite values (NaN or inf)")
+    if labels is not None:
+        labels = np.asarray(labels)
+        if labels.shape != (len(vertices),) or (labels.size and labels.dtype.kind not in "iu"):
+            raise InvalidInputError(f"labels must be ({len(vertices)},) integers, one per vertex, got "
+                                    f"{labels.shape} {labels.dtype}")
     return checked_topology(vertices, faces, labels)
 
 

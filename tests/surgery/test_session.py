@@ -203,6 +203,10 @@ def test_bad_input_and_failed_strokes_change_nothing():
         session.tear(blades[1], blades[2], opening=-1.0)
     with pytest.raises(InvalidInputError, match="scalpel_from"):
         session.tear([[0.0, 0.0, 0.0]], blades[2])
+    with pytest.raises(InvalidInputError):
+        session.cut([0.0, 0.0, 0.0], [0.5, 0.0, 0.0])                 # a zero normal
+    with pytest.raises(InvalidInputError, match="cap"):
+        session.cut([1.0, 0.0, 0.0], [0.5, 0.0, 0.0], cap="yes")
     assert session.rig is before and session.n_operations == 1
     with pytest.raises(InvalidInputError, match="Rig"):
         Surgery("not a rig")

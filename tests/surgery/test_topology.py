@@ -96,6 +96,10 @@ def test_topology_rejects_bad_arrays():
         topology(np.zeros((3, 3)), np.array([[0, 1, 3]]))
     with pytest.raises(InvalidInputError):
         topology(np.full((3, 3), np.nan), np.array([[0, 1, 2]]))
+    with pytest.raises(InvalidInputError, match="labels"):
+        topology(np.eye(3), np.array([[0, 1, 2]]), labels=[0, 1])
+    with pytest.raises(InvalidInputError, match="labels"):
+        topology(np.eye(3), np.array([[0, 1, 2]]), labels=[0.5, 1.0, 2.0])
 
 
 def test_tear_labels_of_any_sign_never_weld_distant_vertices():
