@@ -4,7 +4,7 @@ that probes stay short); welded vertices are numbered by first appearance, each 
 lowest vertex. ``topology.py`` builds the welded topology on it."""
 import numpy as np
 
-from .._shared.jit import U2, helper, kernel
+from .._shared.jit import F2, I1, I2, U2, helper, kernel
 
 _M1 = np.uint64(0xFF51AFD7ED558CCD)
 _M2 = np.uint64(0xC4CEB9FE1A85EC53)
@@ -77,3 +77,77 @@ def _weld(vertices, labels):
     if labels is not None and np.any(labels):
         bits = np.concatenate((bits, np.asarray(labels, np.int64).reshape(-1, 1).view(np.uint64)), axis=1)
     return _weld_positions(bits)
+
+
+@helper
+def _key_bits(bits, vertices, labels, v):
+    """The weld key of vertex v (4 uint64 scalars: no array per key): its position's bit patterns
+    (``bits``: ``vertices`` viewed as uint64; -0.0 read as +0.0) and its label."""
+    zero = np.uint64(0)
+    x = zero if vertices[v, 0] == 0.0 else bits[v, 0]
+    y = zero if vertices[v, 1] == 0.0 else bits[v, 1]
+    z = zero if vertices[v, 2] == 0.0 else bits[v, 2]
+    return x, y, z, np.uint64(labels[v])
+
+
+@helper
+def _find(table, keys, key, mask):
+    """The slot of ``key`` (4 uint64) in the open-addressed ``table`` of rows of ``keys``: where it is,
+    or the empty slot where it goes."""
+    x, y, z, label = key
+    slot = _mix(_mix(x ^ _mix(y + _ROT) ^ _mix(z * _ROT)) ^ (label + _ROT)) & mask
+    while table[slot] >= 0:
+        r = table[slot]
+        if keys[r, 0] == x and keys[r, 1] == y and keys[r, 2] == z and keys[r, 3] == label:
+            break
+        slot = (slot + np.uint64(1)) & mask
+    return slot
+
+
+@kernel((F2, I1, I2, I1), cost=0.6)
+def _boundary_of(vertices, labels, faces, asked):
+    """(a,) bool: whether each ``asked`` vertex lies on a boundary edge (one face) of ``faces`` (k, 3)
+    welded by position and label (``topology.boundary_flags`` of these faces, for these vertices
+    only; ``faces`` must hold the whole fan of every asked vertex). O(k + a), not O(vertices)."""
+    k = faces.shape[0]
+    bits = vertices.view(np.uint64)
+    size = _table_size(3 * k)
+    mask = np.uint64(size - 1)
+    table = np.full(size, -1, np.int64)            # welded id at its key's slot
+    keys = np.empty((3 * k, 4), np.uint64)
+    corner = np.empty((k, 3), np.int64)           # the welded id of each corner
+    count = 0
+    for f in range(k):
+        for c in range(3):
+            key = _key_bits(bits, vertices, labels, faces[f, c])
+            slot = _find(table, keys, key, mask)
+            if table[slot] < 0:
+                for j in range(4):
+                    keys[count, j] = key[j]
+                table[slot] = count
+                count += 1
+            corner[f, c] = table[slot]
+    # the welded edges and their face counts: a table keyed by the pair (lower, higher)
+    esize = _table_size(3 * k)
+    emask = np.uint64(esize - 1)
+    edge_lo = np.full(esize, -1, np.int64)
+    edge_hi = np.empty(esize, np.int64)
+    faces_on = np.zeros(esize, np.int64)
+    for f in range(k):
+        for c in range(3):
+            lo, hi = min(corner[f, c], corner[f, (c + 1) % 3]), max(corner[f, c], corner[f, (c + 1) % 3])
+            slot = _mix(np.uint64(lo) ^ _mix(np.uint64(hi) + _ROT)) & emask
+            while edge_lo[slot] >= 0 and not (edge_lo[slot] == lo and edge_hi[slot] == hi):
+                slot = (slot + np.uint64(1)) & emask
+            edge_lo[slot], edge_hi[slot] = lo, hi
+            faces_on[slot] += 1
+    on_boundary = np.zeros(count, np.bool_)
+    for slot in range(esize):
+        if edge_lo[slot] >= 0 and faces_on[slot] == 1:
+            on_boundary[edge_lo[slot]] = True
+            on_boundary[edge_hi[slot]] = True
+    out = np.zeros(asked.shape[0], np.bool_)
+    for i in range(asked.shape[0]):
+        slot = _find(table, keys, _key_bits(bits, vertices, labels, asked[i]), mask)
+        out[i] = table[slot] >= 0 and on_boundary[table[slot]]
+    return out

@@ -21,11 +21,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import I1, I2, kernel
+from ..._shared.jit import B1, F2, I1, I2, kernel
 from ...tolerances import tol
 from ..bvh import TriangleBVH
 from ..surface import WeldedMesh, _Surface
-from ..topology import checked_topology, incidence
+from ..topology import Topology, _corner_pairs, _unique_pairs, incidence
+from ..weld import _weld_positions
 
 
 #: patches of at most this many faces get a BVH of one leaf (a stroke queries it a few times)
@@ -98,21 +99,66 @@ def _sorted_compact(faces, face_ids):
     return found[order], rank[local]
 
 
+@kernel((F2, F2, I1, B1, I1, I2), cost=1.5)
+def _patch_topology(vertices, positions, labels, boundary, rows, faces):
+    """The patch's arrays in one pass (a dozen numpy calls cost more than the work on a few hundred
+    faces): its surface positions (p, 3) and, welded by rest position and label exactly as
+    ``topology.checked_topology`` welds and numbers (vertices, faces as there; -0.0 as +0.0), the
+    fields of its ``Topology``, then the welded positions, the vertex -> face incidence of the welded
+    faces, and the welded vertices (increasing) that carry a ``boundary`` flag.
+
+    vertices, positions (n, 3), labels (n,), boundary (n,): the source's ; rows (p,) ; faces (q, 3)
+    over 0..p-1
+    """
+    p, q = rows.shape[0], faces.shape[0]
+    bits = np.empty((p, 4), np.uint64)
+    patch_positions = np.empty((p, 3))
+    for i in range(p):
+        for k in range(3):
+            bits[i, k] = np.uint64(0) if vertices[rows[i], k] == 0.0 else vertices[rows[i], k:k + 1].view(np.uint64)[0]
+            patch_positions[i, k] = positions[rows[i], k]
+        bits[i, 3] = np.uint64(labels[rows[i]])
+    welded, representative = _weld_positions(bits)
+    w = representative.shape[0]
+    welded_faces = np.empty((q, 3), np.int64)
+    for f in range(q):
+        for k in range(3):
+            welded_faces[f, k] = welded[faces[f, k]]
+    vertex_edge_ids, vertex_edges = _unique_pairs(*_corner_pairs(faces, np.arange(p)))
+    vertex_edge_edge, edges = _unique_pairs(welded[vertex_edges[:, 0].copy()], welded[vertex_edges[:, 1].copy()])
+    face_vertex_edges = vertex_edge_ids.reshape(q, 3)
+    face_edges = np.empty((q, 3), np.int64)
+    for f in range(q):
+        for k in range(3):
+            face_edges[f, k] = vertex_edge_edge[face_vertex_edges[f, k]]
+    ef_offsets, ef_faces, ef_corners = incidence(face_edges, edges.shape[0])
+    welded_positions = np.empty((w, 3))
+    for v in range(w):
+        for k in range(3):
+            welded_positions[v, k] = patch_positions[representative[v], k]
+    vf_offsets, vf_faces, _ = incidence(welded_faces, w)
+    flagged = np.zeros(w, np.bool_)
+    for i in range(p):
+        flagged[welded[i]] = flagged[welded[i]] or boundary[rows[i]]
+    return (patch_positions, welded, representative, welded_faces, vertex_edges, face_vertex_edges,
+            vertex_edge_edge, edges, face_edges, ef_offsets, ef_faces, ef_corners, welded_positions, vf_offsets,
+            vf_faces, np.flatnonzero(flagged))
+
+
 def patch_surface(source, face_ids) -> Patch:
     """The surface of the faces ``face_ids`` (increasing ids into ``source.faces``) of ``source``.
 
-    source : a surgery source (``splice.py``): positions, faces, labels, boundary, diagonal, affines
+    source : a surgery source (``splice.py``): positions, faces, vertices, labels, boundary, diagonal,
+        affines
     """
     rows, faces = _sorted_compact(source.faces, face_ids)
-    positions = np.ascontiguousarray(source.positions[rows])
+    (positions, *fields, welded_positions, vf_offsets, vf_faces, boundary) = _patch_topology(
+        source.vertices, source.positions, source.labels, source.boundary, rows, faces)
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)
-    topo = checked_topology(source.vertices[rows], faces, source.labels[rows])
-    welded_positions = np.ascontiguousarray(positions[topo.representative])
-    vf_offsets, vf_faces, _ = incidence(topo.faces, topo.n_welded)
+    topo = Topology(*fields)
     welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
                         topo.edge_face_faces, vf_offsets, vf_faces)
-    boundary = np.unique(topo.welded[source.boundary[rows]])
     # (a few thousand faces: testing each of them beats building a tree)
     bvh = (TriangleBVH.one_leaf if len(faces) <= ONE_LEAF else TriangleBVH.of_checked)(positions, faces)
     surface = _Surface(positions, faces, topo, welded, bvh, boundary, source.diagonal, source.affines)

@@ -29,9 +29,9 @@ from ...errors import MissesMeshError, PlacementWarning
 from ...generated.kernels import plane_from_points
 from ...tolerances import tol
 from ..new_vertices import attribute_rule, interpolate_in_place
+from ..weld import _boundary_of
 from .locate import _boundary_hit, locate
 from .region import _margin as _margin_helper
-from ..topology import boundary_flags
 from .patch import patch_surface, region_box, select
 from .records import JUMP_CARRIER, VERTEX, Pieces, Slit, TornFaces
 from .retriangulate import _retriangulate
@@ -200,7 +200,7 @@ def _boundary_changes(faces, vertices, labels, surface, path, p):
     on_path = np.zeros(surface.topo.n_welded, bool)
     on_path[path.nodes[path.nodes[:, 0] == VERTEX, 1]] = True
     changed = np.concatenate((np.flatnonzero(on_path[surface.topo.welded]), np.arange(p, len(vertices))))
-    return changed, boundary_flags(vertices, faces, labels)[changed]
+    return changed, _boundary_of(vertices, labels, faces, changed)
 
 
 def _extended(values, rows: int) -> np.ndarray:
