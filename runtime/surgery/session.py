@@ -209,15 +209,15 @@ class Surgery:
 
     # ---- a stroke's rows in, and out again ------------------------------------------------------------
     def _apply(self, splice) -> _Undo:
-        rows, p = splice.rows, len(splice.rows)
+        rows, changed, p = splice.rows[splice.changed], splice.changed, len(splice.rows)
         n, m = self.n_vertices, self._faces.n
-        # a stroke changes the labels (the far side) and positions (an opening) of its patch's rows;
-        # their weights and attributes stay: those are only appended
+        # a stroke changes the labels (the far side) and positions (an opening) of a few of its patch's
+        # rows; their weights and attributes stay: those are only appended
         old_rows = {name: self._arrays[name].view[rows].copy() for name in ("vertices", "labels")}
-        moved = rows[(splice.vertices[:p] != old_rows["vertices"]).any(axis=1)]
+        moved = rows[(splice.vertices[changed] != old_rows["vertices"]).any(axis=1)]
         old_positions = self.positions[moved].copy()
         for name, values in (("vertices", splice.vertices), ("labels", splice.labels)):
-            self._arrays[name].view[rows] = values[:p]
+            self._arrays[name].view[rows] = values[changed]
         for name, values in (("vertices", splice.vertices), ("joints", splice.joints),
                              ("weights", splice.weights), ("labels", splice.labels)):
             self._arrays[name].append(values[p:])

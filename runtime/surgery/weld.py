@@ -9,7 +9,10 @@ from .._shared.jit import F2, I1, I2, U2, helper, kernel
 _M1 = np.uint64(0xFF51AFD7ED558CCD)
 _M2 = np.uint64(0xC4CEB9FE1A85EC53)
 _S33 = np.uint64(33)
-_ROT = np.uint64(0x9E3779B97F4A7C15)
+#: odd multipliers that spread each key column before they are combined (then one finaliser: five
+#: finalisers per key cost a third of a stroke's weld)
+_K = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B19E3779F9),
+      np.uint64(0xD6E8FEB86659FD93))
 
 
 @helper
@@ -46,10 +49,10 @@ def _weld_positions(bits):
     representative = np.empty(n, np.int64)
     count = 0
     for i in range(n):
-        h = _mix(bits[i, 0] ^ _mix(bits[i, 1] + _ROT) ^ _mix(bits[i, 2] * _ROT))
+        h = bits[i, 0] * _K[0] ^ bits[i, 1] * _K[1] ^ bits[i, 2] * _K[2]
         for c in range(3, bits.shape[1]):
-            h = _mix(h ^ (bits[i, c] + _ROT))
-        slot = h & mask
+            h = (h ^ bits[i, c]) * _K[3]
+        slot = _mix(h) & mask
         while True:
             w = table[slot]
             if w < 0:
@@ -95,7 +98,7 @@ def _find(table, keys, key, mask):
     """The slot of ``key`` (4 uint64) in the open-addressed ``table`` of rows of ``keys``: where it is,
     or the empty slot where it goes."""
     x, y, z, label = key
-    slot = _mix(_mix(x ^ _mix(y + _ROT) ^ _mix(z * _ROT)) ^ (label + _ROT)) & mask
+    slot = _mix(x * _K[0] ^ y * _K[1] ^ z * _K[2] ^ label * _K[3]) & mask
     while table[slot] >= 0:
         r = table[slot]
         if keys[r, 0] == x and keys[r, 1] == y and keys[r, 2] == z and keys[r, 3] == label:
@@ -136,7 +139,7 @@ def _boundary_of(vertices, labels, faces, asked):
     for f in range(k):
         for c in range(3):
             lo, hi = min(corner[f, c], corner[f, (c + 1) % 3]), max(corner[f, c], corner[f, (c + 1) % 3])
-            slot = _mix(np.uint64(lo) ^ _mix(np.uint64(hi) + _ROT)) & emask
+            slot = _mix(np.uint64(lo) * _K[0] ^ np.uint64(hi) * _K[1]) & emask
             while edge_lo[slot] >= 0 and not (edge_lo[slot] == lo and edge_hi[slot] == hi):
                 slot = (slot + np.uint64(1)) & emask
             edge_lo[slot], edge_hi[slot] = lo, hi

@@ -39,11 +39,14 @@ class Patch(NamedTuple):
     faces : (q,) int64 ids of its faces in the source, increasing
     rows : (p,) int64 the source vertices they use, increasing (patch vertex i is source vertex rows[i])
     surface : _Surface over the patch (vertices numbered 0..p-1, faces in the order of ``faces``)
+    vertices : (p, 3) float64, labels : (p,) int64 the source's rows ``rows`` of them
     """
 
     faces: np.ndarray
     rows: np.ndarray
     surface: _Surface
+    vertices: np.ndarray
+    labels: np.ndarray
 
 
 def plane_offset(plane) -> tuple[np.ndarray, float]:
@@ -105,19 +108,23 @@ def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     faces): its surface positions (p, 3) and, welded by rest position and label exactly as
     ``topology.checked_topology`` welds and numbers (vertices, faces as there; -0.0 as +0.0), the
     fields of its ``Topology``, then the welded positions, the vertex -> face incidence of the welded
-    faces, and the welded vertices (increasing) that carry a ``boundary`` flag.
+    faces, the welded vertices (increasing) that carry a ``boundary`` flag, and the patch's rows of
+    ``vertices`` (p, 3) and ``labels`` (p,) (read here anyway: a stroke reuses them).
 
     vertices, positions (n, 3), labels (n,), boundary (n,): the source's ; rows (p,) ; faces (q, 3)
     over 0..p-1
     """
     p, q = rows.shape[0], faces.shape[0]
+    source_bits = vertices.view(np.uint64)
     bits = np.empty((p, 4), np.uint64)
-    patch_positions = np.empty((p, 3))
+    patch_positions, patch_vertices, patch_labels = np.empty((p, 3)), np.empty((p, 3)), np.empty(p, np.int64)
     for i in range(p):
         for k in range(3):
-            bits[i, k] = np.uint64(0) if vertices[rows[i], k] == 0.0 else vertices[rows[i], k:k + 1].view(np.uint64)[0]
+            bits[i, k] = np.uint64(0) if vertices[rows[i], k] == 0.0 else source_bits[rows[i], k]
             patch_positions[i, k] = positions[rows[i], k]
-        bits[i, 3] = np.uint64(labels[rows[i]])
+            patch_vertices[i, k] = vertices[rows[i], k]
+        patch_labels[i] = labels[rows[i]]
+        bits[i, 3] = np.uint64(patch_labels[i])
     welded, representative = _weld_positions(bits)
     w = representative.shape[0]
     welded_faces = np.empty((q, 3), np.int64)
@@ -142,7 +149,7 @@ def _patch_topology(vertices, positions, labels, boundary, rows, faces):
         flagged[welded[i]] = flagged[welded[i]] or boundary[rows[i]]
     return (patch_positions, welded, representative, welded_faces, vertex_edges, face_vertex_edges,
             vertex_edge_edge, edges, face_edges, ef_offsets, ef_faces, ef_corners, welded_positions, vf_offsets,
-            vf_faces, np.flatnonzero(flagged))
+            vf_faces, np.flatnonzero(flagged), patch_vertices, patch_labels)
 
 
 def patch_surface(source, face_ids) -> Patch:
@@ -152,7 +159,7 @@ def patch_surface(source, face_ids) -> Patch:
         affines
     """
     rows, faces = _sorted_compact(source.faces, face_ids)
-    (positions, *fields, welded_positions, vf_offsets, vf_faces, boundary) = _patch_topology(
+    (positions, *fields, welded_positions, vf_offsets, vf_faces, boundary, vertices, labels) = _patch_topology(
         source.vertices, source.positions, source.labels, source.boundary, rows, faces)
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)
@@ -162,7 +169,7 @@ def patch_surface(source, face_ids) -> Patch:
     # (a few thousand faces: testing each of them beats building a tree)
     bvh = (TriangleBVH.one_leaf if len(faces) <= ONE_LEAF else TriangleBVH.of_checked)(positions, faces)
     surface = _Surface(positions, faces, topo, welded, bvh, boundary, source.diagonal, source.affines)
-    return Patch(np.asarray(face_ids, np.int64), rows, surface)
+    return Patch(np.asarray(face_ids, np.int64), rows, surface, vertices, labels)
 
 
 def select(source, plane, lo, hi) -> np.ndarray:

@@ -117,12 +117,12 @@ def torn_rig(rig, source: RigSource, splice):
     n, rows = len(source.vertices), splice.rows
     added = len(splice.vertices) - len(rows)
 
-    def merged(values, changed, rewritten=False):
+    def merged(values, after, rewritten=False):
         out = np.empty((n + added,) + values.shape[1:], values.dtype)
         out[:n] = values
-        out[n:] = changed[len(rows):]
+        out[n:] = after[len(rows):]
         if rewritten:                 # (a stroke rewrites only the labels and positions of its rows)
-            out[rows] = changed[:len(rows)]
+            out[rows[splice.changed]] = after[splice.changed]
         return out
 
     vertices, labels = merged(source.vertices, splice.vertices, True), merged(source.labels, splice.labels, True)

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, I2, f8, kernel
+from ..._shared.jit import F1, F2, I1, I2, f8, i8, kernel
 from ..._shared.warn import warn
 from ...errors import MissesMeshError, PlacementWarning
 from ...generated.kernels import plane_from_points
@@ -43,10 +43,12 @@ from .walk import walk
 class Splice(NamedTuple):
     """What a stroke changes, in the source's numbering (n vertices, m face rows before it).
 
-    rows : (p,) int64 source vertices of the patch; vertices (p + v, 3), joints (p + v, 4), weights,
-        labels (p + v,), attributes {name: (p + v, c)}: those rows after the stroke, then the v new
-        vertices (source vertices n, n + 1, ...). Of the patch's rows a stroke changes only labels
-        (the far side's) and vertices (an opening moves the sides apart).
+    rows : (p,) int64 source vertices of the patch; vertices (p + v, 3), labels (p + v,): those rows
+        after the stroke, then the v new vertices (source vertices n, n + 1, ...); joints (p + v, 4),
+        weights, attributes {name: (p + v, c)}: the new vertices' rows after p rows that hold only
+        what the stroke read (the others are zero: a stroke never changes them)
+    changed : (c,) int64 increasing indices into ``rows``: the only rows whose label (the far side's)
+        or position (an opening moves the sides apart) the stroke may change
     removed : (a,) int64 faces replaced by pieces ; kept : (k,) int64 the other faces that touch the
         path and kept_corners (k, 3) int64 their corners after the stroke (the far side's use twins)
     pieces : (q, 3) int64 the new faces (source vertex ids), in order ; parents (q,) int64 the removed
@@ -57,6 +59,7 @@ class Splice(NamedTuple):
     """
 
     rows: np.ndarray
+    changed: np.ndarray
     vertices: np.ndarray
     joints: np.ndarray
     weights: np.ndarray
@@ -158,8 +161,12 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     slit = Slit(*_open_slit(torn.faces, torn.welded, torn.node_welded, surface.positions, torn.new_positions,
                             ends.plane, torn.candidates))
     added = len(pieces.new_node) + len(slit.twins)
-    vertices, joints, weights, labels = (_extended(values[rows], added) for values in
-                                         (source.vertices, source.joints, source.weights, source.labels))
+    vertices, labels = _extended(patch.vertices, added), _extended(patch.labels, added)
+    # of the joints, weights and attributes only the rows the stroke reads: the new vertices' sources,
+    # the twins' and the moved rows (a posed opening); the other rows of a large patch would be
+    # scattered reads of the source that nothing uses
+    read, changed = _read_and_changed(pieces.new_src, slit.twins, slit.moved, p)
+    joints, weights = (_gathered(values, rows, read, added) for values in (source.joints, source.weights))
     posed = source.affines is not None
     residual = _vertex_data(vertices, joints, weights, labels, p, source.top_label, path.points, tuple(pieces),
                             tuple(slit), opening, ends.plane[:3].copy(),
@@ -169,7 +176,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
              f"blended transform is singular or nearly so)", PlacementWarning)
     attributes, twin_of = {}, slit.twins[:, 0].copy()
     for name, (values, _tail) in source.attributes.items():
-        values = _extended(values[rows], added)
+        values = _gathered(values, rows, read, added)
         # new vertices interpolate their sources, and a twin has its vertex's data
         interpolate_in_place(values, p, pieces.new_src, pieces.new_coef, attribute_rule(name, values.shape[1]),
                              twin_of)
@@ -186,7 +193,8 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
                   side_a=ids[slit.side_a], side_b=ids[slit.side_b], split=slit.split, hits=ends.hits,
                   jumps=path.nodes[:, 2] == JUMP_CARRIER)
-    return Splice(rows, vertices, joints, weights, labels, attributes, patch.faces[pieces.affected],
+    return Splice(rows, changed, vertices, joints, weights, labels, attributes,
+                  patch.faces[pieces.affected],
                   patch.faces[keep][near], ids[torn.faces[near]], ids[torn.faces[n_kept:]],
                   patch.faces[pieces.affected[pieces.parent]], ids[boundary_rows],
                   boundary_flags, stroke)
@@ -203,8 +211,35 @@ def _boundary_changes(faces, vertices, labels, surface, path, p):
     return changed, _boundary_of(vertices, labels, faces, changed)
 
 
+@kernel((I2, I2, I2, i8), cost=0.2)
+def _read_and_changed(new_src, twins, moved, p):
+    """Increasing patch rows (< p) that a stroke reads the joints, weights and attributes of (the new
+    vertices' sources, the twins', the moved rows), and those it may change (the moved rows)."""
+    read = np.zeros(p, np.bool_)
+    changed = np.zeros(p, np.bool_)
+    for v in new_src.reshape(-1):
+        if v < p:
+            read[v] = True
+    for i in range(twins.shape[0]):
+        if twins[i, 0] < p:
+            read[twins[i, 0]] = True
+    for i in range(moved.shape[0]):
+        if moved[i, 0] < p:
+            read[moved[i, 0]] = changed[moved[i, 0]] = True
+    return np.flatnonzero(read), np.flatnonzero(changed)
+
+
 def _extended(values, rows: int) -> np.ndarray:
     """``values`` (p, ...) followed by ``rows`` uninitialised rows, for a kernel to fill."""
     out = np.empty((len(values) + rows,) + values.shape[1:], values.dtype)
     out[:len(values)] = values
+    return out
+
+
+def _gathered(values, rows, read, added: int) -> np.ndarray:
+    """(p + added, ...) the rows ``rows[read]`` of ``values`` at ``read``, zeros in the other p rows,
+    then ``added`` uninitialised rows for a kernel to fill."""
+    out = np.empty((len(rows) + added,) + values.shape[1:], values.dtype)
+    out[:len(rows)] = 0
+    out[read] = values[rows[read]]
     return out
