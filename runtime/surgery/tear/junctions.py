@@ -16,18 +16,19 @@ def _openings(cls, edges, ef_offsets, plane, wpos, region, margin):
     of the boundary edges it crosses (EDGE) and the boundary vertices on it (VERTEX)."""
     found = np.empty((16, 2), np.int64)
     count = 0
+    # (a vertex is met once per boundary edge at it; an existing slit along the plane has hundreds)
+    vertex_seen = np.zeros(wpos.shape[0], np.bool_)
     for e in range(edges.shape[0]):
         if ef_offsets[e + 1] - ef_offsets[e] != 1:
             continue
         for kind, ident in ((EDGE, e), (VERTEX, edges[e, 0]), (VERTEX, edges[e, 1])):
             if kind == EDGE and cls[edges[e, 0]] * cls[edges[e, 1]] >= 0:
                 continue
-            if kind == VERTEX and cls[ident] != 0:
+            if kind == VERTEX and (cls[ident] != 0 or vertex_seen[ident]):
                 continue
-            seen = False
-            for c in range(count):
-                seen = seen or (found[c, 0] == kind and found[c, 1] == ident)
-            if seen or _outside(_element_point(kind, ident, plane, wpos, edges)[1:], region) > margin:
+            if kind == VERTEX:
+                vertex_seen[ident] = True
+            if _outside(_element_point(kind, ident, plane, wpos, edges)[1:], region) > margin:
                 continue
             if count == found.shape[0]:
                 found = np.concatenate((found, np.empty_like(found)))
