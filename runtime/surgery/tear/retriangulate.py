@@ -71,7 +71,7 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
 
 
 @helper
-def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_float, out, on_edge):
+def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_float, out, on_edge, work):
     """Split face ``f`` so that the path's pieces in it become edges.
 
     The face's boundary becomes a polygon: its corners (a path node where the corner is one) with the
@@ -85,10 +85,10 @@ def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_
     ``nodes`` (increasing) are the path nodes that can concern f (``_face_nodes``): the others are not
     looked at, so that a long path costs what each face holds of it.
     Rows of ``out`` get element codes: -1-k for corner k, j >= 0 for path node j. Returns the row count.
+    ``work`` : (poly, flat, along, sub, subflat) scratch arrays of at least nodes + 3 entries (allocated
+    once per stroke: per face they cost more than the face's triangulation)
     """
-    poly = np.empty(nodes.shape[0] + 3, np.int64)
-    flat = np.zeros(nodes.shape[0] + 3, np.bool_)
-    along = np.empty(nodes.shape[0] + 3)
+    poly, flat, along, sub, subflat = work          # (every entry below ``count`` is set here)
     count = np.int64(0)
     for k in range(3):
         code = -1 - k
@@ -134,8 +134,6 @@ def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_
         gap = (ib - ia) % count if ia >= 0 and ib >= 0 else 0
         if gap < 2 or gap > count - 2:
             return _convex_fan(poly, flat, count, f, wfaces, wpos, path_float, out, np.int64(0))
-        sub = np.empty(count, np.int64)
-        subflat = np.zeros(count, np.bool_)
         for start, stop in ((ia, ib), (ib, ia)):
             size = (stop - start) % count + 1
             for i in range(size):
@@ -369,10 +367,12 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     head = np.full(k_nodes, -1, np.int64)           # the new vertices of each node, chained
     chain = np.empty(4 * k_nodes + 4, np.int64)
     local = np.empty((k_nodes + 16, 3), np.int64)
+    work = (np.empty(k_nodes + 3, np.int64), np.zeros(k_nodes + 3, np.bool_), np.empty(k_nodes + 3),
+            np.empty(k_nodes + 3, np.int64), np.zeros(k_nodes + 3, np.bool_))
     for a in range(n_aff):
         f = affected[a]
         n_local = _triangulate_face(f, node_list[node_offsets[a]:node_offsets[a + 1]], path_int, wfaces,
-                                    face_edges, edges, wpos, path_float, local, on_edge)
+                                    face_edges, edges, wpos, path_float, local, on_edge, work)
         for i in range(n_local):
             for c in range(3):
                 code = local[i, c]
