@@ -23,6 +23,10 @@ from typing import NamedTuple
 
 from numba import njit, types
 
+from . import cache_keys
+
+cache_keys.install()            # a kernel's cache is keyed by every cgaskin source it imports
+
 __all__ = ["kernel", "helper", "precompiled", "record", "SIGNATURES", "Signature"]
 
 _OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
