@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F1, I1, S1, f8, i8, kernel, record
+from ..._shared.jit import F1, I1, S1, f8, helper, i8, kernel, record
 from ...tolerances import tol
 from ..bvh import BVH_ARRAYS
 from ..surface import WELDED_MESH
@@ -37,6 +37,11 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     returns found (bool), and the fields of ``Path`` from start to target
     """
     (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
+    if s_kind == FACE and t_kind == FACE and s_id == t_id:
+        # both ends inside one face: the chord between them
+        path_int = np.array([[FACE, s_id, NO_CARRIER, -1], [FACE, s_id, FACE_CARRIER, s_id]], np.int64)
+        path_float = np.array([[0.0, s_pos[0], s_pos[1], s_pos[2]], [0.0, t_pos[0], t_pos[1], t_pos[2]]])
+        return _with_midpoint(path_int, path_float, wpos, edges)
     margin = _margin(wpos, wfaces, hit_faces, s_pos, t_pos)
     m = wfaces.shape[0]
     cap = m + edges.shape[0] + 4
@@ -225,7 +230,44 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
         for c in range(4):
             path_float[r - first, c] = nf[q, c]
     path_int[0, 2], path_int[0, 3] = NO_CARRIER, -1
+    if path_int.shape[0] == 2:
+        return _with_midpoint(path_int, path_float, wpos, edges)
     return True, path_int, path_float
+
+
+@helper
+def _with_midpoint(path_int, path_float, wpos, edges):
+    """(True, path) with a one-segment path's midpoint as a third node, so that the slit has a vertex
+    to split (with both ends kept single, a single edge could not open)."""
+    kind, carrier = path_int[1, 2], path_int[1, 3]
+    mid_int = np.array([EDGE, carrier, EDGE_CARRIER, carrier], np.int64)
+    mid_float = np.empty(4)
+    if kind == FACE_CARRIER:
+        mid_int[0], mid_int[2] = FACE, FACE_CARRIER
+        mid_float[0] = 0.0
+        for c in range(3):
+            mid_float[1 + c] = 0.5 * (path_float[0, 1 + c] + path_float[1, 1 + c])
+    else:
+        lo, hi = wpos[edges[carrier, 0]], wpos[edges[carrier, 1]]
+        if path_int[0, 0] == VERTEX and path_int[1, 0] == VERTEX:
+            # along a whole edge in the plane: its midpoint
+            mid_float[0] = 0.5
+            for c in range(3):
+                mid_float[1 + c] = 0.5 * (lo[c] + hi[c])
+        else:
+            # along part of an edge in the plane (an end is a point of it): the middle of that part, at
+            # the mean of the two ends' parameters on the edge (a corner's is 0 or 1)
+            ts = np.empty(2)
+            for r in range(2):
+                ts[r] = path_float[r, 0] if path_int[r, 0] == EDGE else (1.0 if edges[carrier, 1] == path_int[r, 1] else 0.0)
+            t = 0.5 * (ts[0] + ts[1])
+            mid_float[0] = t
+            for c in range(3):
+                mid_float[1 + c] = lo[c] + t * (hi[c] - lo[c])
+    out_int, out_float = np.empty((3, 4), np.int64), np.empty((3, 4))
+    out_int[0], out_int[1], out_int[2] = path_int[0], mid_int, path_int[1]
+    out_float[0], out_float[1], out_float[2] = path_float[0], mid_float, path_float[1]
+    return True, out_int, out_float
 
 
 def walk(surface, ends: Ends, bvh, blade_from, blade_to) -> Path | None:
@@ -235,43 +277,7 @@ def walk(surface, ends: Ends, bvh, blade_from, blade_to) -> Path | None:
     one-segment path gets its midpoint."""
     (s_kind, s_id), (t_kind, t_id) = ends.nodes.tolist()      # Python ints: cheaper than numpy scalars
     s_pos, t_pos = ends.points
-    if s_kind == FACE and t_kind == FACE and s_id == t_id:
-        path = Path(np.array([[FACE, s_id, NO_CARRIER, -1], [FACE, s_id, FACE_CARRIER, s_id]], np.int64),
-                    np.array([[0.0, *s_pos], [0.0, *t_pos]]))
-    else:
-        found, nodes, points = _walk(tuple(surface.welded), ends.sides, ends.plane, s_kind, s_id, s_pos,
-                                     t_kind, t_id, t_pos, tuple(bvh._arrays), (*blade_from, *blade_to),
-                                     ends.hit_faces, tol.snap * surface.diagonal)
-        if not found:
-            return None
-        path = Path(nodes, points)
-    if len(path.nodes) == 2:
-        return _insert_midpoint(path, surface.welded)
-    return path
-
-
-def _insert_midpoint(path, mesh) -> Path:
-    """A one-segment path gets its midpoint as a third node, so that the slit has a vertex to split
-    (with both ends kept single, a single edge could not open)."""
-    path_int, path_float = path
-    kind, carrier = path_int[1, 2], path_int[1, 3]
-    p0, p1 = path_float[0, 1:4], path_float[1, 1:4]
-    if kind == FACE_CARRIER:
-        mid_int = [FACE, carrier, FACE_CARRIER, carrier]
-        mid_float = [0.0, *(0.5 * (p0 + p1))]
-    elif path_int[0, 0] == VERTEX and path_int[1, 0] == VERTEX:
-        # along a whole edge in the plane: its midpoint
-        lo, hi = mesh.positions[mesh.edges[carrier]]
-        mid_int = [EDGE, carrier, EDGE_CARRIER, carrier]
-        mid_float = [0.5, *(0.5 * (lo + hi))]
-    else:
-        # along part of an edge in the plane (an end is a point of it): the middle of that part, at the
-        # mean of the two ends' parameters on the edge (a corner's is 0 or 1)
-        ts = [path_float[r, 0] if path_int[r, 0] == EDGE else
-              float(mesh.edges[carrier, 1] == path_int[r, 1]) for r in (0, 1)]
-        lo, hi = mesh.positions[mesh.edges[carrier]]
-        t = 0.5 * (ts[0] + ts[1])
-        mid_int = [EDGE, carrier, EDGE_CARRIER, carrier]
-        mid_float = [t, *(lo + t * (hi - lo))]
-    return Path(np.array([path_int[0], mid_int, path_int[1]], np.int64),
-                np.array([path_float[0], mid_float, path_float[1]]))
+    found, nodes, points = _walk(tuple(surface.welded), ends.sides, ends.plane, s_kind, s_id, s_pos, t_kind, t_id,
+                                 t_pos, tuple(bvh._arrays), (*blade_from, *blade_to), ends.hit_faces,
+                                 tol.snap * surface.diagonal)
+    return Path(nodes, points) if found else None
