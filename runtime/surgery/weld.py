@@ -4,7 +4,7 @@ that probes stay short); welded vertices are numbered by first appearance, each 
 lowest vertex. ``topology.py`` builds the welded topology on it."""
 import numpy as np
 
-from .._shared.jit import F2, I1, I2, U2, helper, kernel
+from .._shared.jit import U2, helper, kernel
 
 _M1 = np.uint64(0xFF51AFD7ED558CCD)
 _M2 = np.uint64(0xC4CEB9FE1A85EC53)
@@ -107,12 +107,13 @@ def _find(table, keys, key, mask):
     return slot
 
 
-@kernel((F2, I1, I2, I1), cost=0.6)
-def _boundary_of(vertices, labels, faces, asked):
-    """(a,) bool: whether each ``asked`` vertex lies on a boundary edge (one face) of ``faces`` (k, 3)
-    welded by position and label (``topology.boundary_flags`` of these faces, for these vertices
-    only; ``faces`` must hold the whole fan of every asked vertex). O(k + a), not O(vertices)."""
-    k = faces.shape[0]
+@helper
+def _boundary_of(vertices, labels, faces, rows, asked):
+    """(a,) bool: whether each ``asked`` vertex lies on a boundary edge (one face) of the faces
+    ``faces[rows]`` (k, 3) welded by position and label (``topology.boundary_flags`` of these faces,
+    for these vertices only; they must hold the whole fan of every asked vertex). O(k + a), not
+    O(vertices)."""
+    k = rows.shape[0]
     bits = vertices.view(np.uint64)
     size = _table_size(3 * k)
     mask = np.uint64(size - 1)
@@ -122,7 +123,7 @@ def _boundary_of(vertices, labels, faces, asked):
     count = 0
     for f in range(k):
         for c in range(3):
-            key = _key_bits(bits, vertices, labels, faces[f, c])
+            key = _key_bits(bits, vertices, labels, faces[rows[f], c])
             slot = _find(table, keys, key, mask)
             if table[slot] < 0:
                 for j in range(4):

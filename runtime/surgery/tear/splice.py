@@ -188,8 +188,8 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     keep = np.ones(len(patch.faces), bool)
     keep[pieces.affected] = False
     near = torn.candidates[torn.candidates < n_kept]
-    boundary_rows, boundary_flags = _boundary_changes(torn.faces[torn.candidates], vertices, labels, surface,
-                                                      path, p)
+    boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn.faces, torn.candidates,
+                                                      surface.topo.welded, surface.topo.n_welded, path.nodes, p)
     stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
                   side_a=ids[slit.side_a], side_b=ids[slit.side_b], split=slit.split, hits=ends.hits,
                   jumps=path.nodes[:, 2] == JUMP_CARRIER)
@@ -200,15 +200,25 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
                   boundary_flags, stroke)
 
 
-def _boundary_changes(faces, vertices, labels, surface, path, p):
+@kernel((F2, I1, I2, I1, I1, i8, I2, i8), cost=0.7)
+def _boundary_changes(vertices, labels, faces, candidates, welded, n_welded, path_int, p):
     """The patch vertices whose boundary flag a stroke can change -- the copies of the path's vertices
     and the new vertices -- and their flags in the torn patch (welded as ``surface.tear_topology``
-    welds: by rest position and label). ``faces`` are the torn faces that can touch a path node (the
-    pieces and the kept faces around path vertices): the whole fan of every vertex asked about."""
-    on_path = np.zeros(surface.topo.n_welded, bool)
-    on_path[path.nodes[path.nodes[:, 0] == VERTEX, 1]] = True
-    changed = np.concatenate((np.flatnonzero(on_path[surface.topo.welded]), np.arange(p, len(vertices))))
-    return changed, _boundary_of(vertices, labels, faces, changed)
+    welds: by rest position and label). faces (m, 3) the torn faces, ``candidates`` the rows of them
+    that can touch a path node (the pieces and the kept faces around path vertices): the whole fan
+    of every vertex asked about. welded (p,) the welded vertex of each patch vertex (of n_welded)."""
+    on_path = np.zeros(n_welded, np.bool_)
+    for j in range(path_int.shape[0]):
+        if path_int[j, 0] == VERTEX:
+            on_path[path_int[j, 1]] = True
+    changed = np.empty(vertices.shape[0], np.int64)
+    count = 0
+    for i in range(vertices.shape[0]):
+        if i >= p or on_path[welded[i]]:
+            changed[count] = i
+            count += 1
+    changed = changed[:count].copy()
+    return changed, _boundary_of(vertices, labels, faces, candidates, changed)
 
 
 @kernel((I2, I2, I2, i8), cost=0.2)
