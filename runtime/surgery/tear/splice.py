@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, I2, f8, i8, kernel
+from ..._shared.jit import F1, F2, I1, I2, f8, helper, i8, kernel, record
 from ..._shared.warn import warn
 from ...errors import MissesMeshError, PlacementWarning
 from ...generated.kernels import plane_from_points
@@ -181,23 +181,73 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
         interpolate_in_place(values, p, pieces.new_src, pieces.new_coef, attribute_rule(name, values.shape[1]),
                              twin_of)
         attributes[name] = values
-    ids = np.concatenate((rows, n + np.arange(added, dtype=np.int64)))     # patch vertex -> source vertex
-    # the kept faces the far side's twins can reach: those around the path's vertices (the candidates
-    # before the pieces); the others keep their corners
-    n_kept = len(patch.faces) - len(pieces.affected)
-    keep = np.ones(len(patch.faces), bool)
-    keep[pieces.affected] = False
-    near = torn.candidates[torn.candidates < n_kept]
     boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn.faces, torn.candidates,
                                                       surface.topo.welded, surface.topo.n_welded, path.nodes, p)
+    removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(
+        patch.faces, pieces.affected, pieces.parent, torn.faces, torn.candidates, rows, n,
+        (slit.side_a, slit.side_b, boundary_rows))
     stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
-                  side_a=ids[slit.side_a], side_b=ids[slit.side_b], split=slit.split, hits=ends.hits,
+                  side_a=side_a, side_b=side_b, split=slit.split, hits=ends.hits,
                   jumps=path.nodes[:, 2] == JUMP_CARRIER)
-    return Splice(rows, changed, vertices, joints, weights, labels, attributes,
-                  patch.faces[pieces.affected],
-                  patch.faces[keep][near], ids[torn.faces[near]], ids[torn.faces[n_kept:]],
-                  patch.faces[pieces.affected[pieces.parent]], ids[boundary_rows],
-                  boundary_flags, stroke)
+    return Splice(rows, changed, vertices, joints, weights, labels, attributes, removed, kept, kept_corners,
+                  new_faces, parents, boundary_rows, boundary_flags, stroke)
+
+
+@kernel((I1, I1, I1, I2, I1, I1, i8, record(I1, I1, I1)), cost=0.5)
+def _in_source(face_ids, affected, parent, torn, candidates, rows, n, vertex_lists):
+    """The stroke's faces and vertices in the source's numbering (patch vertex i < p is source
+    vertex rows[i], new vertex p + j is n + j; patch face f is face_ids[f]).
+
+    face_ids (q,) ; affected (a,) the patch faces replaced, parent (k,) the index in ``affected`` of
+    each piece's face ; torn (q - a + k, 3) the torn faces: the kept ones in order, then the pieces ;
+    candidates (c,) rows of ``torn`` around the path ; vertex_lists: patch vertex ids to map
+    returns removed (a,), kept (r,) the kept faces among the candidates (the far side's twins can
+    reach only those: the others keep their corners) and kept_corners (r, 3), pieces (k, 3), parents
+    (k,) the source face of each piece, and the vertex lists mapped
+    """
+    p, q, a = rows.shape[0], face_ids.shape[0], affected.shape[0]
+    n_kept = q - a
+    kept_ids = np.empty(n_kept, np.int64)         # the patch face of each kept row of ``torn``
+    is_affected = np.zeros(q, np.bool_)
+    for f in affected:
+        is_affected[f] = True
+    r = 0
+    for f in range(q):
+        if not is_affected[f]:
+            kept_ids[r] = face_ids[f]
+            r += 1
+    removed = np.empty(a, np.int64)
+    for i in range(a):
+        removed[i] = face_ids[affected[i]]
+    count = 0
+    for c in candidates:
+        count += c < n_kept
+    kept, kept_corners = np.empty(count, np.int64), np.empty((count, 3), np.int64)
+    count = 0
+    for c in candidates:
+        if c < n_kept:
+            kept[count] = kept_ids[c]
+            for k in range(3):
+                kept_corners[count, k] = _source_vertex(torn[c, k], rows, n)
+            count += 1
+    k_pieces = torn.shape[0] - n_kept
+    pieces, parents = np.empty((k_pieces, 3), np.int64), np.empty(k_pieces, np.int64)
+    for i in range(k_pieces):
+        for k in range(3):
+            pieces[i, k] = _source_vertex(torn[n_kept + i, k], rows, n)
+        parents[i] = face_ids[affected[parent[i]]]
+    mapped = []
+    for vertices in vertex_lists:
+        out = np.empty(vertices.shape[0], np.int64)
+        for i in range(vertices.shape[0]):
+            out[i] = _source_vertex(vertices[i], rows, n)
+        mapped.append(out)
+    return removed, kept, kept_corners, pieces, parents, (mapped[0], mapped[1], mapped[2])
+
+
+@helper
+def _source_vertex(v, rows, n):
+    return rows[v] if v < rows.shape[0] else n + v - rows.shape[0]
 
 
 @kernel((F2, I1, I2, I1, I1, i8, I2, i8), cost=0.7)
