@@ -6,8 +6,9 @@ Prints: build time and tree memory of both; first_hit per query on 20k random se
 faces_near_plane over a slab of ~2000 faces; the median and p90 of one stroke's edits (remove 30
 faces, insert 3 pieces of each, move 40) over a 300-stroke incision, its degradation and rebuilds,
 and first_hit against a rebuilt tree; then strokes at random places that also move faces ~0.02, with
-the degradation and the first_hit ratio to a rebuilt tree (what ``dynamic_bvh.REBUILD_AT`` is set by). The BVH reads the bench's mesh arrays,
-which grow like a session's (spare room, doubled when full).
+the degradation and the first_hit ratio to a rebuilt tree (what ``dynamic_bvh.REBUILD_AT`` is set
+by). The BVH reads the bench's mesh arrays, which grow like a session's (spare room, doubled when
+full).
 """
 from __future__ import annotations
 

@@ -14,9 +14,10 @@ Segment–triangle test: the watertight test of Woop, Benthin and Wald (JCGT 2(1
 (either face orientation counts). A segment through an edge or a vertex shared by several triangles
 hits at least one of them, so a scalpel cannot slip between two faces.
 
-A ``TriangleBVH`` keeps the positions and faces it was built from (its own copy; ``of_checked``
-and ``one_leaf`` keep the caller's arrays); build another one when the positions change (a functional tear keeps one per rig and pose: ``tear/rig_source.py``; an editing session
-updates a ``DynamicBVH`` in place).
+A ``TriangleBVH`` keeps the positions and faces it was built from (its own copies; ``of_checked``
+and ``one_leaf`` keep the caller's arrays); build another one when the positions change (a
+functional tear keeps one per rig and pose: ``tear/rig_source.py``; an editing session updates a
+``DynamicBVH`` in place).
 """
 from __future__ import annotations
 
@@ -214,9 +215,10 @@ def _all_hits(bvh, a, b):
 
 @kernel((BVH_ARRAYS, F1, F1, F1, f8, f8), cost=0.8)
 def _faces_near_plane(arrays, lo, hi, normal, offset, delta):
-    """The live faces (unsorted: np.sort compiles for seconds; callers sort) whose triangle box meets the closed box [lo, hi] and whose corners'
-    s = normal . x - offset have min(s) <= delta, max(s) >= -delta. arrays : ``BVHArrays`` (as a tuple), of a
-    TriangleBVH or a DynamicBVH (whose ``slot_face`` is the leaf order)."""
+    """The live faces (unsorted: np.sort compiles for seconds; callers sort) whose triangle box meets
+    the closed box [lo, hi] and whose corners' s = normal . x - offset have min(s) <= delta,
+    max(s) >= -delta. arrays : ``BVHArrays`` (as a tuple), of a TriangleBVH or a DynamicBVH (whose
+    ``slot_face`` is the leaf order)."""
     node_lo, node_hi, node_left, node_right, node_start, node_count, order, positions, faces = arrays
     out = np.empty(64, np.int64)
     n = top = 0

@@ -5,12 +5,13 @@ their pieces: a ``TriangleBVH`` rebuild costs a second per stroke, an edit here 
 
 Layout: the tree of ``bvh_build._build`` in node arrays that grow by doubling (int32 indices). The
 BVH owns no geometry: it reads face f's corners as positions[faces[f]] from the caller's arrays (the
-session's own mesh buffers), so that its memory is the tree's (~65 bytes a face). A leaf owns a block
-of slots (start, capacity) holding face ids, the live ones first (count): remove moves the leaf's
-last face into the hole, so queries never meet a dead slot. Insert descends
-into the child whose box grows least (ties: the smaller box) and appends to the leaf, moving a full
-block to the end with twice the room, up to LEAF_MAX (the old block is dead until a rebuild); a
-leaf that would pass LEAF_MAX faces splits at the median centroid along the longest axis. An edit
+session's own mesh buffers), so that its memory is the tree's (~62 bytes a face; the spare rows are
+allocated, not written, so not resident until used). A leaf owns a block of slots (start, capacity)
+holding face ids, the live ones first (count): remove moves the leaf's last face into the hole, so
+queries never meet a dead slot. Insert descends into the child whose box grows least (ties: the
+smaller box) and appends to the leaf, moving a full block to the end with twice the room, up to
+LEAF_MAX (the old block is dead until a rebuild); a leaf that would pass LEAF_MAX faces splits at
+the median centroid along the longest axis. An edit
 refits its leaf and the ancestors up to the first unchanged box, padded like bvh.py (BOX_PADDING
 times the scene extent at build). Dense face id -> slot and slot -> leaf maps find a face's leaf.
 The edits are compiled in ``dynamic_bvh_edits.py``, as one kernel.
@@ -18,14 +19,18 @@ The edits are compiled in ``dynamic_bvh_edits.py``, as one kernel.
 Degradation: the SAH cost (inner nodes weigh 1, leaves their count; over the root's area), kept at
 every change, over its value after the last build; an edit rebuilds past ``REBUILD_AT`` (or when dead
 slots outnumber live faces). Measured (``python -m benchmarks.bench_dynamic_bvh``, 2 cores,
-capsule_arm 850 x 294 = 1.58M faces): build 1.2 s (static 0.7 s), memory
-1.20x the static arrays; first_hit on 20k random segments 3.5 us (static 3.7 us); faces_near_plane
-over 2352 faces 0.23 ms; a stroke (remove 30, insert 90 pieces, move 40) 0.25 ms median; 300 strokes
-of an incision leave the degradation at 1.000 (first_hit 3.50 us, 3.42 us rebuilt). Strokes at random
-places that also throw 40 faces ~20 face widths: degradation 1.35 / 1.86 / 2.29 / 2.78 / 4.13 / 7.58
-after 150 / 300 / 450 / 600 / 1000 / 2000 strokes, first_hit 1.02 / 1.08 / 1.06 / 1.14 / 1.19 / 1.39x
-that of a rebuilt tree (the SAH ratio also counts the faces' own growth, which no rebuild undoes):
-at 3 (``REBUILD_AT``) queries are ~15 % slower than rebuilt; a rebuild costs ~300k queries.
+capsule_arm 850 x 294 = 1.58M faces): build 0.42 s (static 0.72 s), memory 98 MB, 62 bytes a face
+(the static tree's 76 MB, besides its copies of positions and faces; with the corner copy and int64
+indices they were 271 and 226 MB); first_hit on 20k random segments 4.2 us (static 4.3 us; 3.6 and
+4.1 us reading a corner copy); faces_near_plane over 2352 faces 0.21 ms; a stroke (remove 30, insert
+90 pieces, move 40, through the checked calls) 0.31 ms median; 300 strokes of an incision leave the
+degradation at 1.000 (first_hit 4.13 us, 4.24 us rebuilt). Strokes at random places that also throw
+40 faces' corners ~0.02 (a few face widths): degradation 1.41 / 1.97 / 2.46 / 2.94 / 4.32 / 7.67
+after 150 / 300 / 450 / 600 / 1000 / 2000 strokes, first_hit 1.09 / 1.04 / 1.34 / 1.09 / 1.16 /
+1.37x that of a rebuilt tree (+-10 % between runs; the SAH ratio also counts the faces' own growth,
+which no rebuild undoes): at 3 (``REBUILD_AT``) queries are ~10-15 % slower than rebuilt; a rebuild
+costs ~100k queries. An editing session on that mesh (``python -m benchmarks.bench_progressive``)
+peaks at 1.76x the mesh's own arrays (3.3x with the corner copy): its mesh buffers and this tree.
 """
 from __future__ import annotations
 

@@ -183,8 +183,9 @@ def _split(st, leaf, face):
     # loops, not numpy calls, which numba compiles in seconds
     cs = np.empty((n, 3))
     for j in range(n):
+        p, q, r = faces[ids[j], 0], faces[ids[j], 1], faces[ids[j], 2]
         for k in range(3):
-            cs[j, k] = (positions[faces[ids[j], 0], k] + positions[faces[ids[j], 1], k]) + positions[faces[ids[j], 2], k]
+            cs[j, k] = (positions[p, k] + positions[q, k]) + positions[r, k]
     axis, widest = 0, -1.0
     for k in range(3):
         lo_k, hi_k = np.inf, -np.inf
