@@ -6,16 +6,18 @@ and each query visits only the boxes that the segment crosses.
 
 Build: top-down, each node split at the middle of its centroids' extent along the longest axis
 (object median when that leaves one side empty), leaves of at most ``LEAF_SIZE`` triangles, in one
-numba loop with an explicit stack. Triangle corners are copied into leaf order, so that a leaf's
-triangles lie contiguous in memory.
+numba loop with an explicit stack (``bvh_build.py``). The tree holds face ids in leaf order, not
+triangles: a query reads a triangle's corners as positions[faces[face]] (a per-slot copy of the
+corners, 72 bytes a face, was the largest array of an editing session's BVH).
 
 Segment–triangle test: the watertight test of Woop, Benthin and Wald (JCGT 2(1), 2013), two-sided
 (either face orientation counts). A segment through an edge or a vertex shared by several triangles
 hits at least one of them, so a scalpel cannot slip between two faces.
 
-A ``TriangleBVH`` keeps the positions it was built from; build another one when the positions
-change (a functional tear keeps one per rig and pose: ``tear/rig_source.py``; an editing session
-updates a ``DynamicBVH`` in place).
+A ``TriangleBVH`` keeps the positions and faces it was built from (its own copies; ``of_checked``
+and ``one_leaf`` keep the caller's arrays); build another one when the positions change (a
+functional tear keeps one per rig and pose: ``tear/rig_source.py``; an editing session updates a
+``DynamicBVH`` in place).
 """
 from __future__ import annotations
 
@@ -24,10 +26,10 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.checks import float_array, index_array
-from .._shared.jit import F1, F2, I1, f8, helper, kernel, record
+from .._shared.jit import F1, F2, I2, f8, helper, kernel, record
 from ..errors import InvalidInputError
 from ..tolerances import tol
-from .bvh_build import _build, _one_leaf
+from .bvh_build import N1, _build, _one_leaf
 
 __all__ = ["TriangleBVH", "BVHArrays", "LEAF_SIZE"]
 
@@ -41,9 +43,10 @@ BOX_PADDING = tol.box_padding
 class BVHArrays(NamedTuple):
     """The hierarchy as the query kernels take it.
 
-    lo, hi : (N, 3) float64 padded node boxes ; left, right : (N,) int64 children (-1 for leaves)
-    start, count : (N,) int64 leaf ranges into the leaf order ; order : (m,) int64 face of each leaf
-    slot ; tri : (m, 9) float64 triangle corners in leaf order
+    lo, hi : (N, 3) float64 padded node boxes ; left, right : (N,) int32 children (-1 for leaves)
+    start, count : (N,) int32 leaf ranges into the leaf order ; order : (s,) int32 face id of each
+    leaf slot ; positions : (n, 3) float64 ; faces : (F, 3) int64 rows by face id: the corners of
+    face f are positions[faces[f]]
     """
 
     lo: np.ndarray
@@ -53,11 +56,12 @@ class BVHArrays(NamedTuple):
     start: np.ndarray
     count: np.ndarray
     order: np.ndarray
-    tri: np.ndarray
+    positions: np.ndarray
+    faces: np.ndarray
 
 
 #: the numba type of ``BVHArrays`` (for precompile signatures)
-BVH_ARRAYS = record(F2, F2, I1, I1, I1, I1, I1, F2)
+BVH_ARRAYS = record(F2, F2, N1, N1, N1, N1, N1, F2, I2)
 
 
 # ---- queries ------------------------------------------------------------------------------------
@@ -83,18 +87,19 @@ def _segment_box(lo, hi, a, d, t_max):
 
 
 @helper
-def _watertight(tri, i, a, kx, ky, kz, sx, sy, sz):
+def _watertight(positions, faces, f, a, kx, ky, kz, sx, sy, sz):
     """Woop–Benthin–Wald test of the segment a + t d (sheared frame kx, ky, kz, sx, sy, sz) against
-    triangle ``i`` of ``tri``; two-sided. Returns t (may lie outside [0, 1]) or NaN for a miss."""
-    ax = tri[i, kx] - a[kx]
-    ay = tri[i, ky] - a[ky]
-    az = tri[i, kz] - a[kz]
-    bx = tri[i, 3 + kx] - a[kx]
-    by = tri[i, 3 + ky] - a[ky]
-    bz = tri[i, 3 + kz] - a[kz]
-    cx = tri[i, 6 + kx] - a[kx]
-    cy = tri[i, 6 + ky] - a[ky]
-    cz = tri[i, 6 + kz] - a[kz]
+    the triangle positions[faces[f]]; two-sided. Returns t (may lie outside [0, 1]) or NaN for a miss."""
+    p, q, r = faces[f, 0], faces[f, 1], faces[f, 2]
+    ax = positions[p, kx] - a[kx]
+    ay = positions[p, ky] - a[ky]
+    az = positions[p, kz] - a[kz]
+    bx = positions[q, kx] - a[kx]
+    by = positions[q, ky] - a[ky]
+    bz = positions[q, kz] - a[kz]
+    cx = positions[r, kx] - a[kx]
+    cy = positions[r, ky] - a[ky]
+    cz = positions[r, kz] - a[kz]
     ax, ay = ax - sx * az, ay - sy * az
     bx, by = bx - sx * bz, by - sy * bz
     cx, cy = cx - sx * cz, cy - sy * cz
@@ -128,7 +133,7 @@ def _shear(d):
 def _first_hit(bvh, a, b):
     """Smallest t in [0, 1] where segment a -> b meets a triangle of ``bvh`` (BVHArrays as a tuple);
     returns (face, t), face -1 if none."""
-    node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = bvh
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, positions, faces = bvh
     d = b - a
     kx, ky, kz, sx, sy, sz = _shear(d)
     best_t = np.inf
@@ -144,7 +149,7 @@ def _first_hit(bvh, a, b):
             continue
         if node_left[node] < 0:
             for i in range(node_start[node], node_start[node] + node_count[node]):
-                t = _watertight(tri, i, a, kx, ky, kz, sx, sy, sz)
+                t = _watertight(positions, faces, order[i], a, kx, ky, kz, sx, sy, sz)
                 # equal t (a segment through an edge or a vertex): the lowest face id, whatever the tree
                 if t >= 0.0 and t <= 1.0 and (t < best_t or (t == best_t and order[i] < order[best_i])):
                     best_t, best_i = t, i
@@ -176,10 +181,10 @@ def _first_hit(bvh, a, b):
 def _all_hits(bvh, a, b):
     """Every crossing of segment a -> b with a triangle of ``bvh`` (BVHArrays as a tuple):
     (faces (k,), t (k,)), unsorted."""
-    node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = bvh
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, positions, faces = bvh
     d = b - a
     kx, ky, kz, sx, sy, sz = _shear(d)
-    faces = np.empty(16, np.int64)
+    found = np.empty(16, np.int64)
     ts = np.empty(16)
     n = 0
     stack = np.empty(128, np.int64)
@@ -193,27 +198,28 @@ def _all_hits(bvh, a, b):
             continue
         if node_left[node] < 0:
             for i in range(node_start[node], node_start[node] + node_count[node]):
-                t = _watertight(tri, i, a, kx, ky, kz, sx, sy, sz)
+                t = _watertight(positions, faces, order[i], a, kx, ky, kz, sx, sy, sz)
                 if t >= 0.0 and t <= 1.0:
-                    if n == faces.shape[0]:
-                        faces = np.concatenate((faces, np.empty_like(faces)))
+                    if n == found.shape[0]:
+                        found = np.concatenate((found, np.empty_like(found)))
                         ts = np.concatenate((ts, np.empty_like(ts)))
-                    faces[n], ts[n] = order[i], t
+                    found[n], ts[n] = order[i], t
                     n += 1
             continue
         if top + 3 > stack.shape[0]:
             stack = np.concatenate((stack, np.empty_like(stack)))
         stack[top + 1], stack[top + 2] = node_right[node], node_left[node]
         top += 2
-    return faces[:n].copy(), ts[:n].copy()
+    return found[:n].copy(), ts[:n].copy()
 
 
 @kernel((BVH_ARRAYS, F1, F1, F1, f8, f8), cost=0.8)
 def _faces_near_plane(arrays, lo, hi, normal, offset, delta):
-    """The live faces (unsorted: np.sort compiles for seconds; callers sort) whose triangle box meets the closed box [lo, hi] and whose corners'
-    s = normal . x - offset have min(s) <= delta, max(s) >= -delta. arrays : ``BVHArrays`` (as a tuple), of a
-    TriangleBVH or a DynamicBVH (whose ``slot_face`` is the leaf order)."""
-    node_lo, node_hi, node_left, node_right, node_start, node_count, order, tri = arrays
+    """The live faces (unsorted: np.sort compiles for seconds; callers sort) whose triangle box meets
+    the closed box [lo, hi] and whose corners' s = normal . x - offset have min(s) <= delta,
+    max(s) >= -delta. arrays : ``BVHArrays`` (as a tuple), of a TriangleBVH or a DynamicBVH (whose
+    ``slot_face`` is the leaf order)."""
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, positions, faces = arrays
     out = np.empty(64, np.int64)
     n = top = 0
     stack = np.empty(128, np.int64)
@@ -238,8 +244,9 @@ def _faces_near_plane(arrays, lo, hi, normal, offset, delta):
             continue
         for i in range(node_start[node], node_start[node] + node_count[node]):
             s0, s1, s2 = -offset, -offset, -offset
+            p, q, r = faces[order[i], 0], faces[order[i], 1], faces[order[i], 2]
             for k in range(3):
-                c0, c1, c2 = tri[i, k], tri[i, 3 + k], tri[i, 6 + k]
+                c0, c1, c2 = positions[p, k], positions[q, k], positions[r, k]
                 meets = meets and min(c0, min(c1, c2)) <= hi[k] and max(c0, max(c1, c2)) >= lo[k]
                 s0, s1, s2 = s0 + normal[k] * c0, s1 + normal[k] * c1, s2 + normal[k] * c2
             if meets and min(s0, min(s1, s2)) <= delta and max(s0, max(s1, s2)) >= -delta:
@@ -258,29 +265,33 @@ class TriangleBVH:
     Parameters
     ----------
     positions : (n, 3) float
-        Vertex positions (rest, or skinned in some pose); kept (as float64) by the BVH.
+        Vertex positions (rest, or skinned in some pose); the BVH keeps a float64 copy.
     faces : (m, 3) int
-        Triangles, m >= 1; degenerate (zero-area) triangles are allowed and never hit.
+        Triangles, m >= 1; degenerate (zero-area) triangles are allowed and never hit. The BVH keeps
+        an int64 copy.
 
     Attributes
     ----------
     n_faces, n_nodes : int
 
-    Queries take segments a -> b (both (3,) points) and treat the faces as two-sided. The BVH keeps
-    its own copy of the triangle corners (``triangle(face)``), not the caller's arrays.
+    Queries take segments a -> b (both (3,) points) and treat the faces as two-sided; they read the
+    BVH's copies (``triangle(face)``), never the caller's arrays.
     """
 
     def __init__(self, positions, faces):
-        positions = np.ascontiguousarray(float_array(positions, "positions", 3, ndim=2))
-        faces = np.ascontiguousarray(index_array(faces, "faces", len(positions)), dtype=np.int64)
+        positions = float_array(positions, "positions", 3, ndim=2)
+        faces = index_array(faces, "faces", len(positions))
         if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
             raise InvalidInputError(f"faces must have shape (m, 3) with m >= 1, got {faces.shape}")
-        self._build(positions, faces)
+        # copies: positions and faces (48 bytes a face, at most) are what the queries read
+        self._build(np.array(positions, np.float64, order="C"), np.array(faces, np.int64, order="C"))
 
     def _build(self, positions, faces) -> None:
-        self._arrays = BVHArrays(*_build(positions, faces, LEAF_SIZE, BOX_PADDING))
-        self._slot = np.empty(len(faces), np.int64)
-        self._slot[self._arrays.order] = np.arange(len(faces))
+        order = np.arange(len(faces), dtype=np.int32)          # (the build sorts it into leaf order)
+        lo, hi, left, right, start, count, n, _ = _build(positions, faces, order, LEAF_SIZE, BOX_PADDING, 0)
+        # views of the first n rows: the rows past them (up to 2m - 1) were never written, so never resident
+        self._arrays = BVHArrays(lo[:n], hi[:n], left[:n], right[:n], start[:n], count[:n], order, positions,
+                                 faces)
 
     @classmethod
     def one_leaf(cls, positions, faces) -> "TriangleBVH":
@@ -288,15 +299,15 @@ class TriangleBVH:
         every triangle, which for a few thousand faces costs less than building a tree (a tear
         stroke's patch); the answers are a tree's (the first hit: the lowest t, then face id)."""
         bvh = cls.__new__(cls)
-        bvh._arrays = BVHArrays(*_one_leaf(positions, faces, BOX_PADDING))
-        bvh._slot = bvh._arrays.order
+        bvh._arrays = BVHArrays(*_one_leaf(positions, faces, BOX_PADDING), positions, faces)
         return bvh
 
     @classmethod
     def of_checked(cls, positions, faces) -> "TriangleBVH":
         """The BVH of input already checked: (n, 3) C-contiguous finite float64 positions, (m >= 1, 3)
         C-contiguous int64 faces that index them (a tear stroke builds one per patch, where the checks
-        would cost more than the build)."""
+        would cost more than the build). It keeps these arrays, not copies: the caller must not change
+        them while the BVH is in use."""
         bvh = cls.__new__(cls)
         bvh._build(positions, faces)
         return bvh
@@ -307,11 +318,11 @@ class TriangleBVH:
 
     @property
     def n_faces(self) -> int:
-        return len(self._arrays.order)
+        return len(self._arrays.faces)
 
     def triangle(self, face: int) -> np.ndarray:
         """(3, 3) corners of ``face`` as the BVH holds them (rows: the face's corners in order)."""
-        return self._arrays.tri[self._slot[face]].reshape(3, 3).copy()
+        return self._arrays.positions[self._arrays.faces[face]]
 
     @staticmethod
     def _segment(a, b):

@@ -3,12 +3,15 @@
 A scalpel session on a 1.5M-face mesh makes hundreds of strokes, each replacing a few dozen faces by
 their pieces: a ``TriangleBVH`` rebuild costs a second per stroke, an edit here O(k log m) for k faces.
 
-Layout: the tree of ``bvh._build`` in node arrays that grow by doubling. A leaf owns a block of
-slots (start, capacity) with its triangles' corners contiguous, the live ones first (count): remove
-moves the leaf's last triangle into the hole, so queries never meet a dead slot. Insert descends
-into the child whose box grows least (ties: the smaller box) and appends to the leaf, moving a full
-block to the end with twice the room, up to LEAF_MAX (the old block is dead until a rebuild); a
-leaf that would pass LEAF_MAX faces splits at the median centroid along the longest axis. An edit
+Layout: the tree of ``bvh_build._build`` in node arrays that grow by doubling (int32 indices). The
+BVH owns no geometry: it reads face f's corners as positions[faces[f]] from the caller's arrays (the
+session's own mesh buffers), so that its memory is the tree's (~62 bytes a face; the spare rows are
+allocated, not written, so not resident until used). A leaf owns a block of slots (start, capacity)
+holding face ids, the live ones first (count): remove moves the leaf's last face into the hole, so
+queries never meet a dead slot. Insert descends into the child whose box grows least (ties: the
+smaller box) and appends to the leaf, moving a full block to the end with twice the room, up to
+LEAF_MAX (the old block is dead until a rebuild); a leaf that would pass LEAF_MAX faces splits at
+the median centroid along the longest axis. An edit
 refits its leaf and the ancestors up to the first unchanged box, padded like bvh.py (BOX_PADDING
 times the scene extent at build). Dense face id -> slot and slot -> leaf maps find a face's leaf.
 The edits are compiled in ``dynamic_bvh_edits.py``, as one kernel.
@@ -16,14 +19,18 @@ The edits are compiled in ``dynamic_bvh_edits.py``, as one kernel.
 Degradation: the SAH cost (inner nodes weigh 1, leaves their count; over the root's area), kept at
 every change, over its value after the last build; an edit rebuilds past ``REBUILD_AT`` (or when dead
 slots outnumber live faces). Measured (``python -m benchmarks.bench_dynamic_bvh``, 2 cores,
-capsule_arm 850 x 294 = 1.58M faces): build 1.2 s (static 0.7 s), memory
-1.20x the static arrays; first_hit on 20k random segments 3.5 us (static 3.7 us); faces_near_plane
-over 2352 faces 0.23 ms; a stroke (remove 30, insert 90 pieces, move 40) 0.25 ms median; 300 strokes
-of an incision leave the degradation at 1.000 (first_hit 3.50 us, 3.42 us rebuilt). Strokes at random
-places that also throw 40 faces ~20 face widths: degradation 1.35 / 1.86 / 2.29 / 2.78 / 4.13 / 7.58
-after 150 / 300 / 450 / 600 / 1000 / 2000 strokes, first_hit 1.02 / 1.08 / 1.06 / 1.14 / 1.19 / 1.39x
-that of a rebuilt tree (the SAH ratio also counts the faces' own growth, which no rebuild undoes):
-at 3 (``REBUILD_AT``) queries are ~15 % slower than rebuilt; a rebuild costs ~300k queries.
+capsule_arm 850 x 294 = 1.58M faces): build 0.42 s (static 0.72 s), memory 98 MB, 62 bytes a face
+(the static tree's 76 MB, besides its copies of positions and faces; with the corner copy and int64
+indices they were 271 and 226 MB); first_hit on 20k random segments 4.2 us (static 4.3 us; 3.6 and
+4.1 us reading a corner copy); faces_near_plane over 2352 faces 0.21 ms; a stroke (remove 30, insert
+90 pieces, move 40, through the checked calls) 0.31 ms median; 300 strokes of an incision leave the
+degradation at 1.000 (first_hit 4.13 us, 4.24 us rebuilt). Strokes at random places that also throw
+40 faces' corners ~0.02 (a few face widths): degradation 1.41 / 1.97 / 2.46 / 2.94 / 4.32 / 7.67
+after 150 / 300 / 450 / 600 / 1000 / 2000 strokes, first_hit 1.09 / 1.04 / 1.34 / 1.09 / 1.16 /
+1.37x that of a rebuilt tree (+-10 % between runs; the SAH ratio also counts the faces' own growth,
+which no rebuild undoes): at 3 (``REBUILD_AT``) queries are ~10-15 % slower than rebuilt; a rebuild
+costs ~100k queries. An editing session on that mesh (``python -m benchmarks.bench_progressive``)
+peaks at 1.76x the mesh's own arrays (3.3x with the corner copy): its mesh buffers and this tree.
 """
 from __future__ import annotations
 
@@ -33,7 +40,7 @@ from .._shared.checks import float_array, index_array, real_number
 from ..errors import InvalidInputError
 from .bvh import BOX_PADDING, LEAF_SIZE, TriangleBVH, _all_hits, _faces_near_plane, _first_hit
 from .bvh_build import _build
-from .dynamic_bvh_edits import LEAF_MAX, _change
+from .dynamic_bvh_edits import LEAF_MAX, _adopt, _change
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
 
@@ -45,7 +52,7 @@ def _cost(st) -> float:
     """The SAH cost: the SAH sum over the root's area (0 for an empty tree)."""
     d = st[1][0] - st[0][0]
     area = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]) if d[0] >= 0.0 else 0.0
-    return float(st[13][0] / area) if area > 0.0 else 0.0
+    return float(st[14][0] / area) if area > 0.0 else 0.0
 
 
 # ---- queries: kernels that Python and other kernels call with ``DynamicBVH.arrays`` --------------
@@ -59,21 +66,51 @@ dyn_faces_near_plane = _faces_near_plane
 
 
 # ---- public object --------------------------------------------------------------------------------
-def _grown(arr, size, fill, factor=2):
-    """``arr`` with room for ``size`` rows (``factor`` times as many when it grows: amortised)."""
+def _grown(arr, size, used, fill=None):
+    """``arr`` with room for ``size`` rows (twice as many when it grows: amortised), its first ``used``
+    rows kept; the new rows hold ``fill``, or are left unwritten (not resident until used)."""
     if len(arr) >= size:
         return arr
-    out = np.full((max(size, factor * len(arr)),) + arr.shape[1:], fill, arr.dtype)
-    out[:len(arr)] = arr
+    shape = (max(size, 2 * len(arr)),) + arr.shape[1:]
+    out = np.empty(shape, arr.dtype) if fill is None else np.full(shape, fill, arr.dtype)
+    out[:used] = arr[:used]
     return out
+
+
+def _geometry(ids, positions, faces):
+    """``positions`` (n, 3) float64 and ``faces`` (F, 3) int64 as the BVH reads them (C-contiguous;
+    converted copies only where they are not so), the triangles of face ``ids`` checked: rows of
+    ``faces`` that index ``positions``, finite corners. O(len(ids)): the rest is the caller's word."""
+    positions, faces = np.asarray(positions), np.asarray(faces)
+    if positions.ndim != 2 or positions.shape[1] != 3 or positions.dtype.kind not in "fiu":
+        raise InvalidInputError(f"positions must be a real (n, 3) array, got {positions.shape} {positions.dtype}")
+    if faces.ndim != 2 or faces.shape[1] != 3 or faces.dtype.kind not in "iu":
+        raise InvalidInputError(f"faces must be an integer (F, 3) array, got {faces.shape} {faces.dtype}")
+    positions = np.ascontiguousarray(positions, dtype=np.float64)
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    if len(ids) and ids.max() >= len(faces):
+        raise InvalidInputError(f"faces has {len(faces)} rows: no row for face {ids.max()}")
+    rows = faces[ids]
+    if rows.size and (rows.min() < 0 or rows.max() >= len(positions)):
+        raise InvalidInputError(f"faces {ids[:8].tolist()} must index the {len(positions)} positions, got "
+                                f"indices from {rows.min()} to {rows.max()}")
+    if not np.isfinite(positions[rows]).all():
+        raise InvalidInputError("positions holds a non-finite value (NaN or inf) at a corner of the faces given")
+    return positions, faces
 
 
 class DynamicBVH:
     """A BVH over triangles that follows removals, insertions and moves of faces in place.
 
     positions : (n, 3) float ; faces : (m, 3) int, m >= 1, face ids 0 .. m-1 ; capacity : spare
-    slots and nodes (default m / 16). Face ids are ints in [0, 2**31), new ones for insert. The BVH
-    keeps its own corners; faces are two-sided; segments a -> b ((3,) points) as in ``TriangleBVH``.
+    slots and nodes (default m / 16). Face ids are ints in [0, 2**31), new ones for insert.
+
+    The BVH holds no geometry of its own: it reads face f's corners as positions[faces[f]] from the
+    arrays it was last given (float64 and int64 C-contiguous ones as they are, others as converted
+    copies); it never writes them. Whoever edits them tells the BVH, passing the arrays as they are
+    then: ``insert`` (new faces), ``update`` (faces whose corners moved), ``edit`` (a stroke's
+    changes, unchecked), ``use`` (a copy of the same triangles); every other live face must keep its
+    triangle. Faces are two-sided; segments a -> b ((3,) points) as in ``TriangleBVH``.
     n_faces : live faces ; degradation : SAH cost / its value after the last build ; rebuilds : count
     """
 
@@ -84,52 +121,53 @@ class DynamicBVH:
             raise InvalidInputError(f"faces must have shape (m, 3) with m >= 1, got {faces.shape}")
         self._spare = len(faces) // 16 + 64 if capacity is None else max(int(capacity), 0)
         self.rebuilds = 0
-        self._load(positions, faces, np.arange(len(faces)))
+        self._load(positions, faces, np.arange(len(faces), dtype=np.int32))
 
     def _load(self, positions, faces, ids):
-        """Adopt the tree of ``bvh._build`` over ``faces`` (named ``ids``), with spare room."""
-        lo, hi, left, right, start, count, order, tri = _build(positions, faces, LEAF_SIZE, BOX_PADDING)
-        m, rows, spare = len(order), len(lo) + self._spare // 2 + 16, self._spare
-        pad = BOX_PADDING * max(float(np.ptp(tri.reshape(-1, 3), axis=0).max()), 1e-300)  # as _build
-        corners = _grown(tri, m + spare, 0.0, 1)
-        del tri                # (the largest array: let it go before the others are copied)
-        parent = np.full(len(lo), -1)
-        parent[left[left >= 0]] = parent[right[left >= 0]] = np.flatnonzero(left >= 0)
-        leaves = np.flatnonzero(left < 0)[np.argsort(start[left < 0])]
-        d = hi - lo       # the SAH sum: box areas, weighing 1 (inner nodes) or the count (leaves)
-        sah = (d[:, 0] * d[:, 1] + d[:, 1] * d[:, 2] + d[:, 2] * d[:, 0]) @ np.where(left >= 0, 2.0, 2 * count)
-        face_slot = np.full(ids.max() + 1 + spare, -1)
-        face_slot[ids[order]] = np.arange(m)
-        # st: lo, hi, left, right, parent, start, count, capacity (nodes); face, leaf, corners
-        # (slots); slot of each face id; [nodes, slots, dead slots, live faces]; [SAH sum, padding]
-        self._st = tuple(_grown(x, rows if len(x) == len(lo) else m + spare, fill, 1) for x, fill in (
-            (lo, np.inf), (hi, -np.inf), (left, -1), (right, -1), (parent, -1), (start, -1), (count, 0),
-            (count, 0), (ids[order], -1), (np.repeat(leaves, count[leaves]), -1))) + (
-            corners,
-            face_slot, np.array([len(lo), m, 0, m]), np.array([sah, pad]))
+        """Adopt the tree of ``bvh_build._build`` over the faces ``ids`` (k,) int32, with spare room
+        (allocated, not written: resident only once used)."""
+        k, spare = len(ids), self._spare
+        slot_face = np.empty(k + spare, np.int32)
+        slot_face[:k] = ids
+        lo, hi, left, right, start, count, n_nodes, pad = _build(positions, faces, slot_face[:k], LEAF_SIZE,
+                                                                 BOX_PADDING, spare // 2 + 16)
+        parent, cap, slot_leaf, face_slot, sah = _adopt(left, right, start, count, lo, hi, slot_face, n_nodes,
+                                                        int(ids.max()) + 1 + spare)
+        # st: lo, hi, left, right, parent, start, count, capacity (nodes); face, leaf (slots); positions,
+        # faces (the caller's); slot of each face id; [nodes, slots, dead slots, live faces]; [SAH sum, padding]
+        self._st = (lo, hi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces,
+                    face_slot, np.array([n_nodes, k, 0, k]), np.array([sah, pad]))
         self._sah0 = _cost(self._st)
 
     @property
     def n_faces(self) -> int:
-        return int(self._st[12][3])
+        return int(self._st[13][3])
 
     @property
     def degradation(self) -> float:
         return _cost(self._st) / self._sah0 if self._sah0 > 0 else 1.0
 
     @property
+    def nbytes(self) -> int:
+        """Bytes of the BVH's own arrays in use (the rows allocated past them are unwritten, so not
+        resident; the positions and faces are the caller's)."""
+        st, (nodes, slots) = self._st, self._st[13][:2]
+        return int(sum(x[:nodes].nbytes for x in st[:8]) + sum(x[:slots].nbytes for x in st[8:10]) + st[12].nbytes)
+
+    @property
     def arrays(self) -> tuple:
-        """(lo, hi, left, right, start, count, slot_face, tri): the tree as compiled queries take it."""
+        """(lo, hi, left, right, start, count, slot_face, positions, faces): the tree as compiled queries
+        take it (``bvh.BVHArrays``)."""
         st = self._st
-        return (st[0], st[1], st[2], st[3], st[5], st[6], st[8], st[10])
+        return (st[0], st[1], st[2], st[3], st[5], st[6], st[8], st[10], st[11])
 
     def _ids(self, face_ids, name, live):
         """Distinct face ids (k,) int64, all live (``live``) or none live."""
-        # ids index a dense map (8 bytes per id up to the largest one seen): bound them
+        # ids index a dense int32 map (4 bytes per id up to the largest one seen): bound them
         ids = np.ascontiguousarray(index_array(face_ids, name, 2 ** 31), dtype=np.int64)
         if ids.ndim != 1 or len(np.unique(ids)) != len(ids):
             raise InvalidInputError(f"{name} must be distinct face ids, shape (k,), got {ids[:8].tolist()}")
-        face_slot = self._st[11]
+        face_slot = self._st[12]
         wrong = ids[((ids < len(face_slot)) & (face_slot[np.minimum(ids, len(face_slot) - 1)] >= 0)) != live]
         if len(wrong):
             raise InvalidInputError(f"{name} holds {'faces that are not live' if live else 'live faces'}: "
@@ -137,81 +175,90 @@ class DynamicBVH:
         return ids
 
     def triangle(self, face) -> np.ndarray:
-        """(3, 3) corners of live ``face`` as the BVH holds them."""
-        return self._st[10][self._st[11][self._ids([face], "face", True)[0]]].reshape(3, 3).copy()
+        """(3, 3) corners of live ``face`` as the BVH reads them."""
+        st = self._st
+        return st[10][st[11][self._ids([face], "face", True)[0]]]
 
     def remove(self, face_ids):
         """Remove live faces (k,): they are never hit again."""
-        self._apply(face_ids, None, True)
+        ids, none = self._ids(face_ids, "face_ids", True), np.empty(0, np.int64)
+        if len(ids):
+            _change(self._st, none, none, ids, none)
+            self._rebuild_if_degraded()
 
-    def update(self, face_ids, corners):
-        """Give live faces (k,) new corners (k, 3, 3)."""
-        self._apply(face_ids, corners, True)
-
-    def insert(self, face_ids, corners, near=None):
-        """Add faces with new ids (k,), none live, and corners (k, 3, 3); ``near`` (k,) optional live
-        faces whose leaves take them (the faces they are pieces of; -1: descend from the root)."""
-        self._apply(face_ids, corners, False, near)
-
-    def _apply(self, face_ids, corners, live, near=None):
-        ids = self._ids(face_ids, "face_ids", live)
-        k = len(ids)
-        if corners is not None:
-            corners = float_array(corners, "corners", 3, ndim=3)
-            if corners.shape != (k, 3, 3):
-                raise InvalidInputError(f"corners must have shape ({k}, 3, 3), got {corners.shape}")
-            corners = np.ascontiguousarray(corners.reshape(k, 9))
-        if not k:
-            return
-        none, none9 = np.empty(0, np.int64), np.empty((0, 9))
-        if live and corners is None:
-            _change(self._st, none, none9, none, ids, none, none9)
-        elif live:
-            _change(self._st, none, none9, none, none, ids, corners)
-        else:
-            near = np.full(k, -1, np.int64) if near is None else np.ascontiguousarray(near, dtype=np.int64)
-            given, face_slot = near[near >= 0], self._st[11]
-            if near.shape != (k,) or (given >= len(face_slot)).any() or (face_slot[given] < 0).any():
-                raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
-            self._make_room(k, int(ids.max()))
-            _change(self._st, ids, corners, near, none, none, none9)
+    def update(self, face_ids, positions, faces):
+        """Live faces (k,) whose corners moved: they now are positions[faces[f]] (positions (n, 3),
+        faces (F, 3), the arrays the BVH reads from now on)."""
+        ids = self._ids(face_ids, "face_ids", True)
+        geometry, none = _geometry(ids, positions, faces), np.empty(0, np.int64)
+        self._st = self._st[:10] + geometry + self._st[12:]
+        _change(self._st, none, none, none, ids)
         self._rebuild_if_degraded()
+
+    def insert(self, face_ids, positions, faces, near=None):
+        """Add faces with new ids (k,), none live, with corners positions[faces[f]] (the arrays the BVH
+        reads from now on); ``near`` (k,) optional live faces whose leaves take them (the faces they
+        are pieces of; -1: descend from the root)."""
+        ids = self._ids(face_ids, "face_ids", False)
+        k = len(ids)
+        near = np.full(k, -1, np.int64) if near is None else np.ascontiguousarray(near, dtype=np.int64)
+        given, face_slot = near[near >= 0], self._st[12]
+        if near.shape != (k,) or (given >= len(face_slot)).any() or (face_slot[given] < 0).any():
+            raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
+        geometry = _geometry(ids, positions, faces)
+        self._st = self._st[:10] + geometry + self._st[12:]
+        if k:
+            self._make_room(k, int(ids.max()))
+            _change(self._st, ids, near, np.empty(0, np.int64), np.empty(0, np.int64))
+            self._rebuild_if_degraded()
+
+    def use(self, positions, faces) -> None:
+        """Read the triangles from ``positions`` (n, 3) float64 and ``faces`` (F, 3) int64, C-contiguous,
+        from now on: arrays that hold every live face's triangle as the last ones did (a copy that the
+        caller goes on to edit). Unchecked, like ``edit``."""
+        self._st = self._st[:10] + (positions, faces) + self._st[12:]
 
     def _make_room(self, k: int, top_id: int) -> None:
         """Room for inserting k faces, ids up to ``top_id``: the worst case, per face two nodes and a
         new block of LEAF_MAX slots (arrays grow by doubling)."""
-        st = list(self._st)
-        st[11] = _grown(st[11], top_id + 1, -1)
-        for j, fill in enumerate((np.inf, -np.inf, -1, -1, -1, -1, 0, 0)):
-            st[j] = _grown(st[j], st[12][0] + 2 * k, fill)
-        for j, fill in ((8, -1), (9, -1), (10, 0.0)):
-            st[j] = _grown(st[j], st[12][1] + LEAF_MAX * k, fill)
+        st, (nodes, slots) = list(self._st), self._st[13][:2]
+        st[12] = _grown(st[12], top_id + 1, len(st[12]), -1)
+        for j in range(8):
+            st[j] = _grown(st[j], nodes + 2 * k, nodes)
+        for j in (8, 9):
+            st[j] = _grown(st[j], slots + LEAF_MAX * k, slots)
         self._st = tuple(st)
 
     def _rebuild_if_degraded(self) -> None:
-        if self.degradation > REBUILD_AT or self._st[12][2] > max(self._st[12][3], 1024):
+        if self.degradation > REBUILD_AT or self._st[13][2] > max(self._st[13][3], 1024):
             self.rebuild()
 
-    def edit(self, removed, inserted, corners, near, moved, moved_corners) -> None:
+    def edit(self, removed, inserted, near, moved, positions, faces) -> None:
         """One stroke's changes at once, WITHOUT the checks of ``remove``/``insert``/``update`` (whose
-        cost is a tenth of a stroke on a small mesh): for a caller that owns its face ids (the editing
-        session). inserted (k,) new ids with corners (k, 9) and near (k,) live faces (their leaves take
-        them) go in first, then removed (r,) live faces out, then moved (u,) live faces get
-        moved_corners (u, 9). All int64 / float64, C-contiguous."""
+        cost is a tenth of a stroke on a small mesh): for a caller that owns its face ids and arrays
+        (the editing session). ``positions`` (n, 3) float64 and ``faces`` (F, 3) int64, C-contiguous,
+        hold every face named here and every live one (the BVH reads them from now on); inserted (k,)
+        new ids go in first, each into the leaf of the live face near (k,) (-1: descend), then
+        removed (r,) live faces out, then moved (u,) live faces, whose corners changed, are refitted.
+        Ids int64, C-contiguous."""
+        self._st = self._st[:10] + (positions, faces) + self._st[12:]
         if len(inserted):
             self._make_room(len(inserted), int(inserted.max()))
-        _change(self._st, inserted, corners, near, removed, moved, moved_corners)
+        _change(self._st, inserted, near, removed, moved)
         self._rebuild_if_degraded()
 
     def rebuild(self):
-        """Build afresh from the live triangles, keeping their face ids."""
-        slot_face, tri = self._st[8], self._st[10]
-        live = np.flatnonzero(slot_face[:self._st[12][1]] >= 0)
+        """Build afresh from the live faces, keeping their face ids, reading their triangles from the
+        arrays last given."""
+        st = self._st
+        live = st[8][:st[13][1]]
+        live = live[live >= 0]
         self.rebuilds += 1
         if len(live):           # with no face left, the empty tree answers every query
             self._spare = max(self._spare, len(live) // 16 + 64)
-            self._load(np.ascontiguousarray(tri[live].reshape(-1, 3)),
-                       np.arange(3 * len(live)).reshape(-1, 3), slot_face[live])
+            positions, faces = st[10], st[11]
+            self._st = st = None        # the old tree goes before the new one is built (a lower peak)
+            self._load(positions, faces, live)
 
     def first_hit(self, a, b) -> tuple[int, float]:
         """(face, t) of the first crossing of a -> b, the lowest face id among equal t; (-1, nan)."""

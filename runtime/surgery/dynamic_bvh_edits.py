@@ -1,15 +1,18 @@
 """The edits of ``dynamic_bvh.DynamicBVH`` in compiled code (the design is in dynamic_bvh.py): insert
-beside a face or by least-growth descent, remove by moving a leaf's last triangle into the hole,
-move corners, refit up to the first unchanged box, split a full leaf at its median centroid. ``st``
-is the tuple ``DynamicBVH._st`` (its fields are listed there)."""
+beside a face or by least-growth descent, remove by moving a leaf's last face into the hole, refit
+up to the first unchanged box (after a face's corners moved), split a full leaf at its median
+centroid; and the adoption of a built tree. ``st`` is the tuple ``DynamicBVH._st`` (its fields are
+listed there); the tree reads a face's corners as positions[faces[face]] from its fields 10 and 11.
+"""
 import numpy as np
 
-from .._shared.jit import F1, F2, I1, helper, kernel, record
+from .._shared.jit import F1, F2, I1, I2, helper, i8, kernel, record
+from .bvh_build import N1
 
 #: a leaf that would hold more live faces than this is split
 LEAF_MAX = 8
 #: the numba type of ``DynamicBVH._st`` (for precompile signatures)
-STATE = record(F2, F2, I1, I1, I1, I1, I1, I1, I1, I1, F2, I1, I1, F1)
+STATE = record(F2, F2, N1, N1, N1, N1, N1, N1, N1, N1, F2, I2, N1, I1, F1)
 
 
 @helper
@@ -32,11 +35,36 @@ def _growth(lo, hi, i, b):
     return 2.0 * (ux * uy + uy * uz + uz * ux) - area, area
 
 
+@kernel((N1, N1, N1, N1, F2, F2, N1, i8, i8), cost=0.6)
+def _adopt(left, right, start, count, lo, hi, slot_face, n_nodes, n_ids):
+    """The fields a DynamicBVH adds to the tree of ``bvh_build._build`` (its first ``n_nodes`` rows;
+    ``slot_face`` (s,) the faces of its leaf order, with spare room past them): parent and capacity per
+    node row, leaf per slot (both with the same spare room, unwritten), slot per face id (n_ids, -1
+    where none), and the SAH sum (inner nodes weigh 1, leaves their count)."""
+    parent = np.empty(left.shape[0], np.int32)
+    cap = np.empty(left.shape[0], np.int32)
+    slot_leaf = np.empty(slot_face.shape[0], np.int32)
+    face_slot = np.full(n_ids, -1, np.int32)
+    parent[0] = -1
+    sah = 0.0
+    for node in range(n_nodes):
+        cap[node] = count[node]
+        if left[node] >= 0:
+            parent[left[node]] = parent[right[node]] = node
+            sah += _area(lo, hi, node)
+        else:
+            sah += count[node] * _area(lo, hi, node)
+            for s in range(start[node], start[node] + count[node]):
+                slot_leaf[s] = node
+                face_slot[slot_face[s]] = s
+    return parent, cap, slot_leaf, face_slot, sah
+
+
 @helper
 def _refit(st, node, n):
     """Give leaf ``node`` the live count n, recompute its box and its ancestors' up to the first
     that does not change; keeps the SAH sum (inner nodes weigh 1, leaves their count)."""
-    nlo, nhi, left, right, parent, start, count, _, _, _, tri, _, _, sah = st
+    nlo, nhi, left, right, parent, start, count, _, slot_face, _, positions, faces, _, _, sah = st
     sah[0] += (n - count[node]) * _area(nlo, nhi, node)
     count[node] = n
     box = np.empty((2, 3))
@@ -44,9 +72,12 @@ def _refit(st, node, n):
         if left[node] < 0:
             box[0], box[1] = np.inf, -np.inf
             for s in range(start[node], start[node] + count[node]):
-                for j in range(9):
-                    box[0, j % 3] = min(box[0, j % 3], tri[s, j])
-                    box[1, j % 3] = max(box[1, j % 3], tri[s, j])
+                f = slot_face[s]
+                for c in range(3):
+                    v = faces[f, c]
+                    for k in range(3):
+                        box[0, k] = min(box[0, k], positions[v, k])
+                        box[1, k] = max(box[1, k], positions[v, k])
             if count[node] > 0:
                 box[0] -= sah[1]        # the padding, as bvh._build pads
                 box[1] += sah[1]
@@ -67,49 +98,53 @@ def _refit(st, node, n):
         node = parent[node]
 
 
-@kernel((STATE, I1, F2, I1, I1, I1, F2), cost=8.0)
-def _change(st, inserted, corners, near, removed, moved, moved_corners):
-    """Every edit of the tree, in one kernel: insert ``inserted`` (k,) with corners (k, 9) beside
-    ``near`` (k,), then remove ``removed``, then give ``moved`` new corners."""
-    _insert(st, inserted, corners, near)
-    _edit(st, removed, corners[:0], True)
-    _edit(st, moved, moved_corners, False)
+@kernel((STATE, I1, I1, I1, I1), cost=8.0)
+def _change(st, inserted, near, removed, moved):
+    """Every edit of the tree, in one kernel: insert the faces ``inserted`` (k,) beside ``near`` (k,),
+    then remove ``removed``, then refit ``moved`` (whose corners changed in st's positions and faces)."""
+    _insert(st, inserted, near)
+    _edit(st, removed, True)
+    _edit(st, moved, False)
 
 
 @helper
-def _put(st, s, leaf, face, corners):
-    st[8][s], st[9][s], st[11][face] = face, leaf, s
-    st[10][s, :] = corners
+def _put(st, s, leaf, face):
+    st[8][s], st[9][s], st[12][face] = face, leaf, s
 
 
 @helper
-def _edit(st, faces, corners, remove):
-    """Remove ``faces`` (``remove``) or give them new ``corners``, refitting their leaves."""
-    start, count, slot_face, slot_leaf, tri, face_slot = st[5], st[6], st[8], st[9], st[10], st[11]
+def _edit(st, faces, remove):
+    """Remove ``faces`` (``remove``) or refit their leaves to their corners now."""
+    start, count, slot_face, slot_leaf, face_slot = st[5], st[6], st[8], st[9], st[12]
     for i in range(faces.shape[0]):
         s = face_slot[faces[i]]
         leaf = slot_leaf[s]
-        if not remove:
-            tri[s, :] = corners[i]
-        else:
+        if remove:
             last = start[leaf] + count[leaf] - 1
-            if s != last:    # keep the leaf's live triangles first: its last one fills the hole
-                _put(st, s, leaf, slot_face[last], tri[last].copy())
+            if s != last:    # keep the leaf's live faces first: its last one fills the hole
+                _put(st, s, leaf, slot_face[last])
             slot_face[last] = face_slot[faces[i]] = -1
-            st[12][3] -= 1
+            st[13][3] -= 1
         _refit(st, leaf, count[leaf] - 1 if remove else count[leaf])
 
 
 @helper
-def _insert(st, faces, corners, near):
-    """Insert ``faces`` with ``corners``, each into the leaf of the live face ``near[i]`` (a piece of
-    it: no descent) or, where near[i] is -1, into the leaf the least-growth descent finds."""
-    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
+def _face_box(positions, faces, f, pad, box):
+    """box (2, 3) := the bounding box of face f's corners, padded by ``pad``."""
+    for k in range(3):
+        a, b, c = positions[faces[f, 0], k], positions[faces[f, 1], k], positions[faces[f, 2], k]
+        box[0, k] = min(a, min(b, c)) - pad
+        box[1, k] = max(a, max(b, c)) + pad
+
+
+@helper
+def _insert(st, inserted, near):
+    """Insert the faces ``inserted``, each into the leaf of the live face ``near[i]`` (a piece of it:
+    no descent) or, where near[i] is -1, into the leaf the least-growth descent finds."""
+    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces, face_slot, meta, sah = st
     box = np.empty((2, 3))
-    for i in range(faces.shape[0]):
-        for k in range(3):
-            box[0, k] = min(corners[i, k], min(corners[i, 3 + k], corners[i, 6 + k])) - sah[1]
-            box[1, k] = max(corners[i, k], max(corners[i, 3 + k], corners[i, 6 + k])) + sah[1]
+    for i in range(inserted.shape[0]):
+        _face_box(positions, faces, inserted[i], sah[1], box)
         node = 0 if near[i] < 0 else slot_leaf[face_slot[near[i]]]
         while left[node] >= 0:
             gl, al = _growth(nlo, nhi, left[node], box)
@@ -117,52 +152,53 @@ def _insert(st, faces, corners, near):
             node = left[node] if gl < gr or (gl == gr and al <= ar) else right[node]
         n = count[node]
         if n == LEAF_MAX:
-            _split(st, node, faces[i], corners[i])
+            _split(st, node, inserted[i])
         else:
             if n == cap[node]:
-                # move the full block to the end with twice the room (amortised O(1) per face)
+                # move the full block to the end with twice the room (amortised O(1) per face); the
+                # room past the live faces holds no face (-1: slots past meta[1] are unwritten)
                 room = min(max(2 * cap[node], 2), LEAF_MAX)
                 for j in range(n):
-                    _put(st, meta[1] + j, node, slot_face[start[node] + j], tri[start[node] + j].copy())
+                    _put(st, meta[1] + j, node, slot_face[start[node] + j])
                     slot_face[start[node] + j] = -1
+                slot_face[meta[1] + n:meta[1] + room] = -1
                 meta[2] += cap[node]
                 start[node], cap[node] = meta[1], room
                 meta[1] += room
-            _put(st, start[node] + n, node, faces[i], corners[i])
+            _put(st, start[node] + n, node, inserted[i])
             _refit(st, node, n + 1)
         meta[3] += 1
 
 
 @helper
-def _split(st, leaf, face, corners):
+def _split(st, leaf, face):
     """Split a full leaf plus one new face into two new leaves at the median centroid."""
-    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, tri, face_slot, meta, sah = st
+    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces, face_slot, meta, sah = st
     n, at = count[leaf] + 1, start[leaf]
     ids = np.empty(n, np.int64)
-    cs = np.empty((n, 9))
     for j in range(n - 1):
         ids[j] = slot_face[at + j]
-        for c in range(9):
-            cs[j, c] = tri[at + j, c]
     ids[n - 1] = face
-    for c in range(9):
-        cs[n - 1, c] = corners[c]
-    # the longest axis of the centroids (3 x each), then a stable insertion sort along it (n <= 9):
+    # (3 x) the centroids, the longest axis of them, then a stable insertion sort along it (n <= 9):
     # loops, not numpy calls, which numba compiles in seconds
+    cs = np.empty((n, 3))
+    for j in range(n):
+        p, q, r = faces[ids[j], 0], faces[ids[j], 1], faces[ids[j], 2]
+        for k in range(3):
+            cs[j, k] = (positions[p, k] + positions[q, k]) + positions[r, k]
     axis, widest = 0, -1.0
     for k in range(3):
         lo_k, hi_k = np.inf, -np.inf
         for j in range(n):
-            x = cs[j, k] + cs[j, 3 + k] + cs[j, 6 + k]
-            lo_k, hi_k = min(lo_k, x), max(hi_k, x)
+            lo_k, hi_k = min(lo_k, cs[j, k]), max(hi_k, cs[j, k])
         if hi_k - lo_k > widest:
             axis, widest = k, hi_k - lo_k
     order = np.arange(n)
     for j in range(1, n):
         o = order[j]
-        key = cs[o, axis] + cs[o, 3 + axis] + cs[o, 6 + axis]
+        key = cs[o, axis]
         i = j
-        while i > 0 and cs[order[i - 1], axis] + cs[order[i - 1], 3 + axis] + cs[order[i - 1], 6 + axis] > key:
+        while i > 0 and cs[order[i - 1], axis] > key:
             order[i] = order[i - 1]
             i -= 1
         order[i] = o
@@ -178,6 +214,6 @@ def _split(st, leaf, face, corners):
         left[a + c], right[a + c], parent[a + c] = -1, -1, leaf
         start[a + c], cap[a + c], count[a + c] = at, room, 0
         for j in range(lo_i, hi_i):
-            _put(st, at + j - lo_i, a + c, ids[order[j]], cs[order[j]])
+            _put(st, at + j - lo_i, a + c, ids[order[j]])
         slot_face[at + hi_i - lo_i:at + room] = -1
         _refit(st, a + c, hi_i - lo_i)

@@ -87,7 +87,8 @@ class Surgery:
     # ---- state ----------------------------------------------------------------------------------
     def _reset(self, rig) -> None:
         source = RigSource(rig, self._pose, None)                 # checks the rig (and the pose)
-        # the BVH first: its build's temporaries are gone before the arrays are copied (a lower peak)
+        # the BVH first, over the rig's arrays: its build's temporaries are gone before the arrays are
+        # copied (a lower peak); it reads the session's copies from the end of this on
         self._bvh = DynamicBVH(source.positions, source.faces)
         release_free_memory()
         self._template = rig
@@ -103,6 +104,7 @@ class Surgery:
         self._boundary_list = np.flatnonzero(source.boundary)     # (b,) the flagged vertices, kept sorted
         self._set_bounds(np.stack([source.positions.min(axis=0), source.positions.max(axis=0)]))
         self._snapshot = None
+        self._bvh.use(self.positions, self.faces)
         release_free_memory()          # the builds' temporaries (half a millisecond)
 
     def _state(self) -> tuple:
@@ -245,8 +247,8 @@ class Surgery:
         # vertices they copy are)
         moved_faces = splice.kept[np.isin(splice.kept_corners, moved).any(axis=1)] if len(moved) else moved
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
-        self._bvh.edit(splice.removed, np.arange(m, self._faces.n), self._corners(splice.pieces), splice.parents,
-                       moved_faces, self._corners(self.faces[moved_faces]))
+        self._bvh.edit(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
+                       self.faces)
         self._grow_bounds(np.concatenate((moved, np.arange(n, self.n_vertices))), old_positions)
         return _Undo(n, m, rows, old_rows, moved, old_positions, splice.removed, splice.kept, old_kept, moved_faces,
                      splice.boundary_rows, old_flags, scalars)
@@ -285,13 +287,10 @@ class Surgery:
             positions.view[record.moved] = record.old_positions
         self.top_label, self._labelled, bounds, self._boundary_list = record.scalars
         self._set_bounds(bounds)
-        self._bvh.edit(np.arange(record.m, m), record.removed, self._corners(self.faces[record.removed]),
-                       np.full(len(record.removed), -1), record.moved_faces,
-                       self._corners(self.faces[record.moved_faces]))
-
-    def _corners(self, faces) -> np.ndarray:
-        """(k, 9) the surface corners of ``faces`` (k, 3) vertex ids, as the BVH takes them."""
-        return self.positions[faces].reshape(len(faces), 9)
+        # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
+        # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
+        self._bvh.edit(np.arange(record.m, m), record.removed, np.full(len(record.removed), -1), record.moved_faces,
+                       self._arrays["positions" if self.affines is not None else "vertices"].data, self._faces.data)
 
 
 @kernel((F2, I1, F2), cost=0.1)

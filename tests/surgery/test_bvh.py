@@ -81,3 +81,21 @@ def test_bvh_checks():
     with pytest.raises(InvalidInputError):
         bvh.first_hit([0, 0, 0], [0, 0, 0])
     np.testing.assert_array_equal(bvh.triangle(7), rig.vertices[rig.faces[7]])
+
+
+def test_bvh_reads_its_own_copies_of_the_mesh():
+    """The BVH holds positions and faces (float64, int64 copies) and int32 tree indices, no corner copy:
+    changing the caller's arrays afterwards changes none of its answers."""
+    rig = get_rig("capsule")
+    points, faces = np.array(rig.vertices), np.array(rig.faces, np.int32)
+    bvh = TriangleBVH(points, faces)
+    a, b = np.array([1.0, -1.0, 0.05]), np.array([1.2, 1.0, -0.05])
+    face, t = bvh.first_hit(a, b)
+    assert face >= 0
+    points += 5.0
+    faces[:] = faces[::-1]
+    assert bvh.first_hit(a, b) == (face, t)
+    np.testing.assert_array_equal(bvh.triangle(face), rig.vertices[rig.faces[face]])
+    arrays = bvh._arrays
+    assert arrays.positions.dtype == np.float64 and arrays.faces.dtype == np.int64
+    assert all(x.dtype == np.int32 for x in arrays[2:7]) and len(arrays.order) == len(faces)

@@ -58,8 +58,8 @@ class _Positions:
 
     @property
     def bvh(self) -> TriangleBVH:
-        if self._bvh is None:
-            self._bvh = TriangleBVH(self.positions, self._faces)
+        if self._bvh is None:       # (checked arrays, kept while the rig lives: the BVH need not copy them)
+            self._bvh = TriangleBVH.of_checked(self.positions, self._faces)
         return self._bvh
 
 
