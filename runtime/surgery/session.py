@@ -26,12 +26,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.cache import seed
-from .._shared.jit import B1, F2, I1, kernel
+from .._shared.jit import F2, I1, kernel
 from .._shared.memory import release_free_memory
 from ..animation.skinning import skin_affine
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
-from .bvh import _faces_near_plane, _first_hit
+
 from .dynamic_bvh import DynamicBVH
 from .rows import Rows
 from .surface import TEAR_LABEL
@@ -101,7 +101,6 @@ class Surgery:
         self._faces, self._alive = Rows(source.faces), Rows(np.ones(len(source.faces), bool))
         self.affines, self.top_label = source.affines, source.top_label
         self._labelled = TEAR_LABEL in rig.attributes
-        self._boundary_list = np.flatnonzero(source.boundary)     # (b,) the flagged vertices, kept sorted
         self._set_bounds(np.stack([source.positions.min(axis=0), source.positions.max(axis=0)]))
         self._snapshot = None
         self._bvh.use(self.positions, self.faces)
@@ -109,7 +108,7 @@ class Surgery:
 
     def _state(self) -> tuple:
         return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
-                self.affines, self.top_label, self._labelled, self._bounds, self._boundary_list)
+                self.affines, self.top_label, self._labelled, self._bounds)
 
     # ---- the source interface of tear/splice.py -------------------------------------------------------
     vertices = property(lambda self: self._arrays["vertices"].view)
@@ -132,16 +131,13 @@ class Surgery:
         self._bounds = box
         self.diagonal = float(np.linalg.norm(box[1] - box[0]))
 
-    def boundary_vertices(self) -> np.ndarray:
-        return self._boundary_list
+    @property
+    def bvh_arrays(self) -> tuple:
+        return self._bvh.arrays
 
-    # (the BVH's compiled queries directly: the splice passes checked (3,) float64 points)
-    def first_hit(self, a, b):
-        face, t = _first_hit(self._bvh.arrays, a, b)
-        return int(face), float(t)
+    def check_hits(self, faces) -> None:
+        """(the session's BVH is its own)"""
 
-    def near_plane(self, lo, hi, normal, offset, delta) -> np.ndarray:
-        return np.sort(_faces_near_plane(self._bvh.arrays, lo, hi, normal, float(offset), float(delta)))
 
     # ---- operations -------------------------------------------------------------------------------
     def tear(self, scalpel_from, scalpel_to, opening: float = 0.0) -> StrokeResult:
@@ -172,7 +168,7 @@ class Surgery:
             self._revert(record)
         else:
             (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
-             self.affines, self.top_label, self._labelled, bounds, self._boundary_list) = record
+             self.affines, self.top_label, self._labelled, bounds) = record
             self._set_bounds(bounds)
         self._snapshot = None
 
@@ -234,8 +230,7 @@ class Surgery:
         flags.append(np.zeros(self.n_vertices - n, bool))
         old_flags = flags.view[splice.boundary_rows].copy()
         flags.view[splice.boundary_rows] = splice.boundary_flags
-        scalars = (self.top_label, self._labelled, self._bounds.copy(), self._boundary_list)
-        self._boundary_list = _merged(self._boundary_list, splice.boundary_rows, splice.boundary_flags)
+        scalars = (self.top_label, self._labelled, self._bounds.copy())
         self.top_label = max(self.top_label, int(splice.labels.max(initial=0)))
         # faces: tombstones, the far side's new corners, the pieces appended
         old_kept = self.faces[splice.kept].copy()
@@ -285,7 +280,7 @@ class Surgery:
             positions = self._arrays["positions"]
             positions.truncate(record.n)
             positions.view[record.moved] = record.old_positions
-        self.top_label, self._labelled, bounds, self._boundary_list = record.scalars
+        self.top_label, self._labelled, bounds = record.scalars
         self._set_bounds(bounds)
         # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
         # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
@@ -306,27 +301,6 @@ def _grown_box(positions, rows, box):
             if x > box[1, k]:
                 box[1, k], changed = x, True
     return changed
-
-
-@kernel((I1, I1, B1), cost=0.2)
-def _merged(listed, rows, flags):
-    """The sorted list ``listed`` (b,) with the sorted distinct ``rows`` (r,) in it where ``flags``
-    (r,) and out of it where not: one merge, O(b + r)."""
-    out = np.empty(listed.shape[0] + rows.shape[0], np.int64)
-    i, j, k = 0, 0, 0
-    while i < listed.shape[0] or j < rows.shape[0]:
-        if j == rows.shape[0] or (i < listed.shape[0] and listed[i] < rows[j]):
-            out[k] = listed[i]
-            i += 1
-            k += 1
-            continue
-        if i < listed.shape[0] and listed[i] == rows[j]:
-            i += 1                                  # rows[j] is decided by its flag, below
-        if flags[j]:
-            out[k] = rows[j]
-            k += 1
-        j += 1
-    return out[:k].copy()
 
 
 def _joined(positive, negative):

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..._shared.jit import B1, F2, I1, I2, kernel
 from ...tolerances import tol
-from ..bvh import TriangleBVH
+from ..bvh import TriangleBVH, _faces_near_plane
 from ..surface import WeldedMesh, _Surface
 from ..topology import Topology, _corner_pairs, _unique_pairs, incidence
 from ..weld import _weld_positions
@@ -183,4 +183,4 @@ def select(source, plane, lo, hi) -> np.ndarray:
         # the coordinates: a model far from the origin)
         scale = source.diagonal + float(np.abs(np.concatenate((lo, hi))).max())
         (normal, offset), delta = plane_offset(plane), 2.0 * snap + 16.0 * np.finfo(float).eps * scale
-    return source.near_plane(lo, hi, normal, offset, delta)
+    return np.sort(_faces_near_plane(source.bvh_arrays, lo, hi, normal, float(offset), float(delta)))

@@ -14,7 +14,7 @@ import numpy as np
 from ..._shared.cache import rig_cached, seed
 from ...animation.skinning import check_pose, skin
 from ...errors import InvalidInputError
-from ..bvh import TriangleBVH, _faces_near_plane, _first_hit
+from ..bvh import TriangleBVH
 from ..surface import TEAR_LABEL, _labels, mesh_arrays
 from ..topology import boundary_flags
 
@@ -88,27 +88,26 @@ class RigSource:
         self.top_label = rig_cached(rig, "tear.top_label", _top_label)
         surface = _posed(rig, pose)
         self.positions, self.diagonal, self.affines = surface.positions, surface.diagonal, surface.affines
-        if bvh is not None and (not isinstance(bvh, TriangleBVH) or bvh.n_faces != len(self.faces)):
-            raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {len(self.faces)} faces")
+        if bvh is not None and (not isinstance(bvh, TriangleBVH) or bvh.n_faces != len(self.faces)
+                                or bvh._arrays.positions.shape != self.positions.shape):
+            raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {len(self.positions)} vertices "
+                                    f"and {len(self.faces)} faces")
         self._surface, self._user_bvh, self._rig = surface, bvh, rig
 
     @property
     def _bvh(self) -> TriangleBVH:
         return self._surface.bvh if self._user_bvh is None else self._user_bvh
 
-    def boundary_vertices(self) -> np.ndarray:
-        return rig_cached(self._rig, "tear.boundary_list", lambda _rig: np.flatnonzero(self.boundary))
+    @property
+    def bvh_arrays(self) -> tuple:
+        return tuple(self._bvh._arrays)
 
-    def first_hit(self, a, b):
-        face, t = _first_hit(tuple(self._bvh._arrays), a, b)
-        if self._user_bvh is not None and face >= 0 and not np.array_equal(self._bvh.triangle(face),
-                                                               self.positions[self.faces[face]]):
+    def check_hits(self, faces) -> None:
+        """A user's BVH must hold the surface being torn: checked on the faces a stroke hit."""
+        if self._user_bvh is not None and any(not np.array_equal(self._bvh.triangle(face), self.positions[self.faces[face]])
+                                              for face in faces.tolist()):
             raise InvalidInputError("bvh was built from other positions than the surface being torn "
                                     "(the stored vertices, or the skinned positions in the given pose)")
-        return int(face), float(t)
-
-    def near_plane(self, lo, hi, normal, offset, delta) -> np.ndarray:
-        return np.sort(_faces_near_plane(tuple(self._bvh._arrays), lo, hi, normal, float(offset), float(delta)))
 
 
 def torn_rig(rig, source: RigSource, splice):

@@ -10,15 +10,14 @@ session writes the rows into its arrays). A source is any object with:
     attributes: dict name -> ((n, c) float64 rows, trailing shape), the tear label excluded
     faces (m, 3) int64         rows that queries do not return may hold anything (removed faces)
     boundary (n,) bool         whether each vertex lies on a boundary edge of the label-aware weld
-    boundary_vertices() -> (b,) int64, the flagged vertices
     top_label int ; diagonal float ; affines (B, 12) float64 or None (rest)
-    first_hit(a, b) -> (face, t) ; near_plane(lo, hi, normal, offset, delta) -> increasing face ids
+    bvh_arrays                 ``bvh.BVHArrays`` (as a tuple) of a BVH over positions and faces
+    check_hits(faces)          raises when the BVH does not hold these faces' triangles (a user's BVH)
 
 The stroke itself is the module docstring of ``stroke.py``, run on the stroke's patch (``patch.py``).
 """
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -26,11 +25,11 @@ import numpy as np
 from ..._shared.jit import F1, F2, I1, I2, f8, helper, i8, kernel, record
 from ..._shared.warn import warn
 from ...errors import MissesMeshError, PlacementWarning
-from ...generated.kernels import plane_from_points
 from ...tolerances import tol
 from ..new_vertices import attribute_rule, interpolate_in_place
 from ..weld import _boundary_of
-from .locate import _boundary_hit, locate
+from .guess import FOUND, FROM_MISSES, _guess
+from .locate import locate
 from .region import _margin as _margin_helper
 from .patch import patch_surface, region_box, select
 from .records import JUMP_CARRIER, VERTEX, Pieces, Slit, TornFaces
@@ -75,45 +74,17 @@ class Splice(NamedTuple):
     stroke: dict
 
 
-@kernel((F1, F1, f8, I1, F2, f8), cost=0.3)
-def _first_boundary(a, b, t_max, boundary, positions, snap):
-    """``locate._boundary_hit`` over the source's boundary vertices: (vertex, t) or (-1, t_max)."""
-    return _boundary_hit(a, b, t_max, boundary, positions, snap)
-
-
-def _guess(source, blades, snap):
-    """Where the blade meets the skin at both times, on the whole surface (snapped to a boundary
-    vertex or a corner of the hit face as ``locate`` snaps), the plane through the first point and
-    the blade at t_(i+1) (None when they are aligned: the patch then takes every face in the box,
-    and the plane ``locate`` chooses selects it again), and the margin of ``region.py`` with the hit
-    faces' edges, widened (``locate`` may snap the points a little further). Raises MissesMeshError
-    as ``locate`` does. (Plain Python: a kernel saves 0.05 ms a stroke and costs 3 s of compiling.)"""
-    # (3-vectors as Python floats: numpy's per-call cost would double the guess)
-    points, longest = [], 0.0
-    boundary = source.boundary_vertices()
-    for i, name in enumerate(("scalpel_from", "scalpel_to")):
-        a, b = blades[2 * i], blades[2 * i + 1]
-        face, t = source.first_hit(a, b)
-        w, _ = _first_boundary(a, b, t if face >= 0 else 1.0, boundary, source.positions, snap)
-        if w >= 0:
-            points.append(source.positions[w].tolist())
-            continue
-        if face < 0:
-            raise MissesMeshError(f"the scalpel {name} (handle {a.tolist()} -> tip {b.tolist()}) does not "
-                                  f"meet the surface")
-        hit = [p + t * (q - p) for p, q in zip(a.tolist(), b.tolist())]
-        corners = source.positions[source.faces[face]].tolist()
-        nearest = min(corners, key=lambda c: math.dist(c, hit))
-        points.append(nearest if math.dist(nearest, hit) <= snap else hit)
-        longest = max(longest, *(math.dist(corners[k], corners[k - 1]) for k in range(3)))
-    s0 = points[0]
-    u, v = ([x - y for x, y in zip(blades[j].tolist(), s0)] for j in (2, 3))
-    lu, lv = math.hypot(*u), math.hypot(*v)
-    normal = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
-    plane = None
-    if lu > snap and lv > snap and math.hypot(*normal) > tol.min_sine * lu * lv:
-        plane = np.asarray(plane_from_points(np.array(s0), blades[2], blades[3]))
-    return plane, 1.25 * (math.dist(points[0], points[1]) + longest) + 4.0 * snap
+def _first_guess(source, blades, snap):
+    """``guess._guess`` on the source: its plane (None when the points and the blade are aligned: the
+    patch then takes every face in the box, and the plane ``locate`` chooses selects it again) and
+    margin. Raises MissesMeshError as ``locate`` does."""
+    status, plane, margin, hit_faces = _guess(source.bvh_arrays, source.boundary, blades, snap, tol.min_sine)
+    source.check_hits(hit_faces[hit_faces >= 0])
+    if status != FOUND:
+        name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
+        raise MissesMeshError(f"the scalpel {name} (handle {blades[i].tolist()} -> tip {blades[i + 1].tolist()}) "
+                              f"does not meet the surface")
+    return (plane if plane.any() else None), margin
 
 
 @kernel((F2, I2, I1, F1, F1), cost=0.1)
@@ -132,7 +103,7 @@ def _patch_and_ends(source, blades, check_ends):
     """The stroke's patch and its located ends: the patch of the guessed plane and margin, again with
     the plane and margin ``locate`` found on it until they agree (once, unless the guess was off)."""
     snap = tol.snap * source.diagonal
-    plane, margin = _guess(source, blades, snap)
+    plane, margin = _first_guess(source, blades, snap)
     for _ in range(4):
         patch = patch_surface(source, select(source, plane, *region_box(blades, margin, snap)))
         ends = locate(patch.surface, patch.surface.faces, *blades)

@@ -1,0 +1,116 @@
+"""A stroke's first guess of its tear plane and margin, on the whole surface (``splice.py`` picks the
+stroke's patch with it; ``locate`` on the patch then confirms it or corrects it)."""
+import math
+
+import numpy as np
+
+from ..._shared.jit import B1, F2, I2, f8, helper, kernel
+from ...generated.kernels import plane_from_points
+from ..bvh import BVH_ARRAYS, _first_hit
+
+#: what ``_guess`` found: both points, or which scalpel position missed the surface
+FOUND, FROM_MISSES, TO_MISSES = 0, 1, 2
+
+
+@helper
+def _near_box(lo, hi, a, d, t_max, reach):
+    """Whether a + t d, t in [0, t_max], comes within ``reach`` of the box [lo, hi] in every axis."""
+    t0, t1 = 0.0, t_max
+    for k in range(3):
+        low, high = lo[k] - reach, hi[k] + reach
+        if d[k] == 0.0:
+            if a[k] < low or a[k] > high:
+                return False
+            continue
+        u, v = (low - a[k]) / d[k], (high - a[k]) / d[k]
+        t0, t1 = max(t0, min(u, v)), min(t1, max(u, v))
+        if t0 > t1:
+            return False
+    return True
+
+
+@helper
+def _boundary_near(bvh, boundary, a, b, t_max, snap):
+    """``locate._boundary_hit`` through the BVH: the flagged (``boundary`` (n,) bool) vertex within
+    ``snap`` of segment a -> b with the smallest parameter t < t_max (then the lowest vertex id), as
+    (vertex, t), or (-1, t_max). Only the leaves whose box the segment passes within ``snap`` of are
+    read: a boundary vertex is a corner of a face in such a leaf, so a stroke costs what the blade
+    passes, not the length of every slit made so far."""
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, positions, faces = bvh
+    d = b - a
+    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    best, best_t = -1, t_max
+    stack = np.empty(128, np.int64)
+    top = 0
+    stack[0] = 0
+    while top >= 0:
+        node = stack[top]
+        top -= 1
+        if not _near_box(node_lo[node], node_hi[node], a, d, t_max, snap):
+            continue
+        if node_left[node] >= 0:
+            if top + 3 > stack.shape[0]:
+                stack = np.concatenate((stack, np.empty_like(stack)))
+            stack[top + 1], stack[top + 2] = node_right[node], node_left[node]
+            top += 2
+            continue
+        for i in range(node_start[node], node_start[node] + node_count[node]):
+            for c in range(3):
+                w = faces[order[i], c]
+                if not boundary[w]:
+                    continue
+                p = positions[w]
+                t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
+                if (t < best_t or (best >= 0 and t == best_t and w < best)) and math.sqrt(
+                        (a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2
+                        + (a[2] + t * d[2] - p[2]) ** 2) <= snap:
+                    best, best_t = w, t
+    return best, best_t
+
+
+@helper
+def _distance(p, q):
+    return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
+
+
+@kernel((BVH_ARRAYS, B1, F2, f8, f8), cost=1.5)
+def _guess(bvh, boundary, blades, snap, min_sine):
+    """Where the blade meets the skin at both times, on the whole surface (snapped to a boundary
+    vertex or a corner of the hit face as ``locate`` snaps), the plane through the first point and
+    the blade at t_(i+1), and the margin of ``region.py`` with the hit faces' edges, widened
+    (``locate`` may snap the points a little further).
+
+    bvh : BVHArrays (as a tuple) of the whole surface ; boundary : (n,) bool the boundary flags of
+    its vertices ; blades : (4, 3) handle and tip at t_i, then at t_(i+1) ; snap : absolute distance
+    returns status (FOUND, or which position missed), plane (4,) (zeros when the points and the blade
+    are aligned: no plane), margin, hit faces (2,) (-1 where a boundary vertex was met instead)
+    """
+    positions, faces = bvh[7], bvh[8]
+    points = np.empty((2, 3))
+    hit_faces = np.full(2, -1, np.int64)
+    longest = 0.0
+    for i in range(2):
+        a, b = blades[2 * i], blades[2 * i + 1]
+        face, t = _first_hit(bvh, a, b)
+        w, _ = _boundary_near(bvh, boundary, a, b, t if face >= 0 else 1.0, snap)
+        if w >= 0:
+            points[i] = positions[w]
+            continue
+        if face < 0:
+            return FROM_MISSES + i, np.zeros(4), 0.0, hit_faces
+        hit_faces[i] = face
+        hit = a + t * (b - a)
+        nearest, nearest_distance = -1, np.inf
+        for c in range(3):
+            distance = _distance(positions[faces[face, c]], hit)
+            if distance < nearest_distance:
+                nearest, nearest_distance = c, distance
+            longest = max(longest, _distance(positions[faces[face, c]], positions[faces[face, c - 1]]))
+        points[i] = positions[faces[face, nearest]] if nearest_distance <= snap else hit
+    u, v = blades[2] - points[0], blades[3] - points[0]
+    lu, lv = math.sqrt(u @ u), math.sqrt(v @ v)
+    normal = np.array([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+    plane = np.zeros(4)
+    if lu > snap and lv > snap and math.sqrt(normal @ normal) > min_sine * lu * lv:
+        plane[0], plane[1], plane[2], plane[3] = plane_from_points(points[0], blades[2], blades[3])
+    return FOUND, plane, 1.25 * (_distance(points[0], points[1]) + longest) + 4.0 * snap, hit_faces
