@@ -193,6 +193,10 @@ def test_user_bvh_is_used_and_checked():
     stale = TriangleBVH(rig.vertices + [0.0, 0.01, 0.0], rig.faces)
     with pytest.raises(InvalidInputError, match="bvh"):
         tear(rig, *capsule_blades(1.0, 1.5), bvh=stale)
+    # as many faces, over more vertices: refused before any kernel reads a vertex the rig lacks
+    padded = np.concatenate((rig.vertices, rig.vertices[:7] + 5.0))
+    with pytest.raises(InvalidInputError, match="vertices"):
+        tear(rig, *capsule_blades(1.0, 1.5), bvh=TriangleBVH(padded, rig.faces))
 
 
 def test_points_in_a_face_of_zero_area_get_finite_coordinates():
