@@ -50,9 +50,11 @@ REBUILD_AT = 3.0
 
 def _cost(st) -> float:
     """The SAH cost: the SAH sum over the root's area (0 for an empty tree)."""
-    d = st[1][0] - st[0][0]
-    area = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]) if d[0] >= 0.0 else 0.0
-    return float(st[14][0] / area) if area > 0.0 else 0.0
+    # (Python floats: numpy's scalar arithmetic cost a tenth of a small stroke's edits)
+    (x0, y0, z0), (x1, y1, z1) = st[0][0].tolist(), st[1][0].tolist()
+    dx, dy, dz = x1 - x0, y1 - y0, z1 - z0
+    area = 2.0 * (dx * dy + dy * dz + dz * dx) if dx >= 0.0 else 0.0
+    return float(st[14][0]) / area if area > 0.0 else 0.0
 
 
 # ---- queries: kernels that Python and other kernels call with ``DynamicBVH.arrays`` --------------
@@ -221,7 +223,10 @@ class DynamicBVH:
     def _make_room(self, k: int, top_id: int) -> None:
         """Room for inserting k faces, ids up to ``top_id``: the worst case, per face two nodes and a
         new block of LEAF_MAX slots (arrays grow by doubling)."""
-        st, (nodes, slots) = list(self._st), self._st[13][:2]
+        nodes, slots = self._st[13][:2].tolist()
+        if top_id < len(self._st[12]) and nodes + 2 * k <= len(self._st[0]) and slots + LEAF_MAX * k <= len(self._st[8]):
+            return                                     # (the usual case: room to spare)
+        st = list(self._st)
         st[12] = _grown(st[12], top_id + 1, len(st[12]), -1)
         for j in range(8):
             st[j] = _grown(st[j], nodes + 2 * k, nodes)
@@ -230,7 +235,8 @@ class DynamicBVH:
         self._st = tuple(st)
 
     def _rebuild_if_degraded(self) -> None:
-        if self.degradation > REBUILD_AT or self._st[13][2] > max(self._st[13][3], 1024):
+        dead, live = self._st[13][2:4].tolist()
+        if self.degradation > REBUILD_AT or dead > max(live, 1024):
             self.rebuild()
 
     def edit(self, removed, inserted, near, moved, positions, faces) -> None:
