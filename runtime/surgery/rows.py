@@ -21,12 +21,17 @@ class Rows:
 
     def append(self, values) -> None:
         count = len(values)
+        self.reserve(count)[self.n:self.n + count] = values
+        self.n += count
+
+    def reserve(self, count: int) -> np.ndarray:
+        """Room for ``count`` more rows (the capacity doubles when short); returns ``data``, for a
+        kernel to write rows n .. n + count - 1 before the caller adds ``count`` to ``n``."""
         if self.n + count > len(self.data):
             grown = np.empty((max(2 * len(self.data), self.n + count),) + self.data.shape[1:], self.data.dtype)
             grown[:self.n] = self.data[:self.n]
             self.data = grown
-        self.data[self.n:self.n + count] = values
-        self.n += count
+        return self.data
 
     def truncate(self, n: int) -> None:
         """Forget the rows from ``n`` on (undo of an append)."""

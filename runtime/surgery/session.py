@@ -34,6 +34,7 @@ from .cut import cut as cut_rig
 
 from .dynamic_bvh import DynamicBVH
 from .rows import Rows
+from .session_write import _write_splice
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
 from .tear.splice import stroke_splice
@@ -207,46 +208,39 @@ class Surgery:
 
     # ---- a stroke's rows in, and out again ------------------------------------------------------------
     def _apply(self, splice) -> _Undo:
-        rows, changed, p = splice.rows[splice.changed], splice.changed, len(splice.rows)
-        n, m = self.n_vertices, self._faces.n
+        rows, p = splice.rows[splice.changed], len(splice.rows)
+        n, m, added = self.n_vertices, self._faces.n, len(splice.vertices) - len(splice.rows)
+        buffers = {name: self._arrays[name].reserve(added) for name in ("vertices", "labels", "joints", "weights",
+                                                                        "boundary")}
         # a stroke changes the labels (the far side) and positions (an opening) of a few of its patch's
         # rows; their weights and attributes stay: those are only appended
-        old_rows = {name: self._arrays[name].view[rows].copy() for name in ("vertices", "labels")}
-        moved = rows[(splice.vertices[changed] != old_rows["vertices"]).any(axis=1)]
-        old_positions = self.positions[moved].copy()
-        for name, values in (("vertices", splice.vertices), ("labels", splice.labels)):
-            self._arrays[name].view[rows] = values[changed]
-        for name, values in (("vertices", splice.vertices), ("joints", splice.joints),
-                             ("weights", splice.weights), ("labels", splice.labels)):
-            self._arrays[name].append(values[p:])
+        old_vertices, old_labels, moved, is_moved, old_flags, old_kept, moved_faces, top = _write_splice(
+            buffers["vertices"], buffers["labels"], buffers["joints"], buffers["weights"], buffers["boundary"],
+            self._faces.reserve(len(splice.pieces)), self._alive.reserve(len(splice.pieces)), n, m, rows,
+            splice.changed, p, splice.vertices, splice.labels, splice.joints, splice.weights, splice.boundary_rows,
+            splice.boundary_flags, splice.removed, splice.kept, splice.kept_corners, splice.pieces)
+        for name in buffers:
+            self._arrays[name].n += added
+        self._faces.n += len(splice.pieces)
+        self._alive.n += len(splice.pieces)
         for name, (buffer, _) in self._attributes.items():
             buffer.append(splice.attributes[name][p:])
-        if self.affines is not None:                 # the posed surface of the new and moved rows
+        scalars = (self.top_label, self._labelled, self._bounds.copy())
+        self.top_label = max(self.top_label, top)
+        if self.affines is None:
+            old_positions = old_vertices[is_moved]
+        else:                                        # the posed surface of the new and moved rows
+            old_positions = self._arrays["positions"].view[moved].copy()
             new = np.concatenate((moved, np.arange(n, self.n_vertices)))
             skinned = skin_affine(self.vertices[new], self.joints[new], self.weights[new], self.affines)
             self._arrays["positions"].append(skinned[len(moved):])
             self._arrays["positions"].view[moved] = skinned[:len(moved)]
-        flags = self._arrays["boundary"]
-        flags.append(np.zeros(self.n_vertices - n, bool))
-        old_flags = flags.view[splice.boundary_rows].copy()
-        flags.view[splice.boundary_rows] = splice.boundary_flags
-        scalars = (self.top_label, self._labelled, self._bounds.copy())
-        self.top_label = max(self.top_label, int(splice.labels.max(initial=0)))
-        # faces: tombstones, the far side's new corners, the pieces appended
-        old_kept = self.faces[splice.kept].copy()
-        self._alive.view[splice.removed] = False
-        self._faces.view[splice.kept] = splice.kept_corners
-        self._faces.append(splice.pieces)
-        self._alive.append(np.ones(len(splice.pieces), bool))
-        # the faces whose corners moved (an opening moves vertices; the far side's twins sit where the
-        # vertices they copy are)
-        moved_faces = splice.kept[np.isin(splice.kept_corners, moved).any(axis=1)] if len(moved) else moved
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
         self._bvh.edit(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
                        self.faces)
         self._grow_bounds(np.concatenate((moved, np.arange(n, self.n_vertices))), old_positions)
-        return _Undo(n, m, rows, old_rows, moved, old_positions, splice.removed, splice.kept, old_kept, moved_faces,
-                     splice.boundary_rows, old_flags, scalars)
+        return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, old_positions,
+                     splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
 
     def _grow_bounds(self, rows, old) -> None:
         """The bounding box of the surface after ``rows`` moved (from ``old`` positions) or appeared:
