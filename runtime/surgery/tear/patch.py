@@ -21,14 +21,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import B1, F2, I1, I2, kernel
+from ..._shared.jit import B1, F1, F2, I1, I2, b1, f8, kernel
 from ...tolerances import tol
-from ..bvh import TriangleBVH, _faces_near_plane
+from ..bvh import BVH_ARRAYS, TriangleBVH, _faces_near_plane
 from ..surface import WeldedMesh, _Surface
 from ..topology import Topology, _corner_pairs, _unique_pairs, incidence
 from ..weld import _weld_positions
 
 
+_EPS = float(np.finfo(np.float64).eps)
 #: patches of at most this many faces get a BVH of one leaf (a stroke queries it a few times)
 ONE_LEAF = 4096
 
@@ -47,18 +48,6 @@ class Patch(NamedTuple):
     surface: _Surface
     vertices: np.ndarray
     labels: np.ndarray
-
-
-def plane_offset(plane) -> tuple[np.ndarray, float]:
-    """(normal (3,), offset) of a dual plane n̂ + d e∞: its signed distance is normal·x - offset."""
-    return np.ascontiguousarray(plane[:3]), float(plane[3])
-
-
-def region_box(blades, margin: float, snap: float) -> tuple[np.ndarray, np.ndarray]:
-    """The bounding box of the blade at both times ((4, 3) handle, tip, handle, tip) widened by
-    ``margin`` and a few snap distances (the region's test rounds; a face that touches the box is kept)."""
-    pad = margin + 4.0 * snap
-    return blades.min(axis=0) - pad, blades.max(axis=0) + pad
 
 
 @kernel((I2, I1), cost=0.3)
@@ -172,15 +161,30 @@ def patch_surface(source, face_ids) -> Patch:
     return Patch(np.asarray(face_ids, np.int64), rows, surface, vertices, labels)
 
 
-def select(source, plane, lo, hi) -> np.ndarray:
+def select(source, plane, blades, margin: float) -> np.ndarray:
     """Increasing ids of the faces of ``source`` within 2 snap distances of ``plane`` (any plane when
-    None) that touch the box [lo, hi]."""
-    snap = tol.snap * source.diagonal
-    if plane is None:
-        normal, offset, delta = np.zeros(3), 0.0, np.inf
-    else:
-        # (the rounding of normal·x - offset, which the classification computes otherwise, grows with
-        # the coordinates: a model far from the origin)
-        scale = source.diagonal + float(np.abs(np.concatenate((lo, hi))).max())
-        (normal, offset), delta = plane_offset(plane), 2.0 * snap + 16.0 * np.finfo(float).eps * scale
-    return np.sort(_faces_near_plane(source.bvh_arrays, lo, hi, normal, float(offset), float(delta)))
+    None) that touch the bounding box of the blade at both times ((4, 3) handle, tip, handle, tip)
+    widened by ``margin`` and a few snap distances (the region's test rounds; a face that touches the
+    box is kept)."""
+    has_plane = plane is not None
+    return np.sort(_faces_in_region(source.bvh_arrays, blades, margin, plane if has_plane else np.zeros(4),
+                                    has_plane, tol.snap * source.diagonal, source.diagonal))
+
+
+@kernel((BVH_ARRAYS, F2, f8, F1, b1, f8, f8), cost=0.4)
+def _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal):
+    """``select``'s faces, unsorted (numba's sort compiles for seconds)."""
+    pad = margin + 4.0 * snap
+    lo, hi = np.empty(3), np.empty(3)
+    scale = diagonal
+    for k in range(3):
+        lo[k] = min(min(blades[0, k], blades[1, k]), min(blades[2, k], blades[3, k])) - pad
+        hi[k] = max(max(blades[0, k], blades[1, k]), max(blades[2, k], blades[3, k])) + pad
+        scale = max(scale, diagonal + max(abs(lo[k]), abs(hi[k])))
+    if not has_plane:
+        return _faces_near_plane(bvh, lo, hi, np.zeros(3), 0.0, np.inf)
+    # (the rounding of normal·x - offset, which the classification computes otherwise, grows with the
+    # coordinates: a model far from the origin; the plane is a dual plane n̂ + d e∞: its signed
+    # distance is n̂·x - d)
+    return _faces_near_plane(bvh, lo, hi, plane[:3].copy(), plane[3],
+                             2.0 * snap + 16.0 * _EPS * scale)

@@ -31,7 +31,7 @@ from ..weld import _boundary_of
 from .guess import FOUND, FROM_MISSES, _guess
 from .locate import locate
 from .region import _margin as _margin_helper
-from .patch import patch_surface, region_box, select
+from .patch import patch_surface, select
 from .records import JUMP_CARRIER, VERTEX, Pieces, Slit, TornFaces
 from .retriangulate import _retriangulate
 from .slit import _open_slit, _torn_faces
@@ -105,7 +105,7 @@ def _patch_and_ends(source, blades, check_ends):
     snap = tol.snap * source.diagonal
     plane, margin = _first_guess(source, blades, snap)
     for _ in range(4):
-        patch = patch_surface(source, select(source, plane, *region_box(blades, margin, snap)))
+        patch = patch_surface(source, select(source, plane, blades, margin))
         ends = locate(patch.surface, patch.surface.faces, *blades)
         check_ends(ends, patch.surface)
         needed = _margin(patch.surface, ends)
