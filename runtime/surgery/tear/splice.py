@@ -267,10 +267,13 @@ def _extended(values, rows: int) -> np.ndarray:
     return out
 
 
-def _gathered(values, rows, read, added: int) -> np.ndarray:
-    """(p + added, ...) the rows ``rows[read]`` of ``values`` at ``read``, zeros in the other p rows,
-    then ``added`` uninitialised rows for a kernel to fill."""
-    out = np.empty((len(rows) + added,) + values.shape[1:], values.dtype)
-    out[:len(rows)] = 0
-    out[read] = values[rows[read]]
+@kernel((F2, I1, I1, i8), (I2, I1, I1, i8), cost=0.2)
+def _gathered(values, rows, read, added):
+    """(p + added, c) the rows ``rows[read]`` of ``values`` (n, c) at ``read``, zeros in the other p
+    rows, then ``added`` uninitialised rows for a kernel to fill."""
+    p = rows.shape[0]
+    out = np.empty((p + added, values.shape[1]), values.dtype)
+    out[:p] = 0
+    for i in read:
+        out[i] = values[rows[i]]
     return out
