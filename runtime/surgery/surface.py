@@ -77,7 +77,8 @@ class _Surface:
 
     positions : (n, 3) float64 surface positions of every vertex (skinned when posed)
     faces : (m, 3) int64 the rig's faces (``mesh_arrays``)
-    topo : Topology (label-aware, ``tear_topology``)
+    vertex_welded : (n,) int64 the welded vertex of each vertex (by position and tear label, as
+        ``tear_topology`` welds)
     welded : WeldedMesh
     bvh : TriangleBVH over ``positions``
     boundary : (b,) int64 welded vertices on a boundary edge (borders, earlier slits)
@@ -87,7 +88,7 @@ class _Surface:
 
     positions: np.ndarray
     faces: np.ndarray
-    topo: Topology
+    vertex_welded: np.ndarray
     welded: WeldedMesh
     bvh: TriangleBVH
     boundary: np.ndarray

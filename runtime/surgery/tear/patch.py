@@ -25,7 +25,7 @@ from ..._shared.jit import B1, F1, F2, I1, I2, b1, f8, kernel
 from ...tolerances import tol
 from ..bvh import BVH_ARRAYS, TriangleBVH, _faces_near_plane
 from ..surface import WeldedMesh, _Surface
-from ..topology import Topology, _corner_pairs, _unique_pairs, incidence
+from ..topology import _corner_pairs, _unique_pairs, incidence
 from ..weld import _weld_positions
 
 
@@ -94,11 +94,11 @@ def _sorted_compact(faces, face_ids):
 @kernel((F2, F2, I1, B1, I1, I2), cost=1.5)
 def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     """The patch's arrays in one pass (a dozen numpy calls cost more than the work on a few hundred
-    faces): its surface positions (p, 3) and, welded by rest position and label exactly as
-    ``topology.checked_topology`` welds and numbers (vertices, faces as there; -0.0 as +0.0), the
-    fields of its ``Topology``, then the welded positions, the vertex -> face incidence of the welded
-    faces, the welded vertices (increasing) that carry a ``boundary`` flag, and the patch's rows of
-    ``vertices`` (p, 3) and ``labels`` (p,) (read here anyway: a stroke reuses them).
+    faces), welded by rest position and label exactly as ``topology.checked_topology`` welds and
+    numbers (-0.0 as +0.0): its surface positions (p, 3), the welded vertex of each vertex (p,), the
+    fields of its ``WeldedMesh``, the welded vertices (increasing) that carry a ``boundary`` flag, and
+    the patch's rows of ``vertices`` (p, 3) and ``labels`` (p,) (read here anyway: a stroke reuses
+    them).
 
     vertices, positions (n, 3), labels (n,), boundary (n,): the source's ; rows (p,) ; faces (q, 3)
     over 0..p-1
@@ -127,7 +127,7 @@ def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     for f in range(q):
         for k in range(3):
             face_edges[f, k] = vertex_edge_edge[face_vertex_edges[f, k]]
-    ef_offsets, ef_faces, ef_corners = incidence(face_edges, edges.shape[0])
+    ef_offsets, ef_faces, _ = incidence(face_edges, edges.shape[0])
     welded_positions = np.empty((w, 3))
     for v in range(w):
         for k in range(3):
@@ -136,9 +136,8 @@ def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     flagged = np.zeros(w, np.bool_)
     for i in range(p):
         flagged[welded[i]] = flagged[welded[i]] or boundary[rows[i]]
-    return (patch_positions, welded, representative, welded_faces, vertex_edges, face_vertex_edges,
-            vertex_edge_edge, edges, face_edges, ef_offsets, ef_faces, ef_corners, welded_positions, vf_offsets,
-            vf_faces, np.flatnonzero(flagged), patch_vertices, patch_labels)
+    return (patch_positions, welded, welded_positions, welded_faces, face_edges, edges, ef_offsets, ef_faces,
+            vf_offsets, vf_faces, np.flatnonzero(flagged), patch_vertices, patch_labels)
 
 
 def patch_surface(source, face_ids) -> Patch:
@@ -148,16 +147,14 @@ def patch_surface(source, face_ids) -> Patch:
         affines
     """
     rows, faces = _sorted_compact(source.faces, face_ids)
-    (positions, *fields, welded_positions, vf_offsets, vf_faces, boundary, vertices, labels) = _patch_topology(
-        source.vertices, source.positions, source.labels, source.boundary, rows, faces)
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)
-    topo = Topology(*fields)
-    welded = WeldedMesh(welded_positions, topo.faces, topo.face_edges, topo.edges, topo.edge_face_offsets,
-                        topo.edge_face_faces, vf_offsets, vf_faces)
+    positions, vertex_welded, *mesh, boundary, vertices, labels = _patch_topology(
+        source.vertices, source.positions, source.labels, source.boundary, rows, faces)
     # (a few thousand faces: testing each of them beats building a tree)
     bvh = (TriangleBVH.one_leaf if len(faces) <= ONE_LEAF else TriangleBVH.of_checked)(positions, faces)
-    surface = _Surface(positions, faces, topo, welded, bvh, boundary, source.diagonal, source.affines)
+    surface = _Surface(positions, faces, vertex_welded, WeldedMesh(*mesh), bvh, boundary, source.diagonal,
+                       source.affines)
     return Patch(np.asarray(face_ids, np.int64), rows, surface, vertices, labels)
 
 

@@ -109,7 +109,7 @@ def _patch_and_ends(source, blades, check_ends):
         ends = locate(patch.surface, patch.surface.faces, *blades)
         check_ends(ends, patch.surface)
         needed = _margin(patch.surface, ends)
-        if plane is not None and np.array_equal(ends.plane, plane) and needed <= margin:
+        if plane is not None and ends.plane.tolist() == plane.tolist() and needed <= margin:
             return patch, ends
         plane, margin = ends.plane, max(margin, needed)
     raise AssertionError("the stroke's patch did not settle")      # the plane of a patch is its own
@@ -127,7 +127,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     no_path(ends, path)
     p, n = len(rows), len(source.positions)
     pieces = Pieces(*_retriangulate(*path, surface.faces, tuple(surface.welded), p, tol.on_edge))
-    torn = TornFaces(*_torn_faces(*path, surface.faces, surface.topo.welded, tuple(surface.welded),
+    torn = TornFaces(*_torn_faces(*path, surface.faces, surface.vertex_welded, tuple(surface.welded),
                                   pieces.affected, pieces.tris, pieces.new_node))
     slit = Slit(*_open_slit(torn.faces, torn.welded, torn.node_welded, surface.positions, torn.new_positions,
                             ends.plane, torn.candidates))
@@ -153,7 +153,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
                              twin_of)
         attributes[name] = values
     boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn.faces, torn.candidates,
-                                                      surface.topo.welded, surface.topo.n_welded, path.nodes, p)
+                                                      surface.vertex_welded, len(surface.welded.positions), path.nodes, p)
     removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(
         patch.faces, pieces.affected, pieces.parent, torn.faces, torn.candidates, rows, n,
         (slit.side_a, slit.side_b, boundary_rows))
