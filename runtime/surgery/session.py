@@ -26,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.cache import seed
-from .._shared.jit import F2, I1, kernel
+from .._shared.jit import F2, I1, i8, kernel
 from .._shared.memory import release_free_memory
 from ..animation.skinning import skin_affine
 from ..errors import InvalidInputError
@@ -238,20 +238,20 @@ class Surgery:
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
         self._bvh.edit(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
                        self.faces)
-        self._grow_bounds(np.concatenate((moved, np.arange(n, self.n_vertices))), old_positions)
+        self._grow_bounds(moved, n, old_positions)
         return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, old_positions,
                      splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
 
-    def _grow_bounds(self, rows, old) -> None:
-        """The bounding box of the surface after ``rows`` moved (from ``old`` positions) or appeared:
-        grown by their new positions, or found again from every vertex when a moved one was on the old
-        box's side."""
+    def _grow_bounds(self, moved, first_new, old) -> None:
+        """The bounding box of the surface after the rows ``moved`` changed position (from ``old``) and
+        rows from ``first_new`` on appeared: grown by their new positions, or found again from every
+        vertex when a moved one was on the old box's side."""
         if len(old) and ((old == self._bounds[0]) | (old == self._bounds[1])).any():
-            rows = np.arange(self.n_vertices)
+            moved, first_new = np.empty(0, np.int64), 0
             box = np.stack([np.full(3, np.inf), np.full(3, -np.inf)])
         else:
             box = self._bounds.copy()
-        if _grown_box(self.positions, rows, box):
+        if _grown_box(self.positions, moved, first_new, box):
             self._set_bounds(box)
 
     def _revert(self, record: _Undo) -> None:
@@ -282,12 +282,14 @@ class Surgery:
                        self._arrays["positions" if self.affines is not None else "vertices"].data, self._faces.data)
 
 
-@kernel((F2, I1, F2), cost=0.1)
-def _grown_box(positions, rows, box):
-    """Grow ``box`` (2, 3) in place by ``positions[rows]``; whether it changed (numpy's reductions along
-    the first axis of an (r, 3) array cost tens of microseconds)."""
+@kernel((F2, I1, i8, F2), cost=0.1)
+def _grown_box(positions, moved, first_new, box):
+    """Grow ``box`` (2, 3) in place by the positions of the rows ``moved`` and of every row from
+    ``first_new`` on; whether it changed (numpy's reductions along the first axis of an (r, 3) array
+    cost tens of microseconds)."""
     changed = False
-    for r in rows:
+    for i in range(moved.shape[0] + positions.shape[0] - first_new):
+        r = moved[i] if i < moved.shape[0] else first_new + i - moved.shape[0]
         for k in range(3):
             x = positions[r, k]
             if x < box[0, k]:

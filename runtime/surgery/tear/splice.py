@@ -12,7 +12,8 @@ session writes the rows into its arrays). A source is any object with:
     boundary (n,) bool         whether each vertex lies on a boundary edge of the label-aware weld
     top_label int ; diagonal float ; affines (B, 12) float64 or None (rest)
     bvh_arrays                 ``bvh.BVHArrays`` (as a tuple) of a BVH over positions and faces
-    check_hits(faces)          raises when the BVH does not hold these faces' triangles (a user's BVH)
+    check_hits(faces)          raises when the BVH does not hold these faces' triangles (a user's BVH;
+                               -1: no face)
 
 The stroke itself is the module docstring of ``stroke.py``, run on the stroke's patch (``patch.py``).
 """
@@ -79,7 +80,7 @@ def _first_guess(source, blades, snap):
     patch then takes every face in the box, and the plane ``locate`` chooses selects it again) and
     margin. Raises MissesMeshError as ``locate`` does."""
     status, plane, margin, hit_faces = _guess(source.bvh_arrays, source.boundary, blades, snap, tol.min_sine)
-    source.check_hits(hit_faces[hit_faces >= 0])
+    source.check_hits(hit_faces)
     if status != FOUND:
         name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
         raise MissesMeshError(f"the scalpel {name} (handle {blades[i].tolist()} -> tip {blades[i + 1].tolist()}) "
