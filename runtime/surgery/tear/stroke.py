@@ -209,6 +209,14 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
 
 def check_blades(scalpel_from, scalpel_to) -> np.ndarray:
     """(4, 3) float64 handle and tip at t_i, then at t_(i+1), checked."""
+    try:                                 # (the usual case at once: both well formed)
+        blades = np.array((scalpel_from, scalpel_to), dtype=np.float64)
+    except (TypeError, ValueError):
+        blades = None
+    if blades is not None and blades.shape == (2, 2, 3) and math.isfinite(blades.sum()) \
+            and blades[0, 0].tolist() != blades[0, 1].tolist() and blades[1, 0].tolist() != blades[1, 1].tolist():
+        return blades.reshape(4, 3)
+    # (the slow way, which names what is wrong)
     return np.array([*_scalpel(scalpel_from, "scalpel_from"), *_scalpel(scalpel_to, "scalpel_to")])
 
 
