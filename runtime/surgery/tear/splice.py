@@ -28,12 +28,13 @@ from ..._shared.warn import warn
 from ...errors import MissesMeshError, PlacementWarning
 from ...tolerances import tol
 from ..new_vertices import attribute_rule, interpolate_in_place
+from ..surface import WELDED_MESH
 from ..weld import _boundary_of
 from .guess import FOUND, FROM_MISSES, _guess
 from .locate import locate
 from .region import _margin as _margin_helper
 from .patch import patch_surface, select
-from .records import JUMP_CARRIER, VERTEX, Pieces, Slit, TornFaces
+from .records import JUMP_CARRIER, VERTEX, Pieces, Slit
 from .retriangulate import _retriangulate
 from .slit import _open_slit, _torn_faces
 from .vertex_data import _vertex_data
@@ -127,11 +128,10 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     path = walk(surface, ends, surface.bvh, (blades[0], blades[1]), (blades[2], blades[3]))
     no_path(ends, path)
     p, n = len(rows), len(source.positions)
-    pieces = Pieces(*_retriangulate(*path, surface.faces, tuple(surface.welded), p, tol.on_edge))
-    torn = TornFaces(*_torn_faces(*path, surface.faces, surface.vertex_welded, tuple(surface.welded),
-                                  pieces.affected, pieces.tris, pieces.new_node))
-    slit = Slit(*_open_slit(torn.faces, torn.welded, torn.node_welded, surface.positions, torn.new_positions,
-                            ends.plane, torn.candidates))
+    pieces, (torn_faces, candidates), slit = _split_along(*path, surface.faces, surface.vertex_welded,
+                                                         tuple(surface.welded), p, tol.on_edge, surface.positions,
+                                                         ends.plane)
+    pieces, slit = Pieces(*pieces), Slit(*slit)
     added = len(pieces.new_node) + len(slit.twins)
     vertices, labels = _extended(patch.vertices, added), _extended(patch.labels, added)
     # of the joints, weights and attributes only the rows the stroke reads: the new vertices' sources,
@@ -153,16 +153,31 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
         interpolate_in_place(values, p, pieces.new_src, pieces.new_coef, attribute_rule(name, values.shape[1]),
                              twin_of)
         attributes[name] = values
-    boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn.faces, torn.candidates,
+    boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn_faces, candidates,
                                                       surface.vertex_welded, len(surface.welded.positions), path.nodes, p)
     removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(
-        patch.faces, pieces.affected, pieces.parent, torn.faces, torn.candidates, rows, n,
+        patch.faces, pieces.affected, pieces.parent, torn_faces, candidates, rows, n,
         (slit.side_a, slit.side_b, boundary_rows))
     stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
                   side_a=side_a, side_b=side_b, split=slit.split, hits=ends.hits,
                   jumps=path.nodes[:, 2] == JUMP_CARRIER)
     return Splice(rows, changed, vertices, joints, weights, labels, attributes, removed, kept, kept_corners,
                   new_faces, parents, boundary_rows, boundary_flags, stroke)
+
+
+@kernel((I2, F2, I2, I1, WELDED_MESH, i8, f8, F2, F1), cost=1.0)
+def _split_along(path_int, path_float, faces, vertex_welded, mesh, p, on_edge, positions, plane):
+    """Steps 5-6 in one call: the faces the path crosses split (``retriangulate``), the torn faces
+    (``slit._torn_faces``) and the slit opened (``slit._open_slit``), on the patch (faces (q, 3) over
+    p vertices, vertex_welded (p,), mesh its WeldedMesh as a tuple, positions (p, 3)).
+
+    returns the fields of ``Pieces``, the torn faces and the rows of them around the path, and the
+    fields of ``Slit``
+    """
+    pieces = _retriangulate(path_int, path_float, faces, mesh, p, on_edge)
+    torn = _torn_faces(path_int, path_float, faces, vertex_welded, mesh, pieces[0], pieces[1], pieces[2])
+    slit = _open_slit(torn[0], torn[1], torn[2], positions, torn[3], plane, torn[4])
+    return pieces, (torn[0], torn[4]), slit
 
 
 @kernel((I1, I1, I1, I2, I1, I1, i8, record(I1, I1, I1)), cost=0.5)
