@@ -50,11 +50,11 @@ class Patch(NamedTuple):
     labels: np.ndarray
 
 
-@kernel((I2, I1), cost=0.3)
+@kernel((I2, I1), cost=1.5)
 def _compact(faces, face_ids):
-    """The vertices (p,) that faces[face_ids] use, in order of first use, and those faces (q, 3)
-    over 0..p-1: a hash map from vertex to slot (``np.unique`` sorts all 3q corners, several times
-    slower)."""
+    """The vertices (p,) that faces[face_ids] use, increasing, and those faces (q, 3) over 0..p-1: a
+    hash map from vertex to slot (``np.unique`` sorts all 3q corners, several times slower), then the
+    p vertices sorted and the slots renumbered by rank."""
     q = face_ids.shape[0]
     size = 16
     while size < 6 * q:
@@ -71,24 +71,20 @@ def _compact(faces, face_ids):
             while keys[h] != v and keys[h] >= 0:
                 h = (h + 1) & (size - 1)
             if keys[h] < 0:
-                keys[h], slots[h] = v, p
+                keys[h] = v
                 found[p] = v
                 p += 1
             local[i, c] = h                       # the slot, renumbered below
+    rows = np.sort(found[:p])
+    for rank in range(p):
+        h = (rows[rank] * 0x9E3779B1) & (size - 1)
+        while keys[h] != rows[rank]:
+            h = (h + 1) & (size - 1)
+        slots[h] = rank
     for i in range(q):
         for c in range(3):
             local[i, c] = slots[local[i, c]]
-    return found[:p].copy(), local
-
-
-def _sorted_compact(faces, face_ids):
-    """``_compact`` with the vertices in increasing order (the sort in numpy: numba compiles its
-    argsort for seconds)."""
-    found, local = _compact(faces, face_ids)
-    order = np.argsort(found)
-    rank = np.empty(len(found), np.int64)
-    rank[order] = np.arange(len(found))
-    return found[order], rank[local]
+    return rows, local
 
 
 @kernel((F2, F2, I1, B1, I1, I2), cost=1.5)
@@ -146,7 +142,7 @@ def patch_surface(source, face_ids) -> Patch:
     source : a surgery source (``splice.py``): positions, faces, vertices, labels, boundary, diagonal,
         affines
     """
-    rows, faces = _sorted_compact(source.faces, face_ids)
+    rows, faces = _compact(source.faces, face_ids)
     # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
     # vertex skin alike, but rounding could part them)
     positions, vertex_welded, *mesh, boundary, vertices, labels = _patch_topology(
@@ -164,13 +160,13 @@ def select(source, plane, blades, margin: float) -> np.ndarray:
     widened by ``margin`` and a few snap distances (the region's test rounds; a face that touches the
     box is kept)."""
     has_plane = plane is not None
-    return np.sort(_faces_in_region(source.bvh_arrays, blades, margin, plane if has_plane else np.zeros(4),
-                                    has_plane, tol.snap * source.diagonal, source.diagonal))
+    return _faces_in_region(source.bvh_arrays, blades, margin, plane if has_plane else np.zeros(4), has_plane,
+                            tol.snap * source.diagonal, source.diagonal)
 
 
-@kernel((BVH_ARRAYS, F2, f8, F1, b1, f8, f8), cost=0.4)
+@kernel((BVH_ARRAYS, F2, f8, F1, b1, f8, f8), cost=1.5)
 def _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal):
-    """``select``'s faces, unsorted (numba's sort compiles for seconds)."""
+    """``select``'s faces."""
     pad = margin + 4.0 * snap
     lo, hi = np.empty(3), np.empty(3)
     scale = diagonal
@@ -179,9 +175,8 @@ def _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal):
         hi[k] = max(max(blades[0, k], blades[1, k]), max(blades[2, k], blades[3, k])) + pad
         scale = max(scale, diagonal + max(abs(lo[k]), abs(hi[k])))
     if not has_plane:
-        return _faces_near_plane(bvh, lo, hi, np.zeros(3), 0.0, np.inf)
+        return np.sort(_faces_near_plane(bvh, lo, hi, np.zeros(3), 0.0, np.inf))
     # (the rounding of normal·x - offset, which the classification computes otherwise, grows with the
     # coordinates: a model far from the origin; the plane is a dual plane n̂ + d e∞: its signed
     # distance is n̂·x - d)
-    return _faces_near_plane(bvh, lo, hi, plane[:3].copy(), plane[3],
-                             2.0 * snap + 16.0 * _EPS * scale)
+    return np.sort(_faces_near_plane(bvh, lo, hi, plane[:3].copy(), plane[3], 2.0 * snap + 16.0 * _EPS * scale))
