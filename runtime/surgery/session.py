@@ -3,8 +3,9 @@
 ``cgaskin.tear(rig, ...)`` returns a new rig, and the next stroke on it builds that rig's BVH again:
 the whole mesh per stroke. A ``Surgery`` keeps the mutable state across operations instead:
 
-* the mesh in arrays with spare capacity (``rows.Rows``): a stroke rewrites the rows of its patch
-  and appends its new vertices and faces, amortised, never copying the mesh;
+* the mesh in arrays with spare capacity (``rows.Rows``): a stroke rewrites the few rows it changes
+  (the far side's labels, an opening's positions) and appends its new vertices and faces, amortised,
+  never copying the mesh (``session_write.py``, one kernel);
 * removed faces become tombstones (``alive`` False), so face ids stay stable for the BVH;
 * a ``DynamicBVH`` of the surface, updated for the faces a stroke removes, adds and moves (refit and
   local insertion; it rebuilds itself only past its measured degradation threshold);
@@ -71,8 +72,8 @@ class Surgery:
     What a stroke reads of the session (``vertices``, ``faces``, ``positions``, ``labels``,
     ``boundary``, ... : the source interface of ``tear/splice.py``) are views of its own buffers,
     valid until the next operation: read them, never write them (``rig`` is the copy to keep). The
-    undo log holds, per stroke, the old labels and positions of its patch's rows (about 100 KB a
-    stroke on a 1.6M-face scan).
+    undo log holds, per stroke, the old labels and positions of the rows it changed and the old
+    corners of the faces it changed (about 6 KB a stroke of the 1.6M-face capsule incision).
     """
 
     def __init__(self, rig, pose=None):
