@@ -87,6 +87,16 @@ def _segment_box(lo, hi, a, d, t_max):
 
 
 @helper
+def _push_children(stack, top, left, right):
+    """Push a node's children on a traversal stack (the left one on top: visited first), growing it
+    when full; returns (stack, top)."""
+    if top + 3 > stack.shape[0]:
+        stack = np.concatenate((stack, np.empty_like(stack)))
+    stack[top + 1], stack[top + 2] = right, left
+    return stack, top + 2
+
+
+@helper
 def _watertight(positions, faces, f, a, kx, ky, kz, sx, sy, sz):
     """Woop–Benthin–Wald test of the segment a + t d (sheared frame kx, ky, kz, sx, sy, sz) against
     the triangle positions[faces[f]]; two-sided. Returns t (may lie outside [0, 1]) or NaN for a miss."""
@@ -206,10 +216,7 @@ def _all_hits(bvh, a, b):
                     found[n], ts[n] = order[i], t
                     n += 1
             continue
-        if top + 3 > stack.shape[0]:
-            stack = np.concatenate((stack, np.empty_like(stack)))
-        stack[top + 1], stack[top + 2] = node_right[node], node_left[node]
-        top += 2
+        stack, top = _push_children(stack, top, node_left[node], node_right[node])
     return found[:n].copy(), ts[:n].copy()
 
 
@@ -237,10 +244,7 @@ def _faces_near_plane(arrays, lo, hi, normal, offset, delta):
         if not meets or smin > delta or smax < -delta:
             continue
         if node_left[node] >= 0:
-            if top + 3 > stack.shape[0]:
-                stack = np.concatenate((stack, np.empty_like(stack)))
-            stack[top + 1], stack[top + 2] = node_right[node], node_left[node]
-            top += 2
+            stack, top = _push_children(stack, top, node_left[node], node_right[node])
             continue
         for i in range(node_start[node], node_start[node] + node_count[node]):
             s0, s1, s2 = -offset, -offset, -offset

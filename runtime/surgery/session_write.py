@@ -5,7 +5,7 @@ import numpy as np
 from .._shared.jit import B1, F2, I1, I2, i8, kernel
 
 
-@kernel((F2, I1, I2, F2, B1, I2, B1, i8, i8, I1, I1, i8, F2, I1, I2, F2, I1, B1, I1, I1, I2, I2), cost=0.8)
+@kernel((F2, I1, I2, F2, B1, I2, B1, i8, i8, I1, I1, i8, F2, I1, I2, F2, I1, B1, I1, I1, I2, I2), cost=1.8)
 def _write_splice(vertices, labels, joints, weights, flags, faces, alive, n, m,
                   rows, changed, p, new_vertices, new_labels, new_joints, new_weights, boundary_rows, boundary_flags,
                   removed, kept, kept_corners, pieces):

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..._shared.jit import B1, F2, I2, f8, helper, kernel
 from ...generated.kernels import plane_from_points
-from ..bvh import BVH_ARRAYS, _first_hit
+from ..bvh import BVH_ARRAYS, _first_hit, _push_children
 
 #: what ``_guess`` found: both points, or which scalpel position missed the surface
 FOUND, FROM_MISSES, TO_MISSES = 0, 1, 2
@@ -49,10 +49,7 @@ def _boundary_near(bvh, boundary, a, b, t_max, snap):
         if not _near_box(node_lo[node], node_hi[node], a, d, t_max, snap):
             continue
         if node_left[node] >= 0:
-            if top + 3 > stack.shape[0]:
-                stack = np.concatenate((stack, np.empty_like(stack)))
-            stack[top + 1], stack[top + 2] = node_right[node], node_left[node]
-            top += 2
+            stack, top = _push_children(stack, top, node_left[node], node_right[node])
             continue
         for i in range(node_start[node], node_start[node] + node_count[node]):
             for c in range(3):
@@ -73,7 +70,7 @@ def _distance(p, q):
     return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
 
 
-@kernel((BVH_ARRAYS, B1, F2, f8, f8), cost=1.5)
+@kernel((BVH_ARRAYS, B1, F2, f8, f8), cost=5.0)
 def _guess(bvh, boundary, blades, snap, min_sine):
     """Where the blade meets the skin at both times, on the whole surface (snapped to a boundary
     vertex or a corner of the hit face as ``locate`` snaps), the plane through the first point and
@@ -100,17 +97,18 @@ def _guess(bvh, boundary, blades, snap, min_sine):
             return FROM_MISSES + i, np.zeros(4), 0.0, hit_faces
         hit_faces[i] = face
         hit = a + t * (b - a)
-        nearest, nearest_distance = -1, np.inf
+        nearest, nearest_distance = 0, np.inf
         for c in range(3):
             distance = _distance(positions[faces[face, c]], hit)
             if distance < nearest_distance:
                 nearest, nearest_distance = c, distance
             longest = max(longest, _distance(positions[faces[face, c]], positions[faces[face, c - 1]]))
         points[i] = positions[faces[face, nearest]] if nearest_distance <= snap else hit
-    u, v = blades[2] - points[0], blades[3] - points[0]
-    lu, lv = math.sqrt(u @ u), math.sqrt(v @ v)
-    normal = np.array([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+    u0, u1, u2 = blades[2, 0] - points[0, 0], blades[2, 1] - points[0, 1], blades[2, 2] - points[0, 2]
+    v0, v1, v2 = blades[3, 0] - points[0, 0], blades[3, 1] - points[0, 1], blades[3, 2] - points[0, 2]
+    lu, lv = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2), math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    n0, n1, n2 = u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
     plane = np.zeros(4)
-    if lu > snap and lv > snap and math.sqrt(normal @ normal) > min_sine * lu * lv:
+    if lu > snap and lv > snap and math.sqrt(n0 * n0 + n1 * n1 + n2 * n2) > min_sine * lu * lv:
         plane[0], plane[1], plane[2], plane[3] = plane_from_points(points[0], blades[2], blades[3])
     return FOUND, plane, 1.25 * (_distance(points[0], points[1]) + longest) + 4.0 * snap, hit_faces

@@ -50,7 +50,7 @@ class Patch(NamedTuple):
     labels: np.ndarray
 
 
-@kernel((I2, I1), cost=1.5)
+@kernel((I2, I1), cost=2.5)
 def _compact(faces, face_ids):
     """The vertices (p,) that faces[face_ids] use, increasing, and those faces (q, 3) over 0..p-1: a
     hash map from vertex to slot (``np.unique`` sorts all 3q corners, several times slower), then the
@@ -87,7 +87,7 @@ def _compact(faces, face_ids):
     return rows, local
 
 
-@kernel((F2, F2, I1, B1, I1, I2), cost=1.5)
+@kernel((F2, F2, I1, B1, I1, I2), cost=2.4)
 def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     """The patch's arrays in one pass (a dozen numpy calls cost more than the work on a few hundred
     faces), welded by rest position and label exactly as ``topology.checked_topology`` welds and

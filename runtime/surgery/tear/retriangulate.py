@@ -319,7 +319,7 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
     return n_new, n_new + 1
 
 
-@kernel((I2, F2, I2, WELDED_MESH, i8, f8), cost=4.4)
+@kernel((I2, F2, I2, WELDED_MESH, i8, f8), cost=8.0)
 def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     """Split every face the path crosses (and every face on a crossed edge) and create the new vertices.
 

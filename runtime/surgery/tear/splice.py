@@ -165,7 +165,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
                   new_faces, parents, boundary_rows, boundary_flags, stroke)
 
 
-@kernel((I2, F2, I2, I1, WELDED_MESH, i8, f8, F2, F1), cost=1.0)
+@kernel((I2, F2, I2, I1, WELDED_MESH, i8, f8, F2, F1), cost=2.4)
 def _split_along(path_int, path_float, faces, vertex_welded, mesh, p, on_edge, positions, plane):
     """Steps 5-6 in one call: the faces the path crosses split (``retriangulate``), the torn faces
     (``slit._torn_faces``) and the slit opened (``slit._open_slit``), on the patch (faces (q, 3) over
@@ -237,7 +237,7 @@ def _source_vertex(v, rows, n):
     return rows[v] if v < rows.shape[0] else n + v - rows.shape[0]
 
 
-@kernel((F2, I1, I2, I1, I1, i8, I2, i8), cost=0.7)
+@kernel((F2, I1, I2, I1, I1, i8, I2, i8), cost=1.5)
 def _boundary_changes(vertices, labels, faces, candidates, welded, n_welded, path_int, p):
     """The patch vertices whose boundary flag a stroke can change -- the copies of the path's vertices
     and the new vertices -- and their flags in the torn patch (welded as ``surface.tear_topology``

@@ -14,7 +14,7 @@ from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CA
 from .region import _margin
 
 
-@kernel((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=2.6)
+@kernel((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=10.0)
 def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap):
     """Follow the plane's section of the surface from the start node to the target node.
 
@@ -39,8 +39,12 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
     if s_kind == FACE and t_kind == FACE and s_id == t_id:
         # both ends inside one face: the chord between them
-        path_int = np.array([[FACE, s_id, NO_CARRIER, -1], [FACE, s_id, FACE_CARRIER, s_id]], np.int64)
-        path_float = np.array([[0.0, s_pos[0], s_pos[1], s_pos[2]], [0.0, t_pos[0], t_pos[1], t_pos[2]]])
+        # (arrays filled by element: numba types an array built from nested lists for seconds)
+        path_int, path_float = np.empty((2, 4), np.int64), np.zeros((2, 4))
+        path_int[0, 0], path_int[0, 1], path_int[0, 2], path_int[0, 3] = FACE, s_id, NO_CARRIER, -1
+        path_int[1, 0], path_int[1, 1], path_int[1, 2], path_int[1, 3] = FACE, s_id, FACE_CARRIER, s_id
+        for c in range(3):
+            path_float[0, 1 + c], path_float[1, 1 + c] = s_pos[c], t_pos[c]
         return _with_midpoint(path_int, path_float, wpos, edges)
     margin = _margin(wpos, wfaces, hit_faces, s_pos, t_pos)
     m = wfaces.shape[0]
@@ -240,7 +244,8 @@ def _with_midpoint(path_int, path_float, wpos, edges):
     """(True, path) with a one-segment path's midpoint as a third node, so that the slit has a vertex
     to split (with both ends kept single, a single edge could not open)."""
     kind, carrier = path_int[1, 2], path_int[1, 3]
-    mid_int = np.array([EDGE, carrier, EDGE_CARRIER, carrier], np.int64)
+    mid_int = np.empty(4, np.int64)
+    mid_int[0], mid_int[1], mid_int[2], mid_int[3] = EDGE, carrier, EDGE_CARRIER, carrier
     mid_float = np.empty(4)
     if kind == FACE_CARRIER:
         mid_int[0], mid_int[2] = FACE, FACE_CARRIER
