@@ -2,7 +2,7 @@
 
 numba compiles a kernel at its first call and caches the machine code beside the source (or under
 ``NUMBA_CACHE_DIR``). On a fresh install skinning, cutting and tearing once would compile about
-35 s of kernels (2-core machine), one at a time, on one core. ``precompile()`` finds the kernels of
+85 s of kernels (2-core machine), one at a time, on one core. ``precompile()`` finds the kernels of
 ``KERNELS`` that the cache does not hold yet and compiles them in parallel: this process takes one
 share and worker processes the others (one process per core), each writing to the same cache.
 Afterwards every first call only loads from the cache.
