@@ -224,7 +224,8 @@ class DynamicBVH:
         """Room for inserting k faces, ids up to ``top_id``: the worst case, per face two nodes and a
         new block of LEAF_MAX slots (arrays grow by doubling)."""
         nodes, slots = self._st[13][:2].tolist()
-        if top_id < len(self._st[12]) and nodes + 2 * k <= len(self._st[0]) and slots + LEAF_MAX * k <= len(self._st[8]):
+        if (top_id < len(self._st[12]) and nodes + 2 * k <= len(self._st[0])
+                and slots + LEAF_MAX * k <= len(self._st[8])):
             return                                     # (the usual case: room to spare)
         st = list(self._st)
         st[12] = _grown(st[12], top_id + 1, len(st[12]), -1)

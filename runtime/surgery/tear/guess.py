@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import B1, F2, I2, f8, helper, kernel
+from ..._shared.jit import B1, F2, f8, helper, kernel
 from ...generated.kernels import plane_from_points
 from ..bvh import BVH_ARRAYS, _first_hit, _push_children
 

@@ -104,8 +104,10 @@ class RigSource:
 
     def check_hits(self, faces) -> None:
         """A user's BVH must hold the surface being torn: checked on the faces a stroke hit (-1: none)."""
-        if self._user_bvh is not None and any(not np.array_equal(self._bvh.triangle(face), self.positions[self.faces[face]])
-                                              for face in faces.tolist() if face >= 0):
+        if self._user_bvh is None:
+            return
+        if any(not np.array_equal(self._bvh.triangle(face), self.positions[self.faces[face]])
+               for face in faces.tolist() if face >= 0):
             raise InvalidInputError("bvh was built from other positions than the surface being torn "
                                     "(the stored vertices, or the skinned positions in the given pose)")
 

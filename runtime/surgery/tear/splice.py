@@ -153,8 +153,8 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
         interpolate_in_place(values, p, pieces.new_src, pieces.new_coef, attribute_rule(name, values.shape[1]),
                              twin_of)
         attributes[name] = values
-    boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn_faces, candidates,
-                                                      surface.vertex_welded, len(surface.welded.positions), path.nodes, p)
+    boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn_faces, candidates, surface.vertex_welded,
+                                                      len(surface.welded.positions), path.nodes, p)
     removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(
         patch.faces, pieces.affected, pieces.parent, torn_faces, candidates, rows, n,
         (slit.side_a, slit.side_b, boundary_rows))
@@ -192,7 +192,7 @@ def _in_source(face_ids, affected, parent, torn, candidates, rows, n, vertex_lis
     reach only those: the others keep their corners) and kept_corners (r, 3), pieces (k, 3), parents
     (k,) the source face of each piece, and the vertex lists mapped
     """
-    p, q, a = rows.shape[0], face_ids.shape[0], affected.shape[0]
+    q, a = face_ids.shape[0], affected.shape[0]
     n_kept = q - a
     kept_ids = np.empty(n_kept, np.int64)         # the patch face of each kept row of ``torn``
     is_affected = np.zeros(q, np.bool_)

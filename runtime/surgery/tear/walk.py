@@ -264,7 +264,8 @@ def _with_midpoint(path_int, path_float, wpos, edges):
             # the mean of the two ends' parameters on the edge (a corner's is 0 or 1)
             ts = np.empty(2)
             for r in range(2):
-                ts[r] = path_float[r, 0] if path_int[r, 0] == EDGE else (1.0 if edges[carrier, 1] == path_int[r, 1] else 0.0)
+                corner = 1.0 if edges[carrier, 1] == path_int[r, 1] else 0.0
+                ts[r] = path_float[r, 0] if path_int[r, 0] == EDGE else corner
             t = 0.5 * (ts[0] + ts[1])
             mid_float[0] = t
             for c in range(3):
