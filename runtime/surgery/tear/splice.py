@@ -133,12 +133,9 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
                                                          ends.plane)
     pieces, slit = Pieces(*pieces), Slit(*slit)
     added = len(pieces.new_node) + len(slit.twins)
-    vertices, labels = _extended(patch.vertices, added), _extended(patch.labels, added)
-    # of the joints, weights and attributes only the rows the stroke reads: the new vertices' sources,
-    # the twins' and the moved rows (a posed opening); the other rows of a large patch would be
-    # scattered reads of the source that nothing uses
-    read, changed = _read_and_changed(pieces.new_src, slit.twins, slit.moved, p)
-    joints, weights = (_gathered(values, rows, read, added) for values in (source.joints, source.weights))
+    read, changed, vertices, labels, joints, weights = _stroke_rows(
+        pieces.new_src, slit.twins, slit.moved, rows, patch.vertices, patch.labels, source.joints, source.weights,
+        added)
     posed = source.affines is not None
     residual = _vertex_data(vertices, joints, weights, labels, p, source.top_label, path.points, tuple(pieces),
                             tuple(slit), opening, ends.plane[:3].copy(),
@@ -258,29 +255,35 @@ def _boundary_changes(vertices, labels, faces, candidates, welded, n_welded, pat
     return changed, _boundary_of(vertices, labels, faces, candidates, changed)
 
 
-@kernel((I2, I2, I2, i8), cost=0.2)
-def _read_and_changed(new_src, twins, moved, p):
-    """Increasing patch rows (< p) that a stroke reads the joints, weights and attributes of (the new
-    vertices' sources, the twins', the moved rows), and those it may change (the moved rows)."""
-    read = np.zeros(p, np.bool_)
-    changed = np.zeros(p, np.bool_)
+@kernel((I2, I2, I2, I1, F2, I1, I2, F2, i8), cost=0.6)
+def _stroke_rows(new_src, twins, moved, rows, vertices, labels, joints, weights, added):
+    """The patch's vertex arrays for a stroke, each with ``added`` uninitialised rows after its p rows
+    for ``vertex_data`` to fill.
+
+    Of the joints and weights (and, with ``_gathered``, the attributes) only the rows the stroke reads
+    are gathered from the source's ``joints``, ``weights`` (n, 4): the new vertices' sources, the
+    twins' and the moved rows (a posed opening); the other rows of a large patch would be scattered
+    reads of the source that nothing uses (they are zero). ``vertices`` (p, 3), ``labels`` (p,) are
+    the patch's own rows (all of them: the boundary is welded from them).
+    returns read (increasing patch rows read), changed (increasing: the moved rows, the only ones a
+    stroke may change), vertices, labels, joints, weights (p + added rows each)
+    """
+    p = rows.shape[0]
+    is_read, is_changed = np.zeros(p, np.bool_), np.zeros(p, np.bool_)
     for v in new_src.reshape(-1):
         if v < p:
-            read[v] = True
+            is_read[v] = True
     for i in range(twins.shape[0]):
         if twins[i, 0] < p:
-            read[twins[i, 0]] = True
+            is_read[twins[i, 0]] = True
     for i in range(moved.shape[0]):
         if moved[i, 0] < p:
-            read[moved[i, 0]] = changed[moved[i, 0]] = True
-    return np.flatnonzero(read), np.flatnonzero(changed)
-
-
-def _extended(values, rows: int) -> np.ndarray:
-    """``values`` (p, ...) followed by ``rows`` uninitialised rows, for a kernel to fill."""
-    out = np.empty((len(values) + rows,) + values.shape[1:], values.dtype)
-    out[:len(values)] = values
-    return out
+            is_read[moved[i, 0]] = is_changed[moved[i, 0]] = True
+    read = np.flatnonzero(is_read)
+    out_vertices, out_labels = np.empty((p + added, 3)), np.empty(p + added, np.int64)
+    out_vertices[:p], out_labels[:p] = vertices, labels
+    return (read, np.flatnonzero(is_changed), out_vertices, out_labels, _gathered(joints, rows, read, added),
+            _gathered(weights, rows, read, added))
 
 
 @kernel((F2, I1, I1, i8), (I2, I1, I1, i8), cost=0.2)
