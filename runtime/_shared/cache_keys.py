@@ -9,43 +9,50 @@ functions outside cgaskin keep numba's key.
 """
 from __future__ import annotations
 
-import ast
 import functools
 import hashlib
 import importlib.util
 import os
+import re
 import sys
 from pathlib import Path
 
 _PACKAGES = ("cgaskin",)
 
 
+#: ``from .x import a, b`` (names in parentheses may span lines) and ``import x.y``, at any depth: a
+#: regular expression (parsing every module's syntax tree cost a tenth of a second per process); one
+#: that a docstring quotes only adds a module to the key
+_IMPORT = re.compile(r"^[ \t]*(?:from[ \t]+([.\w]+)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)|import[ \t]+([^\n]*))", re.M)
+
+
 @functools.lru_cache(maxsize=None)
 def _imports(module: str) -> tuple[str, ...]:
     """The cgaskin modules that ``module`` (a loaded module's name) imports, directly."""
-    spec = importlib.util.find_spec(module)
-    path = Path(spec.origin)
-    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    loaded = sys.modules[module]
+    path, name = Path(loaded.__file__), loaded.__name__     # (its own name: ``cgaskin.versor`` is an alias)
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = set()
-    for node in ast.walk(ast.parse(path.read_bytes())):
-        if isinstance(node, ast.ImportFrom):
-            base = importlib.util.resolve_name("." * node.level + (node.module or ""), package) \
-                if node.level else (node.module or "")
-            names = [base] + [f"{base}.{alias.name}" for alias in node.names]
-        elif isinstance(node, ast.Import):
-            names = [alias.name for alias in node.names]
+    for source, imported, modules in _IMPORT.findall(path.read_text()):
+        if source:
+            dots = len(source) - len(source.lstrip("."))
+            try:
+                base = importlib.util.resolve_name(source, package) if dots else source
+            except ImportError:
+                continue
+            names = [base] + [f"{base}.{item.split()[0]}" for item in imported.strip("()").replace("\\", " ").split(",")
+                              if item.split()]
         else:
-            continue
+            names = [item.split()[0] for item in modules.split(",") if item.split()]
         found.update(name for name in names if name.split(".")[0] in _PACKAGES and _is_module(name))
     return tuple(sorted(found))
 
 
 def _is_module(name: str) -> bool:
-    """Whether ``name`` is a module (``from m import f`` names f too: a function is not one)."""
-    try:
-        return importlib.util.find_spec(name) is not None
-    except (ImportError, ValueError):
-        return False
+    """Whether ``name`` is a module (``from m import f`` names f too: a function is not one). The
+    modules a loaded module imports are loaded too (a file-system search per name cost a third of a
+    second per process)."""
+    return name in sys.modules
 
 
 @functools.lru_cache(maxsize=None)
@@ -71,9 +78,14 @@ def _closure_digest(module: str) -> bytes:
         stack.extend(_imports(name))
     digest = hashlib.sha256()
     for name in sorted(seen):
-        digest.update(name.encode())
-        digest.update(Path(importlib.util.find_spec(name).origin).read_bytes())
+        digest.update(name.encode() + _source_digest(name))
     return digest.digest()
+
+
+@functools.lru_cache(maxsize=None)
+def _source_digest(module: str) -> bytes:
+    """sha256 of a loaded module's source (read once per process, whatever closures hold it)."""
+    return hashlib.sha256(Path(sys.modules[module].__file__).read_bytes()).digest()
 
 
 def install() -> None:

@@ -41,13 +41,19 @@ def test_a_changed_helper_changes_the_key_of_the_kernels_that_use_it(monkeypatch
         return data + b"\n# an edit\n" if path.resolve() == helper_file else data
 
     monkeypatch.setattr(Path, "read_bytes", edited)
-    cache_keys._closure_digest.cache_clear()
+    _forget_digests()
     try:
         assert _walk_stamp() != before
     finally:
         monkeypatch.undo()
-        cache_keys._closure_digest.cache_clear()
+        _forget_digests()
     assert _walk_stamp() == before
+
+
+def _forget_digests():
+    """Read the sources again (the digests are kept per process)."""
+    cache_keys._closure_digest.cache_clear()
+    cache_keys._source_digest.cache_clear()
 
 
 def test_functions_outside_cgaskin_keep_numbas_key(tmp_path):
