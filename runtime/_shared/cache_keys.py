@@ -33,7 +33,7 @@ def _imports(module: str) -> tuple[str, ...]:
     path, name = Path(loaded.__file__), loaded.__name__     # (its own name: ``cgaskin.versor`` is an alias)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = set()
-    for source, imported, modules in _IMPORT.findall(path.read_text()):
+    for source, imported, modules in _IMPORT.findall(path.read_text(encoding="utf-8")):
         if source:
             dots = len(source) - len(source.lstrip("."))
             try:
@@ -62,7 +62,7 @@ def _module_of(py_file: str) -> str | None:
     for name, module in list(sys.modules.items()):
         if name.split(".")[0] in _PACKAGES and getattr(module, "__file__", None) \
                 and os.path.realpath(module.__file__) == path:
-            return name
+            return module.__name__          # (not an alias's: the key must not depend on import order)
     return None
 
 
@@ -71,7 +71,7 @@ def _closure_digest(module: str) -> bytes:
     """sha256 over the sources of ``module`` and every cgaskin module it imports, transitively."""
     seen, stack = set(), [module]
     while stack:
-        name = stack.pop()
+        name = sys.modules[stack.pop()].__name__        # (aliases as the module's own name)
         if name in seen:
             continue
         seen.add(name)
