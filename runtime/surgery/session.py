@@ -32,7 +32,6 @@ from .._shared.memory import release_free_memory
 from ..animation.skinning import skin_affine
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
-
 from .dynamic_bvh import DynamicBVH
 from .rows import Rows
 from .session_write import _write_splice
@@ -138,8 +137,7 @@ class Surgery:
         return self._bvh.arrays
 
     def check_hits(self, faces) -> None:
-        """(the session's BVH is its own)"""
-
+        """Nothing to check: the session's BVH is built and kept over its own arrays."""
 
     # ---- operations -------------------------------------------------------------------------------
     def tear(self, scalpel_from, scalpel_to, opening: float = 0.0) -> StrokeResult:
