@@ -15,7 +15,7 @@ Segment–triangle test: the watertight test of Woop, Benthin and Wald (JCGT 2(1
 hits at least one of them, so a scalpel cannot slip between two faces.
 
 A ``TriangleBVH`` keeps the positions and faces it was built from (its own copies; ``of_checked``
-and ``one_leaf`` keep the caller's arrays); build another one when the positions change (a
+and ``of_tree`` keep the caller's arrays); build another one when the positions change (a
 functional tear keeps one per rig and pose: ``tear/rig_source.py``; an editing session updates a
 ``DynamicBVH`` in place).
 """
@@ -62,6 +62,18 @@ class BVHArrays(NamedTuple):
 
 #: the numba type of ``BVHArrays`` (for precompile signatures)
 BVH_ARRAYS = record(F2, F2, N1, N1, N1, N1, N1, F2, I2)
+
+
+@kernel()
+def _tree(positions, faces, one_leaf_up_to):
+    """The tree fields of ``BVHArrays`` (lo, hi, left, right, start, count, order) over every face
+    (m >= 1): one leaf when m <= ``one_leaf_up_to`` (for a few thousand faces, testing each one costs
+    less than building a tree: a tear stroke's patch), else ``_build``'s tree, its node arrays trimmed."""
+    if faces.shape[0] <= one_leaf_up_to:
+        return _one_leaf(positions, faces, BOX_PADDING)
+    order = np.arange(faces.shape[0]).astype(np.int32)
+    lo, hi, left, right, start, count, n, _ = _build(positions, faces, order, LEAF_SIZE, BOX_PADDING, 0)
+    return lo[:n].copy(), hi[:n].copy(), left[:n].copy(), right[:n].copy(), start[:n].copy(), count[:n].copy(), order
 
 
 # ---- queries ------------------------------------------------------------------------------------
@@ -298,12 +310,11 @@ class TriangleBVH:
                                  faces)
 
     @classmethod
-    def one_leaf(cls, positions, faces) -> "TriangleBVH":
-        """A BVH of one leaf that holds every face (checked input, as ``of_checked``): its queries test
-        every triangle, which for a few thousand faces costs less than building a tree (a tear
-        stroke's patch); the answers are a tree's (the first hit: the lowest t, then face id)."""
+    def of_tree(cls, tree, positions, faces) -> "TriangleBVH":
+        """The BVH of the tree fields ``tree`` (``_tree``'s, for example) over checked ``positions`` and
+        ``faces`` (as ``of_checked``: kept, not copied)."""
         bvh = cls.__new__(cls)
-        bvh._arrays = BVHArrays(*_one_leaf(positions, faces, BOX_PADDING), positions, faces)
+        bvh._arrays = BVHArrays(*tree, positions, faces)
         return bvh
 
     @classmethod

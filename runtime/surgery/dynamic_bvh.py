@@ -49,8 +49,7 @@ REBUILD_AT = 3.0
 
 
 def _cost(st) -> float:
-    """The SAH cost: the SAH sum over the root's area (0 for an empty tree)."""
-    # (Python floats: numpy's scalar arithmetic cost a tenth of a small stroke's edits)
+    """The SAH cost: the SAH sum over the root's area (0 for an empty tree; ``_change`` returns it)."""
     (x0, y0, z0), (x1, y1, z1) = st[0][0].tolist(), st[1][0].tolist()
     dx, dy, dz = x1 - x0, y1 - y0, z1 - z0
     area = 2.0 * (dx * dy + dy * dz + dz * dx) if dx >= 0.0 else 0.0
@@ -185,8 +184,7 @@ class DynamicBVH:
         """Remove live faces (k,): they are never hit again."""
         ids, none = self._ids(face_ids, "face_ids", True), np.empty(0, np.int64)
         if len(ids):
-            _change(self._st, none, none, ids, none)
-            self._rebuild_if_degraded()
+            self._edit_tree(none, none, ids, none)
 
     def update(self, face_ids, positions, faces):
         """Live faces (k,) whose corners moved: they now are positions[faces[f]] (positions (n, 3),
@@ -194,8 +192,7 @@ class DynamicBVH:
         ids = self._ids(face_ids, "face_ids", True)
         geometry, none = _geometry(ids, positions, faces), np.empty(0, np.int64)
         self._st = self._st[:10] + geometry + self._st[12:]
-        _change(self._st, none, none, none, ids)
-        self._rebuild_if_degraded()
+        self._edit_tree(none, none, none, ids)
 
     def insert(self, face_ids, positions, faces, near=None):
         """Add faces with new ids (k,), none live, with corners positions[faces[f]] (the arrays the BVH
@@ -210,9 +207,7 @@ class DynamicBVH:
         geometry = _geometry(ids, positions, faces)
         self._st = self._st[:10] + geometry + self._st[12:]
         if k:
-            self._make_room(k, int(ids.max()))
-            _change(self._st, ids, near, np.empty(0, np.int64), np.empty(0, np.int64))
-            self._rebuild_if_degraded()
+            self._edit_tree(ids, near, np.empty(0, np.int64), np.empty(0, np.int64))
 
     def use(self, positions, faces) -> None:
         """Read the triangles from ``positions`` (n, 3) float64 and ``faces`` (F, 3) int64, C-contiguous,
@@ -220,13 +215,19 @@ class DynamicBVH:
         caller goes on to edit). Unchecked, like ``edit``."""
         self._st = self._st[:10] + (positions, faces) + self._st[12:]
 
+    def _edit_tree(self, inserted, near, removed, moved) -> None:
+        """``_change`` with room made first where it lacks it, then a rebuild if the tree degraded."""
+        done, cost, dead, live = _change(self._st, inserted, near, removed, moved)
+        if not done:
+            self._make_room(len(inserted), int(inserted.max()))
+            done, cost, dead, live = _change(self._st, inserted, near, removed, moved)
+        if (cost / self._sah0 if self._sah0 > 0 else 1.0) > REBUILD_AT or dead > max(live, 1024):
+            self.rebuild()
+
     def _make_room(self, k: int, top_id: int) -> None:
         """Room for inserting k faces, ids up to ``top_id``: the worst case, per face two nodes and a
         new block of LEAF_MAX slots (arrays grow by doubling)."""
         nodes, slots = self._st[13][:2].tolist()
-        if (top_id < len(self._st[12]) and nodes + 2 * k <= len(self._st[0])
-                and slots + LEAF_MAX * k <= len(self._st[8])):
-            return                                     # (the usual case: room to spare)
         st = list(self._st)
         st[12] = _grown(st[12], top_id + 1, len(st[12]), -1)
         for j in range(8):
@@ -234,11 +235,6 @@ class DynamicBVH:
         for j in (8, 9):
             st[j] = _grown(st[j], slots + LEAF_MAX * k, slots)
         self._st = tuple(st)
-
-    def _rebuild_if_degraded(self) -> None:
-        dead, live = self._st[13][2:4].tolist()
-        if self.degradation > REBUILD_AT or dead > max(live, 1024):
-            self.rebuild()
 
     def edit(self, removed, inserted, near, moved, positions, faces) -> None:
         """One stroke's changes at once, WITHOUT the checks of ``remove``/``insert``/``update`` (whose
@@ -249,10 +245,7 @@ class DynamicBVH:
         removed (r,) live faces out, then moved (u,) live faces, whose corners changed, are refitted.
         Ids int64, C-contiguous."""
         self._st = self._st[:10] + (positions, faces) + self._st[12:]
-        if len(inserted):
-            self._make_room(len(inserted), int(inserted.max()))
-        _change(self._st, inserted, near, removed, moved)
-        self._rebuild_if_degraded()
+        self._edit_tree(inserted, near, removed, moved)
 
     def rebuild(self):
         """Build afresh from the live faces, keeping their face ids, reading their triangles from the

@@ -101,10 +101,25 @@ def _refit(st, node, n):
 @kernel((STATE, I1, I1, I1, I1), cost=8.0)
 def _change(st, inserted, near, removed, moved):
     """Every edit of the tree, in one kernel: insert the faces ``inserted`` (k,) beside ``near`` (k,),
-    then remove ``removed``, then refit ``moved`` (whose corners changed in st's positions and faces)."""
+    then remove ``removed``, then refit ``moved`` (whose corners changed in st's positions and faces).
+
+    returns (done, cost, dead, live): done False, with nothing changed, when the arrays lack room for
+    the insertion (the caller grows them and calls again); the SAH cost after the edits (the SAH sum
+    over the root's area, 0 for an empty tree), the dead slots and the live faces (what the caller's
+    rebuild test reads: from Python, each of them cost a numpy call)
+    """
+    meta = st[13]
+    top = -1
+    for f in inserted:
+        top = max(top, f)
+    k = inserted.shape[0]
+    if top >= st[12].shape[0] or meta[0] + 2 * k > st[0].shape[0] or meta[1] + LEAF_MAX * k > st[8].shape[0]:
+        return False, 0.0, meta[2], meta[3]
     _insert(st, inserted, near)
     _edit(st, removed, True)
     _edit(st, moved, False)
+    area = _area(st[0], st[1], 0)
+    return True, st[14][0] / area if area > 0.0 else 0.0, meta[2], meta[3]
 
 
 @helper

@@ -4,12 +4,11 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, I2, f8, helper, kernel
+from ..._shared.jit import helper, kernel
 from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
 from ...tolerances import tol
-from ..bvh import BVH_ARRAYS, _first_hit
-from ..surface import WELDED_MESH
+from ..bvh import _first_hit
 from .records import EDGE, FACE, VERTEX, Ends
 
 
@@ -93,7 +92,7 @@ def _boundary_hit(a, b, t_max, boundary, wpos, tol):
     return best, best_t
 
 
-@kernel((BVH_ARRAYS, F1, F1, F1, F1, F2, I2, WELDED_MESH, I1, f8, f8), cost=6.0)
+@kernel()
 def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
     """Steps 2-3: where the blade meets the skin at both times, the tear plane, and the side of
     every welded vertex.

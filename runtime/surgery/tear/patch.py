@@ -21,9 +21,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import B1, F1, F2, I1, I2, b1, f8, kernel
-from ...tolerances import tol
-from ..bvh import BVH_ARRAYS, TriangleBVH, _faces_near_plane
+from ..._shared.jit import helper, kernel
+from ..bvh import TriangleBVH, _faces_near_plane, _tree
 from ..surface import WeldedMesh, _Surface
 from ..topology import _corner_pairs, _unique_pairs, incidence
 from ..weld import _weld_positions
@@ -50,7 +49,7 @@ class Patch(NamedTuple):
     labels: np.ndarray
 
 
-@kernel((I2, I1), cost=2.5)
+@kernel()
 def _compact(faces, face_ids):
     """The vertices (p,) that faces[face_ids] use, increasing, and those faces (q, 3) over 0..p-1: a
     hash map from vertex to slot (``np.unique`` sorts all 3q corners, several times slower), then the
@@ -87,7 +86,7 @@ def _compact(faces, face_ids):
     return rows, local
 
 
-@kernel((F2, F2, I1, B1, I1, I2), cost=2.4)
+@kernel()
 def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     """The patch's arrays in one pass (a dozen numpy calls cost more than the work on a few hundred
     faces), welded by rest position and label exactly as ``topology.checked_topology`` welds and
@@ -147,26 +146,18 @@ def patch_surface(source, face_ids) -> Patch:
     # vertex skin alike, but rounding could part them)
     positions, vertex_welded, *mesh, boundary, vertices, labels = _patch_topology(
         source.vertices, source.positions, source.labels, source.boundary, rows, faces)
-    # (a few thousand faces: testing each of them beats building a tree)
-    bvh = (TriangleBVH.one_leaf if len(faces) <= ONE_LEAF else TriangleBVH.of_checked)(positions, faces)
+    bvh = TriangleBVH.of_tree(_tree(positions, faces, ONE_LEAF), positions, faces)
     surface = _Surface(positions, faces, vertex_welded, WeldedMesh(*mesh), bvh, boundary, source.diagonal,
                        source.affines)
     return Patch(np.asarray(face_ids, np.int64), rows, surface, vertices, labels)
 
 
-def select(source, plane, blades, margin: float) -> np.ndarray:
-    """Increasing ids of the faces of ``source`` within 2 snap distances of ``plane`` (any plane when
-    None) that touch the bounding box of the blade at both times ((4, 3) handle, tip, handle, tip)
-    widened by ``margin`` and a few snap distances (the region's test rounds; a face that touches the
-    box is kept)."""
-    has_plane = plane is not None
-    return _faces_in_region(source.bvh_arrays, blades, margin, plane if has_plane else np.zeros(4), has_plane,
-                            tol.snap * source.diagonal, source.diagonal)
-
-
-@kernel((BVH_ARRAYS, F2, f8, F1, b1, f8, f8), cost=1.5)
+@helper
 def _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal):
-    """``select``'s faces."""
+    """Increasing ids of the faces of ``bvh`` (BVHArrays as a tuple) within 2 ``snap`` distances of
+    ``plane`` (any plane when not ``has_plane``) that touch the bounding box of ``blades`` (4, 3)
+    (handle, tip, handle, tip) widened by ``margin`` and a few snap distances (the region's test rounds;
+    a face that touches the box is kept); ``diagonal`` the surface's bounding-box diagonal."""
     pad = margin + 4.0 * snap
     lo, hi = np.empty(3), np.empty(3)
     scale = diagonal

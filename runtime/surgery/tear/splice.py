@@ -15,7 +15,8 @@ session writes the rows into its arrays). A source is any object with:
     check_hits(faces)          raises when the BVH does not hold these faces' triangles (a user's BVH;
                                -1: no face)
 
-The stroke itself is the module docstring of ``stroke.py``, run on the stroke's patch (``patch.py``).
+The stroke itself is the module docstring of ``stroke.py``, run on the stroke's patch (``patch.py``,
+``settle.py``): steps 2-7 are one compiled call (``_stroke``), then the attributes' rows one call each.
 """
 from __future__ import annotations
 
@@ -23,22 +24,20 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, I2, f8, helper, i8, kernel, record
+from ..._shared.jit import B1, F2, I1, I2, b1, f8, helper, i8, kernel
 from ..._shared.warn import warn
 from ...errors import MissesMeshError, PlacementWarning
 from ...tolerances import tol
+from ..bvh import BVH_ARRAYS
 from ..new_vertices import attribute_rule, interpolate_in_place
-from ..surface import WELDED_MESH
 from ..weld import _boundary_of
 from .guess import FOUND, FROM_MISSES, _guess
-from .locate import locate
-from .region import _margin as _margin_helper
-from .patch import patch_surface, select
-from .records import JUMP_CARRIER, VERTEX, Pieces, Slit
+from .records import JUMP_CARRIER, VERTEX, Ends, Path
 from .retriangulate import _retriangulate
+from .settle import _settle
 from .slit import _open_slit, _torn_faces
 from .vertex_data import _vertex_data
-from .walk import walk
+from .walk import _walk
 
 
 class Splice(NamedTuple):
@@ -65,7 +64,6 @@ class Splice(NamedTuple):
     joints: np.ndarray
     weights: np.ndarray
     labels: np.ndarray
-    attributes: dict
     removed: np.ndarray
     kept: np.ndarray
     kept_corners: np.ndarray
@@ -73,111 +71,134 @@ class Splice(NamedTuple):
     parents: np.ndarray
     boundary_rows: np.ndarray
     boundary_flags: np.ndarray
+    attributes: dict
     stroke: dict
-
-
-def _first_guess(source, blades, snap):
-    """``guess._guess`` on the source: its plane (None when the points and the blade are aligned: the
-    patch then takes every face in the box, and the plane ``locate`` chooses selects it again) and
-    margin. Raises MissesMeshError as ``locate`` does."""
-    status, plane, margin, hit_faces = _guess(source.bvh_arrays, source.boundary, blades, snap, tol.min_sine)
-    source.check_hits(hit_faces)
-    if status != FOUND:
-        name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
-        raise MissesMeshError(f"the scalpel {name} (handle {blades[i].tolist()} -> tip {blades[i + 1].tolist()}) "
-                              f"does not meet the surface")
-    return (plane if plane.any() else None), margin
-
-
-@kernel((F2, I2, I1, F1, F1), cost=0.1)
-def _margin_kernel(wpos, wfaces, hit_faces, s_pos, t_pos):
-    return _margin_helper(wpos, wfaces, hit_faces, s_pos, t_pos)
-
-
-def _margin(surface, ends) -> float:
-    """``region._margin`` of the located ends on the patch: |S_(i+1) - S_i| plus the longest edge of
-    the two hit faces."""
-    return _margin_kernel(surface.welded.positions, surface.welded.faces, ends.hit_faces, ends.points[0],
-                          ends.points[1])
-
-
-def _patch_and_ends(source, blades, check_ends):
-    """The stroke's patch and its located ends: the patch of the guessed plane and margin, again with
-    the plane and margin ``locate`` found on it until they agree (once, unless the guess was off)."""
-    snap = tol.snap * source.diagonal
-    plane, margin = _first_guess(source, blades, snap)
-    for _ in range(4):
-        patch = patch_surface(source, select(source, plane, blades, margin))
-        ends = locate(patch.surface, patch.surface.faces, *blades)
-        check_ends(ends, patch.surface)
-        needed = _margin(patch.surface, ends)
-        if plane is not None and ends.plane.tolist() == plane.tolist() and needed <= margin:
-            return patch, ends
-        plane, margin = ends.plane, max(margin, needed)
-    raise AssertionError("the stroke's patch did not settle")      # the plane of a patch is its own
 
 
 def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice:
     """One stroke on ``source``: ``blades`` (4, 3) float64 handle and tip at t_i, then at t_(i+1).
 
-    check_ends(ends, surface) raises the errors of steps 2-3 ; no_path(ends, path) raises when the walk
-    found no path (path None) or nothing to tear (no nodes).
+    check_ends(ends) raises the errors of steps 2-3 ; no_path(ends, path) raises when the walk
+    found no path (path None) or nothing to tear (no nodes). Raises MissesMeshError when a scalpel
+    position misses the surface.
     """
-    patch, ends = _patch_and_ends(source, blades, check_ends)
-    surface, rows = patch.surface, patch.rows
-    path = walk(surface, ends, surface.bvh, (blades[0], blades[1]), (blades[2], blades[3]))
-    no_path(ends, path)
-    p, n = len(rows), len(source.positions)
-    pieces, (torn_faces, candidates), slit = _split_along(*path, surface.faces, surface.vertex_welded,
-                                                         tuple(surface.welded), p, tol.on_edge, surface.positions,
-                                                         ends.plane)
-    pieces, slit = Pieces(*pieces), Slit(*slit)
-    added = len(pieces.new_node) + len(slit.twins)
-    read, changed, vertices, labels, joints, weights = _stroke_rows(
-        pieces.new_src, slit.twins, slit.moved, rows, patch.vertices, patch.labels, source.joints, source.weights,
-        added)
     posed = source.affines is not None
-    residual = _vertex_data(vertices, joints, weights, labels, p, source.top_label, path.points, tuple(pieces),
-                            tuple(slit), opening, ends.plane[:3].copy(),
-                            source.affines if posed else np.zeros((1, 12)), posed)
+    status, hit_faces, located = _stroke(
+        source.bvh_arrays, source.boundary, source.vertices, source.positions, source.labels, source.faces,
+        source.joints, source.weights, blades, source.top_label, source.diagonal, tol.snap, tol.min_sine, tol.on_edge,
+        opening, source.affines if posed else np.zeros((1, 12)), posed)
+    source.check_hits(hit_faces)
+    if status != FOUND:
+        name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
+        raise MissesMeshError(f"the scalpel {name} (handle {blades[i].tolist()} -> tip {blades[i + 1].tolist()}) "
+                              f"does not meet the surface")
+    settled, ends, (found, nodes, points), spliced = located
+    ends = Ends(*ends)
+    check_ends(ends)
+    if not settled:
+        raise AssertionError("the stroke's patch did not settle")      # the plane of a patch is its own
+    no_path(ends, Path(nodes, points) if found else None)
+    rows, ((new_src, new_coef, twin_of, read), arrays, (points, kinds, side_a, side_b, split, jumps), residual) = spliced
     if not residual <= tol.placement * source.diagonal:
         warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
              f"blended transform is singular or nearly so)", PlacementWarning)
-    attributes, twin_of = {}, slit.twins[:, 0].copy()
-    for name, (values, _tail) in source.attributes.items():
-        values = _gathered(values, rows, read, added)
-        # new vertices interpolate their sources, and a twin has its vertex's data
-        interpolate_in_place(values, p, pieces.new_src, pieces.new_coef, attribute_rule(name, values.shape[1]),
-                             twin_of)
-        attributes[name] = values
-    boundary_rows, boundary_flags = _boundary_changes(vertices, labels, torn_faces, candidates, surface.vertex_welded,
-                                                      len(surface.welded.positions), path.nodes, p)
-    removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(
-        patch.faces, pieces.affected, pieces.parent, torn_faces, candidates, rows, n,
-        (slit.side_a, slit.side_b, boundary_rows))
-    stroke = dict(plane=ends.plane, points=path.points[:, 1:4].copy(), kinds=path.nodes[:, 0].copy(),
-                  side_a=side_a, side_b=side_b, split=slit.split, hits=ends.hits,
-                  jumps=path.nodes[:, 2] == JUMP_CARRIER)
-    return Splice(rows, changed, vertices, joints, weights, labels, attributes, removed, kept, kept_corners,
-                  new_faces, parents, boundary_rows, boundary_flags, stroke)
+    # new vertices interpolate their sources, and a twin has its vertex's data
+    attributes = {name: _attribute_rows(values, rows, read, new_src, new_coef, attribute_rule(name, values.shape[1]),
+                                        twin_of) for name, (values, _tail) in source.attributes.items()}
+    stroke = dict(plane=ends.plane, points=points, kinds=kinds, side_a=side_a, side_b=side_b, split=split,
+                  hits=ends.hits, jumps=jumps)
+    return Splice(rows, *arrays, attributes, stroke)
 
 
-@kernel((I2, F2, I2, I1, WELDED_MESH, i8, f8, F2, F1), cost=2.4)
-def _split_along(path_int, path_float, faces, vertex_welded, mesh, p, on_edge, positions, plane):
-    """Steps 5-6 in one call: the faces the path crosses split (``retriangulate``), the torn faces
-    (``slit._torn_faces``) and the slit opened (``slit._open_slit``), on the patch (faces (q, 3) over
-    p vertices, vertex_welded (p,), mesh its WeldedMesh as a tuple, positions (p, 3)).
+@kernel((BVH_ARRAYS, B1, F2, F2, I1, I2, I2, F2, F2, i8, f8, f8, f8, f8, f8, F2, b1), cost=45.0)
+def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, blades, top_label, diagonal, snap,
+            min_sine, on_edge, opening, affines, posed):
+    """Steps 2-7 of one stroke on a source's arrays (``stroke_splice``'s source interface; ``snap``,
+    ``min_sine`` and ``on_edge`` the relative tolerances), compiled in one call: every step hands the
+    next a dozen arrays, and from Python each returned array cost a boxing and each step a call (half
+    a small mesh's stroke).
 
-    returns the fields of ``Pieces``, the torn faces and the rows of them around the path, and the
-    fields of ``Slit``
+    returns the guess's status (``guess.FOUND``, or which scalpel position missed) and hit faces (2,),
+    then None when it missed, else (settled, the fields of ``Ends``, (found, the fields of ``Path``),
+    the splice): the splice is None unless the patch settled and the walk found a path with nodes, else
+    (rows (p,), ``_splice_arrays``' values as a tuple)
     """
+    snap = snap * diagonal
+    status, plane, margin, hit_faces = _guess(bvh, boundary, blades, snap, min_sine)
+    located = None
+    if status == FOUND:
+        (settled, face_ids, rows, patch_faces, patch_positions, welded, mesh, patch_boundary, patch_vertices,
+         patch_labels, tree, ends) = _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane,
+                                             plane.any(), margin, snap, min_sine, diagonal)
+        _, ends_int, ends_pos, _, ends_faces, ends_plane, sides = ends
+        found, path_int, path_float = False, np.empty((0, 4), np.int64), np.empty((0, 4))
+        spliced = None
+        if settled:
+            found, path_int, path_float = _walk(
+                mesh, sides, ends_plane, ends_int[0, 0], ends_int[0, 1], ends_pos[0], ends_int[1, 0], ends_int[1, 1],
+                ends_pos[1], (tree[0], tree[1], tree[2], tree[3], tree[4], tree[5], tree[6], patch_positions,
+                              patch_faces), (blades[0], blades[1], blades[2], blades[3]), ends_faces, snap)
+            if found and path_int.shape[0] > 0:
+                spliced = (rows, _splice_arrays(
+                    path_int, path_float, patch_faces, patch_positions, welded, mesh, ends_plane, face_ids, rows,
+                    patch_vertices, patch_labels, joints, weights, positions.shape[0], top_label, on_edge, opening,
+                    affines, posed))
+        located = (settled, ends, (found, path_int, path_float), spliced)
+    return status, hit_faces, located
+
+
+@helper
+def _splice_arrays(path_int, path_float, faces, positions, vertex_welded, mesh, plane, face_ids, rows, vertices,
+                   labels, joints, weights, n, top_label, on_edge, opening, affines, posed):
+    """Steps 5-7 on the patch and the splice in the source's numbering: the faces the path
+    crosses split (``retriangulate``), the torn faces and the slit opened (``slit.py``), the vertex rows
+    (``vertex_data``), the boundary flags that change, all mapped to the source (``_in_source``).
+
+    path_int, path_float : the ``Path``'s fields ; faces (q, 3), positions (p, 3), vertex_welded (p,),
+    mesh (its WeldedMesh as a tuple) : the patch's surface ; plane (4,) the tear plane ; face_ids (q,),
+    rows (p,), vertices (p, 3), labels (p,) : the patch's ids and rest rows in the source ; joints,
+    weights (n, 4) : the source's ; top_label, affines (B, 12), posed : the source's ;
+    returns (new_src, new_coef, twin_of, read) for the attributes (``_attribute_rows``), the fields
+    of ``Splice`` from ``changed`` to ``boundary_flags``, (points, kinds, side_a, side_b, split,
+    jumps) of the stroke's record, and the largest placement residual (``vertex_data``)
+    """
+    p = rows.shape[0]
     pieces = _retriangulate(path_int, path_float, faces, mesh, p, on_edge)
-    torn = _torn_faces(path_int, path_float, faces, vertex_welded, mesh, pieces[0], pieces[1], pieces[2])
-    slit = _open_slit(torn[0], torn[1], torn[2], positions, torn[3], plane, torn[4])
-    return pieces, (torn[0], torn[4]), slit
+    affected, _, new_node, new_src, new_coef, parent = pieces
+    torn_faces, torn_welded, node_welded, new_positions, candidates = _torn_faces(
+        path_int, path_float, faces, vertex_welded, mesh, affected, pieces[1], new_node)
+    slit = _open_slit(torn_faces, torn_welded, node_welded, positions, new_positions, plane, candidates)
+    split, twins, moved, side_a, side_b = slit
+    added = new_node.shape[0] + twins.shape[0]
+    read, changed, out_vertices, out_labels, out_joints, out_weights = _stroke_rows(
+        new_src, twins, moved, rows, vertices, labels, joints, weights, added)
+    residual = _vertex_data(out_vertices, out_joints, out_weights, out_labels, p, top_label, path_float, pieces, slit,
+                            opening, plane[:3].copy(), affines, posed)
+    boundary_rows, boundary_flags = _boundary_changes(out_vertices, out_labels, torn_faces, candidates, vertex_welded,
+                                                      mesh[0].shape[0], path_int, p)
+    removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(
+        face_ids, affected, parent, torn_faces, candidates, rows, n, (side_a, side_b, boundary_rows))
+    k_nodes = path_int.shape[0]
+    points, kinds, jumps = np.empty((k_nodes, 3)), np.empty(k_nodes, np.int64), np.empty(k_nodes, np.bool_)
+    for i in range(k_nodes):
+        points[i] = path_float[i, 1:4]
+        kinds[i], jumps[i] = path_int[i, 0], path_int[i, 2] == JUMP_CARRIER
+    return ((new_src, new_coef, twins[:, 0].copy(), read),
+            (changed, out_vertices, out_joints, out_weights, out_labels, removed, kept, kept_corners, new_faces,
+             parents, boundary_rows, boundary_flags),
+            (points, kinds, side_a, side_b, split, jumps), residual)
 
 
-@kernel((I1, I1, I1, I2, I1, I1, i8, record(I1, I1, I1)), cost=0.5)
+@kernel((F2, I1, I1, I2, F2, i8, I1), cost=0.5)
+def _attribute_rows(values, rows, read, new_src, new_coef, rule, twin_of):
+    """An attribute's splice rows: ``values`` (n, c) gathered at ``rows[read]`` (``_gathered``), then
+    the new vertices' rows interpolated by ``rule`` and the twins' copied from ``twin_of``."""
+    out = _gathered(values, rows, read, new_src.shape[0] + twin_of.shape[0])
+    interpolate_in_place(out, rows.shape[0], new_src, new_coef, rule, twin_of)
+    return out
+
+
+@helper
 def _in_source(face_ids, affected, parent, torn, candidates, rows, n, vertex_lists):
     """The stroke's faces and vertices in the source's numbering (patch vertex i < p is source
     vertex rows[i], new vertex p + j is n + j; patch face f is face_ids[f]).
@@ -234,7 +255,7 @@ def _source_vertex(v, rows, n):
     return rows[v] if v < rows.shape[0] else n + v - rows.shape[0]
 
 
-@kernel((F2, I1, I2, I1, I1, i8, I2, i8), cost=1.5)
+@helper
 def _boundary_changes(vertices, labels, faces, candidates, welded, n_welded, path_int, p):
     """The patch vertices whose boundary flag a stroke can change -- the copies of the path's vertices
     and the new vertices -- and their flags in the torn patch (welded as ``surface.tear_topology``
@@ -255,7 +276,7 @@ def _boundary_changes(vertices, labels, faces, candidates, welded, n_welded, pat
     return changed, _boundary_of(vertices, labels, faces, candidates, changed)
 
 
-@kernel((I2, I2, I2, I1, F2, I1, I2, F2, i8), cost=0.6)
+@helper
 def _stroke_rows(new_src, twins, moved, rows, vertices, labels, joints, weights, added):
     """The patch's vertex arrays for a stroke, each with ``added`` uninitialised rows after its p rows
     for ``vertex_data`` to fill.
@@ -286,7 +307,7 @@ def _stroke_rows(new_src, twins, moved, rows, vertices, labels, joints, weights,
             _gathered(weights, rows, read, added))
 
 
-@kernel((F2, I1, I1, i8), (I2, I1, I1, i8), cost=0.2)
+@helper
 def _gathered(values, rows, read, added):
     """(p + added, c) the rows ``rows[read]`` of ``values`` (n, c) at ``read``, zeros in the other p
     rows, then ``added`` uninitialised rows for a kernel to fill."""

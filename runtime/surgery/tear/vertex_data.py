@@ -2,13 +2,12 @@
 opening, rest placement in a pose)."""
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, I2, b1, f8, i8, kernel
+from ..._shared.jit import helper
 from ...algebra.vec3 import _copy_row, _set_row
 from ..new_vertices import _blended, _solve_linear, _to_rest, blend_weight_rows
-from .records import PIECES, SLIT
 
 
-@kernel((F2, I2, F2, I1, i8, i8, F2, PIECES, SLIT, f8, F1, F2, b1), cost=3.4)
+@helper
 def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, opening, normal, affines, posed):
     """Step 7 and the vertex arrays of the torn mesh: originals, new vertices, twins.
 

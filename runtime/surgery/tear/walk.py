@@ -3,18 +3,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F1, I1, S1, f8, helper, i8, kernel, record
-from ...tolerances import tol
-from ..bvh import BVH_ARRAYS
-from ..surface import WELDED_MESH
+from ..._shared.jit import helper
 from .elements import _along_edge, _edge_parameter, _elements, _in_plane, _push, _push_element
 from .flat import _across_flat, _flat, _line_plane, _line_side
 from .junctions import _boundary_vertex, _jumps, _openings
-from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CARRIER, VERTEX, Ends, Path
+from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CARRIER, VERTEX
 from .region import _margin
 
 
-@kernel((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=10.0)
+@helper
 def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap):
     """Follow the plane's section of the surface from the start node to the target node.
 
@@ -275,15 +272,3 @@ def _with_midpoint(path_int, path_float, wpos, edges):
     out_float[0], out_float[1], out_float[2] = path_float[0], mid_float, path_float[1]
     return True, out_int, out_float
 
-
-def walk(surface, ends: Ends, bvh, blade_from, blade_to) -> Path | None:
-    """Step 4 on ``surface`` (``surface._Surface``, ``bvh`` a TriangleBVH of it) for the blade (handle,
-    tip) at both times: the path from S_i to S_{i+1} along the section within the swept region (None
-    when the section does not lead there, no nodes when it runs only through openings); a
-    one-segment path gets its midpoint."""
-    (s_kind, s_id), (t_kind, t_id) = ends.nodes.tolist()      # Python ints: cheaper than numpy scalars
-    s_pos, t_pos = ends.points
-    found, nodes, points = _walk(tuple(surface.welded), ends.sides, ends.plane, s_kind, s_id, s_pos, t_kind, t_id,
-                                 t_pos, tuple(bvh._arrays), (*blade_from, *blade_to), ends.hit_faces,
-                                 tol.snap * surface.diagonal)
-    return Path(nodes, points) if found else None

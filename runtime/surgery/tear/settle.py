@@ -1,0 +1,59 @@
+"""A stroke's patch and its located ends, settled (compiled; ``splice._stroke`` runs it).
+
+``guess.py`` guesses the tear plane and margin on the whole surface; the patch of that plane and margin
+(``patch.py``: the faces near the plane inside the region's box, compacted, welded, with a BVH of one
+leaf) then has its ends located on it (``locate.py``), and the patch is taken again with the plane and
+margin ``locate`` found until the two agree (once, unless the guess was off). The steps hand each other
+a few dozen arrays: run from Python, every returned array cost a boxing and every step a call, a third of
+a small mesh's stroke; compiled, they stay where they are.
+"""
+from __future__ import annotations
+
+from ..._shared.jit import helper
+from ..bvh import _tree
+from .locate import OK, _ends
+from .patch import ONE_LEAF, _compact, _faces_in_region, _patch_topology
+from .region import _margin
+
+#: how often the patch is taken again before giving up (the plane of a patch is its own: twice is enough)
+ROUNDS = 4
+
+
+@helper
+def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, has_plane, margin, snap, min_sine,
+            diagonal):
+    """The stroke's patch and its located ends, settled, for ``blades`` (4, 3) handle and tip at t_i,
+    then at t_(i+1): the source's ``bvh`` (BVHArrays as a tuple), ``boundary`` (n,) flags, ``vertices``,
+    ``positions`` (n, 3), ``labels`` (n,), ``faces`` (m, 3); the guessed ``plane`` (4,) (``has_plane``
+    False: none; the patch then takes every face in the box, and the plane ``locate`` chooses selects it
+    again) and ``margin``; ``snap`` the absolute snap distance.
+
+    returns settled (False: the ends' status is not OK, or the rounds ran out), the patch's face ids
+    (q,), rows (p,), faces (q, 3) over 0..p-1, positions (p, 3), welded vertex of each vertex (p,),
+    WeldedMesh fields, boundary (welded ids), rest vertices (p, 3) and labels (p,), the fields of its
+    BVH's tree (``BVHArrays``' first seven), and the fields of ``Ends``
+    """
+    a0, b0, a1, b1 = blades[0], blades[1], blades[2], blades[3]
+    for round_ in range(ROUNDS):
+        face_ids = _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal)
+        rows, local = _compact(faces, face_ids)
+        (patch_positions, welded, wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces,
+         patch_boundary, patch_vertices, patch_labels) = _patch_topology(vertices, positions, labels, boundary,
+                                                                         rows, local)
+        mesh = (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces)
+        tree = _tree(patch_positions, local, ONE_LEAF)
+        ends = _ends((tree[0], tree[1], tree[2], tree[3], tree[4], tree[5], tree[6], patch_positions, local),
+                     a0, b0, a1, b1, patch_positions, local, mesh, patch_boundary, snap, min_sine)
+        status, points, hit_faces, located = ends[0], ends[2], ends[4], ends[5]
+        settled = status == OK
+        if settled:
+            needed = _margin(wpos, wfaces, hit_faces, points[0], points[1])
+            same = has_plane
+            for k in range(4):
+                same = same and located[k] == plane[k]
+            settled = same and needed <= margin
+            plane, has_plane, margin = located.copy(), True, max(margin, needed)
+        if settled or status != OK or round_ == ROUNDS - 1:
+            return (settled, face_ids, rows, local, patch_positions, welded, mesh, patch_boundary, patch_vertices,
+                    patch_labels, tree, ends)
+    raise AssertionError("unreachable")
