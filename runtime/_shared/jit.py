@@ -1,7 +1,8 @@
 """The one jit wrapper of the runtime, and the record of what ``cgaskin.precompile`` compiles.
 
 Every compiled function is either a ``kernel`` (called from Python) or a ``helper`` (called only from
-other compiled functions), each with one fixed set of options:
+other compiled functions; a ``callee`` is a helper that precompile compiles ahead), each with one
+fixed set of options:
 
 * ``cache=True``: machine code is cached beside the source, so only a fresh install compiles;
 * ``nogil=True``: callers may run kernels in threads;
@@ -15,7 +16,9 @@ A kernel lists the argument types the runtime's own calls give it, where it is d
 are called (``precompiled(K.some_batch, (F2r, F2), cost=0.3)``). ``SIGNATURES`` collects them as the
 modules are imported; ``cgaskin.precompile`` compiles the ones numba's cache lacks, on every core.
 ``cost`` is the seconds one signature takes to compile cold on a 2-core machine, used only to share
-the work out evenly.
+the work out evenly. A *fused* kernel (``@kernel(..., fused=True)``) calls big helpers that are
+``callee``s with their signatures: precompile compiles it after everything else, so that those callees
+were compiled in parallel first and it only loads them (numba's cache: the same machine code).
 """
 from __future__ import annotations
 
@@ -27,7 +30,7 @@ from . import cache_keys
 
 cache_keys.install()            # a kernel's cache is keyed by every cgaskin source it imports
 
-__all__ = ["kernel", "helper", "precompiled", "record", "SIGNATURES", "Signature"]
+__all__ = ["kernel", "helper", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
 
 _OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -51,34 +54,45 @@ def record(*fields):
 
 
 class Signature(NamedTuple):
-    """One compiled variant that precompile makes: ``module.name`` for ``argtypes``."""
+    """One compiled variant that precompile makes: ``module.name`` for ``argtypes`` (``fused``: after
+    every other one)."""
 
     module: str
     name: str
     argtypes: tuple
     cost: float
+    fused: bool = False
 
 
 #: every (kernel, argument types) that the runtime calls from Python, in import order
 SIGNATURES: list = []
 
 
-def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3):
+def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3, fused: bool = False):
     """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it."""
     for argtypes in signatures:
         SIGNATURES.append(Signature(dispatcher.py_func.__module__, dispatcher.__name__, tuple(argtypes),
-                                    cost))
+                                    cost, fused))
     return dispatcher
 
 
-def kernel(*signatures: tuple, cost: float = 0.3):
+def kernel(*signatures: tuple, cost: float = 0.3, fused: bool = False):
     """Compile a function that Python calls; ``signatures`` are the argument types of the runtime's
-    own calls (precompiled), ``cost`` the cold compile seconds of each."""
+    own calls (precompiled), ``cost`` the cold compile seconds of each (for a ``fused`` one, its own
+    seconds once its callees are compiled)."""
     def wrap(function):
-        return precompiled(njit(**_OPTIONS)(function), *signatures, cost=cost)
+        return precompiled(njit(**_OPTIONS)(function), *signatures, cost=cost, fused=fused)
     return wrap
 
 
 def helper(function):
     """Compile a function that only other compiled functions call (no Python entry point)."""
     return njit(**_OPTIONS, no_cpython_wrapper=True)(function)
+
+
+def callee(*signatures: tuple, cost: float):
+    """A ``helper`` that a fused kernel calls with these argument types, compiled ahead by precompile
+    (in parallel with the other kernels; ``cost`` as for ``kernel``)."""
+    def wrap(function):
+        return precompiled(helper(function), *signatures, cost=cost)
+    return wrap

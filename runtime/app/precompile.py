@@ -2,7 +2,7 @@
 
 numba compiles a kernel at its first call and caches the machine code beside the source (or under
 ``NUMBA_CACHE_DIR``). On a fresh install skinning, cutting and tearing once would compile about
-85 s of kernels (2-core machine), one at a time, on one core. ``precompile()`` finds the kernels of
+85-130 s of kernels (2-core machine), one at a time, on one core. ``precompile()`` finds the kernels of
 ``KERNELS`` that the cache does not hold yet and compiles them in parallel: this process takes one
 share and worker processes the others (one process per core), each writing to the same cache.
 Afterwards every first call only loads from the cache.
@@ -11,7 +11,10 @@ Afterwards every first call only loads from the cache.
 runtime's own calls give it (arrays it made or converted itself; a kernel called with other types,
 say read-only arrays of a caller, is compiled at that call as before), recorded where each kernel
 is defined (``cgaskin._shared.jit``). Kernels called only from
-other kernels are compiled with them (and without a Python wrapper: ``no_cpython_wrapper``). A test
+other kernels are compiled with them (and without a Python wrapper: ``no_cpython_wrapper``), except the
+big callees of a fused kernel (``jit.callee``): those are compiled in parallel first, and the fused
+kernels after them, loading them from the cache (one process compiling a fused kernel and all it
+calls took 1.5 times as long as every other kernel together). A test
 runs skinning, cuts and tears after ``precompile()`` and fails if any of them still compiles a
 kernel, so the list cannot fall behind the code.
 """
@@ -24,10 +27,10 @@ import subprocess
 import sys
 import time
 
-from .._shared.jit import SIGNATURES
+from .._shared.jit import SIGNATURES, Signature
 from ..errors import InvalidInputError
 
-__all__ = ["precompile", "KERNELS"]
+__all__ = ["precompile", "KERNELS", "Signature"]
 
 #: every kernel the Python side calls, with the argument types of the runtime's own calls: the
 #: ``Signature`` records that ``cgaskin._shared.jit`` collects where each kernel is defined (importing
@@ -36,7 +39,7 @@ KERNELS = SIGNATURES
 
 
 def _dispatcher(index: int):
-    module, name, argtypes, _ = KERNELS[index]
+    module, name, argtypes = KERNELS[index][:3]
     return importlib.import_module(module).__dict__[name], argtypes
 
 
@@ -83,6 +86,28 @@ _WORKER = ("import sys; from cgaskin.app.precompile import _compile\n"
            "for line in _compile(int(a) for a in sys.argv[1:]): print('FAILED', line, file=sys.stderr)")
 
 
+def _in_parallel(shares: list) -> list:
+    """Compile the first share here and each other one in a worker process; returns what failed."""
+    own, *others = shares
+    workers = [subprocess.Popen([sys.executable, "-c", _WORKER, *map(str, share)], stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+               for share in others]
+    try:
+        failed = _compile(own)
+    except BaseException:                  # interrupted: stop the workers too
+        for worker in workers:
+            worker.kill()
+        raise
+    finally:
+        reports = [worker.communicate()[1] for worker in workers]
+    for worker, report in zip(workers, reports):
+        lines = report.strip().splitlines()
+        failed += [line[len("FAILED "):] for line in lines if line.startswith("FAILED ")]
+        if worker.returncode:               # the worker itself failed: the rest of its share is left
+            failed.append(f"a compile worker: {lines[-1] if lines else 'no message'}")
+    return failed
+
+
 def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     """Compile every kernel of ``KERNELS`` that numba's cache does not hold yet, in ``jobs``
     processes (default: one per core); returns how many were missing. Kernels the cache holds cost
@@ -100,26 +125,14 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     missing = [i for i in range(len(KERNELS)) if not _is_cached(*_dispatcher(i))]
     if not missing:
         return 0
-    own, *others = _shares(missing, jobs)
     if verbose:
-        print(f"compiling {len(missing)} numba kernels in {1 + len(others)} processes (once: they are "
+        print(f"compiling {len(missing)} numba kernels in {min(jobs, len(missing))} processes (once: they are "
               f"cached for later runs)", flush=True)
-    workers = [subprocess.Popen([sys.executable, "-c", _WORKER, *map(str, share)], stdin=subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-               for share in others]
-    try:
-        failed = _compile(own)
-    except BaseException:                  # interrupted: stop the workers too
-        for worker in workers:
-            worker.kill()
-        raise
-    finally:
-        reports = [worker.communicate()[1] for worker in workers]
-    for worker, report in zip(workers, reports):
-        lines = report.strip().splitlines()
-        failed += [line[len("FAILED "):] for line in lines if line.startswith("FAILED ")]
-        if worker.returncode:               # the worker itself failed: the rest of its share is left
-            failed.append(f"a compile worker: {lines[-1] if lines else 'no message'}")
+    # fused kernels last: the callees they inline are then in the cache, compiled in parallel
+    failed = []
+    for stage in ([i for i in missing if not KERNELS[i].fused], [i for i in missing if KERNELS[i].fused]):
+        if stage:
+            failed += _in_parallel(_shares(stage, jobs))
     if verbose:
         print(f"compiled in {time.perf_counter() - start:.1f} s", flush=True)
         for line in failed:

@@ -42,6 +42,9 @@ from .tear.stroke import StrokeResult, check_blades, check_ends, check_opening, 
 
 __all__ = ["Surgery"]
 
+#: the per-vertex buffers a stroke writes, in ``session_write._write_splice``'s order
+_VERTEX_ARRAYS = ("vertices", "labels", "joints", "weights", "boundary")
+
 
 class _Undo(NamedTuple):
     """What one stroke changed: counts before it, and the old values of the rows it rewrote."""
@@ -207,28 +210,25 @@ class Surgery:
 
     # ---- a stroke's rows in, and out again ------------------------------------------------------------
     def _apply(self, splice) -> _Undo:
-        rows, p = splice.rows[splice.changed], len(splice.rows)
-        n, m, added = self.n_vertices, self._faces.n, len(splice.vertices) - len(splice.rows)
-        buffers = {name: self._arrays[name].reserve(added) for name in ("vertices", "labels", "joints", "weights",
-                                                                        "boundary")}
+        p, n, m, k = len(splice.rows), self.n_vertices, self._faces.n, len(splice.pieces)
+        added = len(splice.vertices) - p
+        buffers = [self._arrays[name] for name in _VERTEX_ARRAYS]
         # a stroke changes the labels (the far side) and positions (an opening) of a few of its patch's
         # rows; their weights and attributes stay: those are only appended
-        old_vertices, old_labels, moved, is_moved, old_flags, old_kept, moved_faces, top = _write_splice(
-            buffers["vertices"], buffers["labels"], buffers["joints"], buffers["weights"], buffers["boundary"],
-            self._faces.reserve(len(splice.pieces)), self._alive.reserve(len(splice.pieces)), n, m, rows,
-            splice.changed, p, splice.vertices, splice.labels, splice.joints, splice.weights, splice.boundary_rows,
-            splice.boundary_flags, splice.removed, splice.kept, splice.kept_corners, splice.pieces)
-        for name in buffers:
-            self._arrays[name].n += added
-        self._faces.n += len(splice.pieces)
-        self._alive.n += len(splice.pieces)
+        rows, old_vertices, old_labels, moved, old_positions, old_flags, old_kept, moved_faces, top = _write_splice(
+            *[buffer.reserve(added) for buffer in buffers], self._faces.reserve(k), self._alive.reserve(k), n, m,
+            splice.rows, splice.changed, splice.vertices, splice.labels, splice.joints, splice.weights,
+            splice.boundary_rows, splice.boundary_flags, splice.removed, splice.kept, splice.kept_corners,
+            splice.pieces)
+        for buffer in buffers:
+            buffer.n += added
+        self._faces.n += k
+        self._alive.n += k
         for name, (buffer, _) in self._attributes.items():
             buffer.append(splice.attributes[name][p:])
         scalars = (self.top_label, self._labelled, self._bounds.copy())
         self.top_label = max(self.top_label, top)
-        if self.affines is None:
-            old_positions = old_vertices[is_moved]
-        else:                                        # the posed surface of the new and moved rows
+        if self.affines is not None:                 # the posed surface of the new and moved rows
             old_positions = self._arrays["positions"].view[moved].copy()
             new = np.concatenate((moved, np.arange(n, self.n_vertices)))
             skinned = skin_affine(self.vertices[new], self.joints[new], self.weights[new], self.affines)

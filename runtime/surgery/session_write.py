@@ -5,33 +5,35 @@ import numpy as np
 from .._shared.jit import B1, F2, I1, I2, i8, kernel
 
 
-@kernel((F2, I1, I2, F2, B1, I2, B1, i8, i8, I1, I1, i8, F2, I1, I2, F2, I1, B1, I1, I1, I2, I2), cost=1.8)
+@kernel((F2, I1, I2, F2, B1, I2, B1, i8, i8, I1, I1, F2, I1, I2, F2, I1, B1, I1, I1, I2, I2), cost=1.8)
 def _write_splice(vertices, labels, joints, weights, flags, faces, alive, n, m,
-                  rows, changed, p, new_vertices, new_labels, new_joints, new_weights, boundary_rows, boundary_flags,
+                  patch_rows, changed, new_vertices, new_labels, new_joints, new_weights, boundary_rows, boundary_flags,
                   removed, kept, kept_corners, pieces):
     """Write a splice (``tear/splice.py``) into the session's buffers, which hold n vertices and m face
     rows and have room for the rows appended here; returns what undo needs.
 
     vertices (N, 3), labels (N,), joints (N, 4), weights (N, 4), flags (N,) boundary flags ; faces
-    (M, 3), alive (M,) : the buffers ; rows (c,) the source vertices the stroke may change, increasing,
-    at ``changed`` (c,) in the splice's rows ; p : the splice's row count before its new vertices ;
-    new_* : the splice's rows (p + v) ; boundary_rows (b,), boundary_flags (b,) ; removed (a,),
-    kept (r,) with kept_corners (r, 3), pieces (k, 3) : its faces
-    returns old_vertices (c, 3), old_labels (c,), moved (u,) the rows whose position changed
-    (increasing), is_moved (c,) bool, old_flags (b,), old_kept (r, 3), moved_faces (the kept faces
-    with a moved corner), top (the highest label written)
+    (M, 3), alive (M,) : the buffers ; patch_rows (p,) the source vertices of the splice's first p rows,
+    of which it may change those at ``changed`` (c,) (increasing) ; new_* : the splice's rows (p + v) ;
+    boundary_rows (b,), boundary_flags (b,) ; removed (a,), kept (r,) with kept_corners (r, 3),
+    pieces (k, 3) : its faces
+    returns rows (c,) = patch_rows[changed], their old_vertices (c, 3) and old_labels (c,), moved (u,)
+    the rows whose position changed (increasing) and their old positions (u, 3), old_flags (b,),
+    old_kept (r, 3), moved_faces (the kept faces with a moved corner), top (the highest label written)
     """
-    c = rows.shape[0]
+    c, p = changed.shape[0], patch_rows.shape[0]
+    rows = np.empty(c, np.int64)
     old_vertices, old_labels = np.empty((c, 3)), np.empty(c, np.int64)
     is_moved = np.zeros(c, np.bool_)
     for i in range(c):
-        r, j = rows[i], changed[i]
+        r, j = patch_rows[changed[i]], changed[i]
+        rows[i] = r
         for k in range(3):
             old_vertices[i, k] = vertices[r, k]
             is_moved[i] = is_moved[i] or new_vertices[j, k] != vertices[r, k]
             vertices[r, k] = new_vertices[j, k]
         old_labels[i], labels[r] = labels[r], new_labels[j]
-    moved = rows[is_moved]
+    moved, old_moved = rows[is_moved], old_vertices[is_moved]
     top = 0
     for j in range(new_labels.shape[0]):
         top = max(top, new_labels[j])
@@ -63,4 +65,5 @@ def _write_splice(vertices, labels, joints, weights, flags, faces, alive, n, m,
         for k in range(3):
             faces[m + i, k] = pieces[i, k]
         alive[m + i] = True
-    return old_vertices, old_labels, moved, is_moved, old_flags, old_kept, moved_faces[:n_moved_faces].copy(), top
+    return (rows, old_vertices, old_labels, moved, old_moved, old_flags, old_kept, moved_faces[:n_moved_faces].copy(),
+            top)

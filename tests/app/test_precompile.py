@@ -24,6 +24,16 @@ WORKLOAD = textwrap.dedent("""
     from cgaskin.app.precompile import precompile
 
     assert precompile() > 0                       # an empty cache: it compiles
+    # a fused kernel loaded its callees from the cache: no callee was compiled for other types too
+    # (numba's cache index of a kernel holds one entry per compiled signature)
+    pc = sys.modules["cgaskin.app.precompile"]
+    listed = {}
+    for i, signature in enumerate(pc.KERNELS):
+        dispatcher = pc._dispatcher(i)[0]
+        if dispatcher.targetoptions.get("no_cpython_wrapper"):
+            listed[dispatcher] = listed.get(dispatcher, 0) + 1
+    extra = [d.py_func.__name__ for d, n in listed.items() if len(d._cache._cache_file._load_index()) != n]
+    assert listed and not extra, f"callees compiled again for other types by the kernels that call them: {extra}"
     compiled = []
 
     class Recorder(event.Listener):
@@ -75,8 +85,9 @@ def test_after_precompile_nothing_compiles(models_dir, tmp_path):
 def test_shares_are_even_and_complete():
     indices = list(range(len(pc.KERNELS)))
     kernel_cost = {}
-    for module, name, _, cost in pc.KERNELS:
-        kernel_cost[module, name] = kernel_cost.get((module, name), 0.0) + cost
+    for signature in pc.KERNELS:
+        key = signature.module, signature.name
+        kernel_cost[key] = kernel_cost.get(key, 0.0) + signature.cost
     for jobs in (1, 2, 3, 8):
         shares = pc._shares(indices, jobs)
         assert sorted(i for share in shares for i in share) == indices and len(shares) == jobs
@@ -91,9 +102,20 @@ def test_shares_are_even_and_complete():
 
 
 def test_every_listed_kernel_exists():
-    for index, (_, _, argtypes, cost) in enumerate(pc.KERNELS):
+    for index, signature in enumerate(pc.KERNELS):
         dispatcher, _ = pc._dispatcher(index)
-        assert len(argtypes) == dispatcher.py_func.__code__.co_argcount and cost > 0
+        assert len(signature.argtypes) == dispatcher.py_func.__code__.co_argcount and signature.cost > 0
+    assert any(signature.fused for signature in pc.KERNELS)
+
+
+def test_fused_kernels_compile_after_the_others(monkeypatch):
+    """A fused kernel's callees must be in the cache before it compiles: its stage comes second."""
+    stages = []
+    monkeypatch.setattr(pc, "_is_cached", lambda dispatcher, argtypes: False)
+    monkeypatch.setattr(pc, "_in_parallel", lambda shares: stages.append(sorted(i for s in shares for i in s)) or [])
+    assert precompile(jobs=2) == len(pc.KERNELS)
+    fused = [i for i, signature in enumerate(pc.KERNELS) if signature.fused]
+    assert stages == [sorted(set(range(len(pc.KERNELS))) - set(fused)), fused]
 
 
 def test_command_line(capsys):
@@ -118,7 +140,7 @@ def test_failures_cost_time_not_results(tmp_path):
         from numba import types
         pc = importlib.import_module("cgaskin.app.precompile")
         listed = {k[1]: k for k in pc.KERNELS}
-        wrong = ("cgaskin.generated.kernels", "segment_plane", (types.float64,) * 3, 1.0)
+        wrong = pc.Signature("cgaskin.generated.kernels", "segment_plane", (types.float64,) * 3, 1.0)
         pc.KERNELS = [listed["reverse_versor"], wrong]
         assert pc.precompile(jobs=1, verbose=True) == 2
         print("cached", [pc._is_cached(*pc._dispatcher(i)) for i in range(2)])

@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import helper
+from ..._shared.jit import B1, F2, callee, f8, helper
 from ...generated.kernels import plane_from_points
-from ..bvh import _first_hit, _push_children
+from ..bvh import BVH_ARRAYS, _first_hit, _push_children
 
 #: what ``_guess`` found: both points, or which scalpel position missed the surface
 FOUND, FROM_MISSES, TO_MISSES = 0, 1, 2
@@ -70,7 +70,7 @@ def _distance(p, q):
     return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
 
 
-@helper
+@callee((BVH_ARRAYS, B1, F2, f8, f8), cost=5.0)
 def _guess(bvh, boundary, blades, snap, min_sine):
     """Where the blade meets the skin at both times, on the whole surface (snapped to a boundary
     vertex or a corner of the hit face as ``locate`` snaps), the plane through the first point and

@@ -1,4 +1,5 @@
-"""The tear's path node codes and the records handed from step to step.
+"""The tear's path node codes and the records handed from step to step (the compiled steps hand each
+other their fields as plain tuples, in these orders).
 
 The compiled helpers take these codes (and every other small integer) as np.int64, never as Python
 int literals: numba compiles a separate copy of a helper for each literal value it is called with
@@ -10,8 +11,6 @@ no Python entry point for them, which shortens a cold start by about a tenth (cg
 from typing import NamedTuple
 
 import numpy as np
-
-from ..._shared.jit import B1, F2, I1, I2, record
 
 # path node kinds
 VERTEX, EDGE, FACE = np.int64(0), np.int64(1), np.int64(2)
@@ -102,7 +101,3 @@ class Slit(NamedTuple):
     side_a: np.ndarray
     side_b: np.ndarray
 
-
-#: numba types of the records that kernels take
-PIECES = record(I1, I2, I1, I2, F2, I1)
-SLIT = record(B1, I2, I2, I1, I1)

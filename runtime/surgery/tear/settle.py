@@ -9,8 +9,8 @@ a small mesh's stroke; compiled, they stay where they are.
 """
 from __future__ import annotations
 
-from ..._shared.jit import helper
-from ..bvh import _tree
+from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8
+from ..bvh import BVH_ARRAYS, _tree
 from .locate import OK, _ends
 from .patch import ONE_LEAF, _compact, _faces_in_region, _patch_topology
 from .region import _margin
@@ -19,7 +19,7 @@ from .region import _margin
 ROUNDS = 4
 
 
-@helper
+@callee((BVH_ARRAYS, B1, F2, F2, I1, I2, F2, F1, b1, f8, f8, f8, f8), cost=16.0)
 def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, has_plane, margin, snap, min_sine,
             diagonal):
     """The stroke's patch and its located ends, settled, for ``blades`` (4, 3) handle and tip at t_i,

@@ -24,11 +24,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import B1, F2, I1, I2, b1, f8, helper, i8, kernel
+from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8, helper, i8, kernel
 from ..._shared.warn import warn
 from ...errors import MissesMeshError, PlacementWarning
 from ...tolerances import tol
 from ..bvh import BVH_ARRAYS
+from ..surface import WELDED_MESH
 from ..new_vertices import attribute_rule, interpolate_in_place
 from ..weld import _boundary_of
 from .guess import FOUND, FROM_MISSES, _guess
@@ -110,7 +111,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     return Splice(rows, *arrays, attributes, stroke)
 
 
-@kernel((BVH_ARRAYS, B1, F2, F2, I1, I2, I2, F2, F2, i8, f8, f8, f8, f8, f8, F2, b1), cost=45.0)
+@kernel((BVH_ARRAYS, B1, F2, F2, I1, I2, I2, F2, F2, i8, f8, f8, f8, f8, f8, F2, b1), cost=13.0, fused=True)
 def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, blades, top_label, diagonal, snap,
             min_sine, on_edge, opening, affines, posed):
     """Steps 2-7 of one stroke on a source's arrays (``stroke_splice``'s source interface; ``snap``,
@@ -147,7 +148,7 @@ def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, 
     return status, hit_faces, located
 
 
-@helper
+@callee((I2, F2, I2, F2, I1, WELDED_MESH, F1, I1, I1, F2, I1, I2, F2, i8, i8, f8, f8, F2, b1), cost=22.0)
 def _splice_arrays(path_int, path_float, faces, positions, vertex_welded, mesh, plane, face_ids, rows, vertices,
                    labels, joints, weights, n, top_label, on_edge, opening, affines, posed):
     """Steps 5-7 on the patch and the splice in the source's numbering: the faces the path

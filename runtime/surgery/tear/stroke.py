@@ -81,7 +81,7 @@ from ...errors import CgaskinError, InvalidInputError, MissesMeshError, Placemen
 from ...tolerances import tol
 from ..bvh import TriangleBVH
 from ..surface import TEAR_LABEL, tear_topology
-from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, TO_MISSES
+from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, OK, TO_MISSES
 from .records import Ends
 from .rig_source import RigSource, torn_rig
 from .splice import stroke_splice
@@ -209,20 +209,30 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
 
 def check_blades(scalpel_from, scalpel_to) -> np.ndarray:
     """(4, 3) float64 handle and tip at t_i, then at t_(i+1), checked."""
+    blades = None
     try:                                 # (the usual case at once: both well formed)
-        blades = np.array((scalpel_from, scalpel_to), dtype=np.float64)
+        if type(scalpel_from) is np.ndarray and type(scalpel_to) is np.ndarray:    # (half np.array's cost)
+            if scalpel_from.shape == scalpel_to.shape == (2, 3) and scalpel_from.dtype.kind in "fiu" \
+                    and scalpel_to.dtype.kind in "fiu":
+                blades = np.empty((4, 3))        # (C-contiguous, whatever the inputs' strides: the kernels')
+                blades[:2], blades[2:] = scalpel_from, scalpel_to
+        else:
+            blades = np.array((scalpel_from, scalpel_to), dtype=np.float64)
+            blades = blades.reshape(4, 3) if blades.shape == (2, 2, 3) else None
     except (TypeError, ValueError):
-        blades = None
-    if blades is not None and blades.shape == (2, 2, 3):
+        pass
+    if blades is not None:
         x = blades.ravel().tolist()          # (Python floats: a tenth of numpy's calls on 12 numbers)
         if math.isfinite(sum(x)) and x[0:3] != x[3:6] and x[6:9] != x[9:12]:
-            return blades.reshape(4, 3)
+            return blades
     # (the slow way, which names what is wrong)
     return np.array([*_scalpel(scalpel_from, "scalpel_from"), *_scalpel(scalpel_to, "scalpel_to")])
 
 
 def check_ends(ends: Ends) -> None:
     """The errors of steps 2-3, named for the user (a scalpel that misses is found before: splice.py)."""
+    if ends.status == OK:
+        return
     if ends.status in (FROM_MISSES, TO_MISSES):
         name = "scalpel_from" if ends.status == FROM_MISSES else "scalpel_to"
         raise MissesMeshError(f"the scalpel {name} does not meet the surface")
@@ -236,6 +246,8 @@ def check_ends(ends: Ends) -> None:
 
 def check_path(ends: Ends, path) -> None:
     """The errors of step 4: no path, or nothing to tear."""
+    if path is not None and len(path.nodes):
+        return
     s_pos, t_pos = ends.points
     if path is None:
         raise TearPathError(
@@ -243,10 +255,9 @@ def check_path(ends: Ends, path) -> None:
             f"region the blade swept, does not reach S_(i+1) = {t_pos.tolist()}: the surface between "
             f"them leaves that region (a fold, or a boundary or slit of the mesh that the section "
             f"cannot cross there), or they lie on different pieces of the section (use shorter strokes)")
-    if len(path.nodes) == 0:
-        raise TearPathError(
-            f"nothing to tear: the stroke from S_i = {s_pos.tolist()} to S_(i+1) = {t_pos.tolist()} runs "
-            f"only through openings the surface already has (an existing slit or hole)")
+    raise TearPathError(
+        f"nothing to tear: the stroke from S_i = {s_pos.tolist()} to S_(i+1) = {t_pos.tolist()} runs "
+        f"only through openings the surface already has (an existing slit or hole)")
 
 
 def tear(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 0.0,

@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import helper
+from ..._shared.jit import F1, I1, S1, callee, f8, helper, i8, record
+from ..bvh import BVH_ARRAYS
+from ..surface import WELDED_MESH
 from .elements import _along_edge, _edge_parameter, _elements, _in_plane, _push, _push_element
 from .flat import _across_flat, _flat, _line_plane, _line_side
 from .junctions import _boundary_vertex, _jumps, _openings
@@ -11,7 +13,7 @@ from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CA
 from .region import _margin
 
 
-@helper
+@callee((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=12.0)
 def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap):
     """Follow the plane's section of the surface from the start node to the target node.
 
