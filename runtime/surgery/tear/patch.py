@@ -49,7 +49,7 @@ class Patch(NamedTuple):
     labels: np.ndarray
 
 
-@kernel()
+@helper
 def _compact(faces, face_ids):
     """The vertices (p,) that faces[face_ids] use, increasing, and those faces (q, 3) over 0..p-1: a
     hash map from vertex to slot (``np.unique`` sorts all 3q corners, several times slower), then the
@@ -86,7 +86,7 @@ def _compact(faces, face_ids):
     return rows, local
 
 
-@kernel()
+@helper
 def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     """The patch's arrays in one pass (a dozen numpy calls cost more than the work on a few hundred
     faces), welded by rest position and label exactly as ``topology.checked_topology`` welds and
@@ -141,15 +141,24 @@ def patch_surface(source, face_ids) -> Patch:
     source : a surgery source (``splice.py``): positions, faces, vertices, labels, boundary, diagonal,
         affines
     """
-    rows, faces = _compact(source.faces, face_ids)
-    # welded by rest position and label, as ``surface.tear_topology`` (a posed surface's copies of a
-    # vertex skin alike, but rounding could part them)
-    positions, vertex_welded, *mesh, boundary, vertices, labels = _patch_topology(
-        source.vertices, source.positions, source.labels, source.boundary, rows, faces)
-    bvh = TriangleBVH.of_tree(_tree(positions, faces, ONE_LEAF), positions, faces)
+    rows, faces, (positions, vertex_welded, *mesh, boundary, vertices, labels), tree = _patch_arrays(
+        source.vertices, source.positions, source.labels, source.boundary, source.faces, face_ids)
+    bvh = TriangleBVH.of_tree(tree, positions, faces)
     surface = _Surface(positions, faces, vertex_welded, WeldedMesh(*mesh), bvh, boundary, source.diagonal,
                        source.affines)
     return Patch(np.asarray(face_ids, np.int64), rows, surface, vertices, labels)
+
+
+@kernel()
+def _patch_arrays(vertices, positions, labels, boundary, faces, face_ids):
+    """The patch of the faces ``face_ids`` (increasing) of a source's arrays (as ``_patch_topology``
+    takes them, and its ``faces`` (m, 3)): its rows (p,) and faces (q, 3) over 0..p-1 (``_compact``),
+    ``_patch_topology``'s arrays (welded by rest position and label, as ``surface.tear_topology``: a
+    posed surface's copies of a vertex skin alike, but rounding could part them), and the fields of its
+    BVH's tree (``bvh._tree``). ``settle._settle`` runs it every round; ``patch_surface`` from Python."""
+    rows, local = _compact(faces, face_ids)
+    topology = _patch_topology(vertices, positions, labels, boundary, rows, local)
+    return rows, local, topology, _tree(topology[0], local, ONE_LEAF)
 
 
 @helper

@@ -10,9 +10,9 @@ a small mesh's stroke; compiled, they stay where they are.
 from __future__ import annotations
 
 from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8
-from ..bvh import BVH_ARRAYS, _tree
+from ..bvh import BVH_ARRAYS
 from .locate import OK, _ends
-from .patch import ONE_LEAF, _compact, _faces_in_region, _patch_topology
+from .patch import _faces_in_region, _patch_arrays
 from .region import _margin
 
 #: how often the patch is taken again before giving up (the plane of a patch is its own: twice is enough)
@@ -36,12 +36,10 @@ def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, ha
     a0, b0, a1, b1 = blades[0], blades[1], blades[2], blades[3]
     for round_ in range(ROUNDS):
         face_ids = _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal)
-        rows, local = _compact(faces, face_ids)
+        rows, local, topology, tree = _patch_arrays(vertices, positions, labels, boundary, faces, face_ids)
         (patch_positions, welded, wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces,
-         patch_boundary, patch_vertices, patch_labels) = _patch_topology(vertices, positions, labels, boundary,
-                                                                         rows, local)
+         patch_boundary, patch_vertices, patch_labels) = topology
         mesh = (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces)
-        tree = _tree(patch_positions, local, ONE_LEAF)
         ends = _ends((tree[0], tree[1], tree[2], tree[3], tree[4], tree[5], tree[6], patch_positions, local),
                      a0, b0, a1, b1, patch_positions, local, mesh, patch_boundary, snap, min_sine)
         status, points, hit_faces, located = ends[0], ends[2], ends[4], ends[5]
