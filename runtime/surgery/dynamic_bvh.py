@@ -145,6 +145,21 @@ class DynamicBVH:
         return int(self._st[13][3])
 
     @property
+    def n_nodes(self) -> int:
+        """Node rows in use (the arrays' rows past them are spare)."""
+        return int(self._st[13][0])
+
+    @property
+    def parents(self) -> np.ndarray:
+        """(N,) int32 parent of each node row (-1 for the root)."""
+        return self._st[4]
+
+    def leaves(self, face_ids) -> np.ndarray:
+        """(k,) int64 the leaf that holds each of the live faces ``face_ids`` (k,) int64 (unchecked)."""
+        st = self._st
+        return st[9][st[12][face_ids]].astype(np.int64)
+
+    @property
     def degradation(self) -> float:
         return _cost(self._st) / self._sah0 if self._sah0 > 0 else 1.0
 

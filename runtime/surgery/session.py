@@ -14,6 +14,11 @@ the whole mesh per stroke. A ``Surgery`` keeps the mutable state across operatio
   vertices;
 * an undo log of the rows each operation changed.
 
+The state is in rest space, and so is the BVH: a stroke in a pose (the session's, or one given to the
+operation: surgery on a playing model) poses only what its blade reaches through the bone-carried
+bounds of the BVH's nodes (``posed_bounds.py``, ``posed_source.py``), so a stroke in a new pose costs
+what it touches, like one at rest.
+
 A stroke is ``tear/splice.py`` run on the session as its source, exactly as the functional ``tear``
 runs it on a rig, so a session's mesh after k strokes is the functional chain's (tests check it).
 ``rig`` is an immutable snapshot, copied on export (once per state; O(mesh)). ``cut`` cuts the whole
@@ -29,10 +34,11 @@ import numpy as np
 from .._shared.cache import seed
 from .._shared.jit import F2, I1, i8, kernel
 from .._shared.memory import release_free_memory
-from ..animation.skinning import skin_affine
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
 from .dynamic_bvh import DynamicBVH
+from .posed_bounds import PosedScratch, no_posing, used_bones
+from .posed_source import PosedSource, SessionMasks, bone_affines_of, padding
 from .rows import Rows
 from .session_write import _write_splice
 from .surface import TEAR_LABEL
@@ -65,10 +71,11 @@ class _Undo(NamedTuple):
 
 
 class Surgery:
-    """An editing session on ``rig`` (torn as posed in ``pose``; default the stored vertices).
+    """An editing session on ``rig``; ``pose`` the pose its operations happen in unless they name one
+    (default: the stored vertices).
 
-    Methods: ``tear(scalpel_from, scalpel_to, opening=0.0)``, ``cut(normal, point, cap=False)``,
-    ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``, ``n_faces``,
+    Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``cut(normal, point, pose=None,
+    cap=False)``, ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``, ``n_faces``,
     ``n_operations``, ``pose``. The caller's rig is never modified.
 
     What a stroke reads of the session (``vertices``, ``faces``, ``positions``, ``labels``,
@@ -78,19 +85,23 @@ class Surgery:
     corners of the faces it changed (about 6 KB a stroke of the 1.6M-face capsule incision).
     """
 
+    #: the source interface's posing (``posed_bounds.Posing``): the session's own surface is at rest
+    posing = no_posing()
+    affines = None
+
     def __init__(self, rig, pose=None):
-        self._pose = pose
         self._history: list = []
         self._reset(rig)
+        self._pose, self._affines = pose, None if pose is None else bone_affines_of(rig, pose)
 
     @property
     def pose(self):
-        """The pose the session tears in (None: the stored vertices)."""
+        """The pose the session's operations happen in unless they name one (None: the stored vertices)."""
         return self._pose
 
     # ---- state ----------------------------------------------------------------------------------
     def _reset(self, rig) -> None:
-        source = RigSource(rig, self._pose, None)                 # checks the rig (and the pose)
+        source = RigSource(rig, None, None)                      # checks the rig
         # the BVH first, over the rig's arrays: its build's temporaries are gone before the arrays are
         # copied (a lower peak); it reads the session's copies from the end of this on
         self._bvh = DynamicBVH(source.positions, source.faces)
@@ -99,11 +110,11 @@ class Surgery:
         self._arrays = {"vertices": Rows(source.vertices), "joints": Rows(source.joints),
                         "weights": Rows(source.weights), "labels": Rows(source.labels),
                         "boundary": Rows(source.boundary)}
-        if source.affines is not None:
-            self._arrays["positions"] = Rows(source.positions)
         self._attributes = {name: (Rows(values), tail) for name, (values, tail) in source.attributes.items()}
         self._faces, self._alive = Rows(source.faces), Rows(np.ones(len(source.faces), bool))
-        self.affines, self.top_label = source.affines, source.top_label
+        self.top_label = source.top_label
+        self._masks, self._scratch = SessionMasks(self._bvh, rig.skeleton.n_bones), PosedScratch()
+        self._used, self._pad = used_bones(source.joints, source.weights, rig.skeleton.n_bones), padding(source.weights)
         self._labelled = TEAR_LABEL in rig.attributes
         self._set_bounds(np.stack([source.positions.min(axis=0), source.positions.max(axis=0)]))
         self._snapshot = None
@@ -111,8 +122,8 @@ class Surgery:
         release_free_memory()          # the builds' temporaries (half a millisecond)
 
     def _state(self) -> tuple:
-        return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
-                self.affines, self.top_label, self._labelled, self._bounds)
+        return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._masks,
+                self._used, self._pad, self.top_label, self._labelled, self._bounds)
 
     # ---- the source interface of tear/splice.py -------------------------------------------------------
     vertices = property(lambda self: self._arrays["vertices"].view)
@@ -122,9 +133,7 @@ class Surgery:
     boundary = property(lambda self: self._arrays["boundary"].view)
     faces = property(lambda self: self._faces.view)
 
-    @property
-    def positions(self) -> np.ndarray:
-        return self._arrays["positions" if self.affines is not None else "vertices"].view
+    positions = vertices          # (the session's surface is its rest mesh; a posed stroke poses it)
 
     @property
     def attributes(self) -> dict:
@@ -143,21 +152,25 @@ class Surgery:
         """Nothing to check: the session's BVH is built and kept over its own arrays."""
 
     # ---- operations -------------------------------------------------------------------------------
-    def tear(self, scalpel_from, scalpel_to, opening: float = 0.0) -> StrokeResult:
-        """One scalpel stroke (as ``cgaskin.tear_stroke``: the same arguments but the rig and pose, the
-        same errors); the session keeps the torn mesh. A stroke that raises changes nothing."""
+    def tear(self, scalpel_from, scalpel_to, pose=None, opening: float = 0.0) -> StrokeResult:
+        """One scalpel stroke (as ``cgaskin.tear_stroke``: the same arguments but the rig, the same
+        errors) in ``pose`` (None: the session's pose); the session keeps the torn mesh. A stroke in a
+        pose skins only the vertices its blade reaches. A stroke that raises changes nothing."""
         blades = check_blades(scalpel_from, scalpel_to)
-        splice = stroke_splice(self, blades, check_opening(opening), check_ends, check_path)
+        opening = check_opening(opening)
+        source = self if pose is None and self._pose is None else self._posed(pose)
+        splice = stroke_splice(source, blades, opening, check_ends, check_path)
         self._history.append(self._apply(splice))
         self._labelled = self._labelled or bool(splice.stroke["split"].any())
         self._snapshot = None
         return StrokeResult(**splice.stroke)
 
-    def cut(self, normal, point, cap: bool = False) -> None:
+    def cut(self, normal, point, pose=None, cap: bool = False) -> None:
         """Cut the whole mesh with the plane through ``point`` with normal ``normal`` (``cgaskin.cut``
-        in the session's pose); both halves stay in the session, apart (the negative half's tear labels
-        are moved past the positive half's, so that the halves do not weld along the cut)."""
-        positive, negative = cut_rig(self.rig, normal, point, pose=self._pose, cap=cap)
+        in ``pose``, None: the session's pose); both halves stay in the session, apart (the negative
+        half's tear labels are moved past the positive half's, so that the halves do not weld along the
+        cut)."""
+        positive, negative = cut_rig(self.rig, normal, point, pose=self._pose if pose is None else pose, cap=cap)
         previous = self._state()
         self._reset(replace(_joined(positive, negative), name=self._template.name))
         self._history.append(previous)
@@ -170,8 +183,8 @@ class Surgery:
         if isinstance(record, _Undo):
             self._revert(record)
         else:
-            (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
-             self.affines, self.top_label, self._labelled, bounds) = record
+            (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._masks,
+             self._used, self._pad, self.top_label, self._labelled, bounds) = record
             self._set_bounds(bounds)
         self._snapshot = None
 
@@ -208,6 +221,18 @@ class Surgery:
         return (f"Surgery({self._template.name!r}: {self.n_vertices} vertices, {self.n_faces} faces, "
                 f"{self.n_operations} operations)")
 
+    def _posed(self, pose) -> PosedSource:
+        """The session in ``pose`` (None: its own), as a stroke's source."""
+        affines = self._affines if pose is None else bone_affines_of(self._template, pose)
+        return PosedSource(self, affines, self._bvh.arrays, self._bvh.n_nodes, self._masks.masks(self.joints, self.weights),
+                           self._used, self._scratch, self._pad)
+
+    def _edit_bvh(self, removed, inserted, near, moved, positions, faces) -> None:
+        """``DynamicBVH.edit``, with the bone masks kept."""
+        leaves, first_node = self._masks.removing(removed), self._bvh.n_nodes
+        self._bvh.edit(removed, inserted, near, moved, positions, faces)
+        self._masks.edited(leaves, first_node, inserted, moved, self.joints, self.weights)
+
     # ---- a stroke's rows in, and out again ------------------------------------------------------------
     def _apply(self, splice) -> _Undo:
         p, n, m, k = len(splice.rows), self.n_vertices, self._faces.n, len(splice.pieces)
@@ -226,16 +251,11 @@ class Surgery:
         self._alive.n += k
         for name, (buffer, _) in self._attributes.items():
             buffer.append(splice.attributes[name][p:])
+        # (a new row's bones are some of its sources': the bones in use, ``_used``, stay as they are)
         scalars = (self.top_label, self._labelled, self._bounds.copy())
         self.top_label = max(self.top_label, top)
-        if self.affines is not None:                 # the posed surface of the new and moved rows
-            old_positions = self._arrays["positions"].view[moved].copy()
-            new = np.concatenate((moved, np.arange(n, self.n_vertices)))
-            skinned = skin_affine(self.vertices[new], self.joints[new], self.weights[new], self.affines)
-            self._arrays["positions"].append(skinned[len(moved):])
-            self._arrays["positions"].view[moved] = skinned[:len(moved)]
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
-        self._bvh.edit(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
+        self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
                        self.faces)
         self._grow_bounds(moved, n, old_positions)
         return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, old_positions,
@@ -269,16 +289,12 @@ class Surgery:
         flags.truncate(record.n)
         valid = record.boundary_rows < record.n
         flags.view[record.boundary_rows[valid]] = record.old_flags[valid]
-        if self.affines is not None:
-            positions = self._arrays["positions"]
-            positions.truncate(record.n)
-            positions.view[record.moved] = record.old_positions
         self.top_label, self._labelled, bounds = record.scalars
         self._set_bounds(bounds)
         # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
         # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
-        self._bvh.edit(np.arange(record.m, m), record.removed, np.full(len(record.removed), -1), record.moved_faces,
-                       self._arrays["positions" if self.affines is not None else "vertices"].data, self._faces.data)
+        self._edit_bvh(np.arange(record.m, m), record.removed, np.full(len(record.removed), -1), record.moved_faces,
+                       self._arrays["vertices"].data, self._faces.data)
 
 
 @kernel((F2, I1, i8, F2), cost=0.1)

@@ -63,6 +63,7 @@ WORKLOAD = textwrap.dedent("""
             session = cgaskin.Surgery(rig, pose)
             session.tear(blade[0], blade[1], opening=0.01)
             session.tear(blade[1], blade[2])
+            session.tear(blade[2], blade[1], pose=posed)        # a stroke in another pose than the session's
             session.undo()
             session.cut([0.3, 1, 0.1], centre)
             session.undo()

@@ -162,12 +162,18 @@ def _patch_arrays(vertices, positions, labels, boundary, faces, face_ids):
 
 
 @helper
+def _region_pad(margin, snap):
+    """How far the region's box reaches past the box of the blades (``_faces_in_region``)."""
+    return margin + 4.0 * snap
+
+
+@helper
 def _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal):
     """Increasing ids of the faces of ``bvh`` (BVHArrays as a tuple) within 2 ``snap`` distances of
     ``plane`` (any plane when not ``has_plane``) that touch the bounding box of ``blades`` (4, 3)
     (handle, tip, handle, tip) widened by ``margin`` and a few snap distances (the region's test rounds;
     a face that touches the box is kept); ``diagonal`` the surface's bounding-box diagonal."""
-    pad = margin + 4.0 * snap
+    pad = _region_pad(margin, snap)
     lo, hi = np.empty(3), np.empty(3)
     scale = diagonal
     for k in range(3):

@@ -1,25 +1,26 @@
 """A rig as the source of a tear stroke (``splice.py``), and the torn rig made from a stroke's splice.
 
-What a stroke needs of the whole rig is built once per rig (its arrays, tear labels, boundary flags)
-and per rig and pose (the surface positions, their BVH and diagonal), and kept while the rig lives
-(``_shared.cache``). A torn rig gets its boundary flags and highest label from the stroke that made
+What a stroke needs of the whole rig is built once per rig (its arrays, tear labels, boundary flags, the
+rest surface's BVH and its bone masks) and kept while the rig lives (``_shared.cache``); a stroke in a
+pose poses only what it reaches (``posed_source.PosedSource``), so nothing is built per pose. A torn rig gets its boundary flags and highest label from the stroke that made
 it, so that a chain of functional tears never rebuilds the whole welded topology.
 """
 from __future__ import annotations
 
-import weakref
+from functools import cached_property
 
 import numpy as np
 
 from ..._shared.cache import rig_cached, seed
-from ...animation.skinning import check_pose, skin
+from ...animation.skinning import skin
 from ...errors import InvalidInputError
 from ..bvh import TriangleBVH
+from ..posed_bounds import PosedScratch, bone_masks, no_posing, posed_scale, used_bones
+from ..posed_source import PosedSource, bone_affines_of, padding
 from ..surface import TEAR_LABEL, _labels, mesh_arrays
 from ..topology import boundary_flags
 
-#: posed surfaces kept per rig: a few poses per rig are plenty
-POSED_SURFACES = 8
+NO_POSING = no_posing()
 
 
 def _arrays(rig):
@@ -46,15 +47,25 @@ def _top_label(rig) -> int:
     return max(0, int(labels.max())) if len(labels) else 0
 
 
-class _Positions:
-    """The surface of a rig in one pose: positions, bounding-box diagonal, bone maps, and its BVH
-    (built on first use: an editing session keeps a BVH of its own)."""
+class _Rest:
+    """The surface of a rig as stored: positions, bounding-box diagonal, and its BVH (built on first
+    use: an editing session keeps a BVH of its own) with the bone masks of its nodes."""
 
-    def __init__(self, positions, faces, affines):
-        self.positions = np.ascontiguousarray(positions, dtype=np.float64)
+    def __init__(self, rig):
+        mesh = mesh_arrays(rig)
+        self.positions, self._faces, self._bvh = mesh.vertices, mesh.faces, None
         self.diagonal = float(np.linalg.norm(self.positions.max(axis=0) - self.positions.min(axis=0)))
-        self.affines = affines
-        self._faces, self._bvh = faces, None
+        self._mesh, self._n_bones = mesh, rig.skeleton.n_bones
+
+    @cached_property
+    def used(self) -> np.ndarray:
+        """(u,) int64 the bones in use (``posed_bounds.used_bones``)."""
+        return used_bones(self._mesh.joints, self._mesh.weights, self._n_bones)
+
+    @cached_property
+    def pad(self) -> float:
+        """A posed box's relative padding (``posed_source.padding``)."""
+        return padding(self._mesh.weights)
 
     @property
     def bvh(self) -> TriangleBVH:
@@ -62,23 +73,19 @@ class _Positions:
             self._bvh = TriangleBVH.of_checked(self.positions, self._faces)
         return self._bvh
 
-
-def _posed(rig, pose) -> _Positions:
-    if pose is None:
-        return rig_cached(rig, "tear.rest", lambda r: _Positions(mesh_arrays(r).vertices, mesh_arrays(r).faces, None))
-    check_pose(rig, pose)
-    posed = rig_cached(rig, "tear.posed", lambda _rig: weakref.WeakKeyDictionary())
-    surface = posed.get(pose)
-    if surface is None:
-        surface = _Positions(skin(rig, pose), mesh_arrays(rig).faces, pose.bone_affines())
-        if len(posed) >= POSED_SURFACES:
-            posed.popitem()
-        posed[pose] = surface
-    return surface
+    @cached_property
+    def masks(self) -> np.ndarray:
+        """(N, W) uint64 the bone masks of the BVH's nodes."""
+        tree, mesh = self.bvh._arrays, self._mesh
+        return bone_masks(tree.left, tree.right, tree.start, tree.count, tree.order, tree.faces, mesh.joints,
+                          mesh.weights, len(tree.lo), self._n_bones, len(tree.lo))
 
 
 class RigSource:
-    """``rig`` (in ``pose``) as a stroke source; ``bvh`` a user's TriangleBVH of its surface, or None."""
+    """``rig`` (in ``pose``) as a stroke source; ``bvh`` a user's TriangleBVH of its surface, or None.
+
+    In a pose, the surface is the rest one posed where the stroke reaches (``PosedSource``) unless the
+    user gave a BVH of the posed surface: then the whole mesh is skinned, as that BVH holds it."""
 
     def __init__(self, rig, pose, bvh):
         mesh_arrays(rig)                                 # checks the rig first
@@ -86,27 +93,36 @@ class RigSource:
             rig_cached(rig, "tear.arrays", _arrays)
         self.boundary = rig_cached(rig, "tear.boundary", _boundary_flags)
         self.top_label = rig_cached(rig, "tear.top_label", _top_label)
-        surface = _posed(rig, pose)
-        self.positions, self.diagonal, self.affines = surface.positions, surface.diagonal, surface.affines
+        rest = rig_cached(rig, "tear.rest", _Rest)
+        self.positions, self.diagonal, self.affines, self.posing = rest.positions, rest.diagonal, None, NO_POSING
+        self._rest, self._user_bvh, self._posed = rest, bvh, None
+        if pose is not None:
+            self.affines = bone_affines_of(rig, pose)
+            if bvh is None:
+                self._posed = PosedSource(self, self.affines, tuple(rest.bvh._arrays), rest.bvh.n_nodes,
+                                          rest.masks, rest.used,
+                                          PosedScratch(), rest.pad)
+                self.positions, self.diagonal, self.posing = (self._posed.positions, self._posed.diagonal,
+                                                              self._posed.posing)
+            else:
+                self.positions = skin(rig, pose)
+                self.diagonal = rest.diagonal * posed_scale(self.affines, rest.used)
         if bvh is not None and (not isinstance(bvh, TriangleBVH) or bvh.n_faces != len(self.faces)
                                 or bvh._arrays.positions.shape != self.positions.shape):
             raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {len(self.positions)} vertices "
                                     f"and {len(self.faces)} faces")
-        self._surface, self._user_bvh, self._rig = surface, bvh, rig
-
-    @property
-    def _bvh(self) -> TriangleBVH:
-        return self._surface.bvh if self._user_bvh is None else self._user_bvh
 
     @property
     def bvh_arrays(self) -> tuple:
-        return tuple(self._bvh._arrays)
+        if self._posed is not None:
+            return self._posed.bvh_arrays
+        return tuple(self._rest.bvh._arrays if self._user_bvh is None else self._user_bvh._arrays)
 
     def check_hits(self, faces) -> None:
         """A user's BVH must hold the surface being torn: checked on the faces a stroke hit (-1: none)."""
         if self._user_bvh is None:
             return
-        if any(not np.array_equal(self._bvh.triangle(face), self.positions[self.faces[face]])
+        if any(not np.array_equal(self._user_bvh.triangle(face), self.positions[self.faces[face]])
                for face in faces.tolist() if face >= 0):
             raise InvalidInputError("bvh was built from other positions than the surface being torn "
                                     "(the stored vertices, or the skinned positions in the given pose)")

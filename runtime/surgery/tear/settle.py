@@ -12,21 +12,23 @@ from __future__ import annotations
 from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8
 from ..bvh import BVH_ARRAYS
 from .locate import OK, _ends
-from .patch import _faces_in_region, _patch_arrays
+from ..posed_bounds import POSING, _pose_blades
+from .patch import _faces_in_region, _patch_arrays, _region_pad
 from .region import _margin
 
 #: how often the patch is taken again before giving up (the plane of a patch is its own: twice is enough)
 ROUNDS = 4
 
 
-@callee((BVH_ARRAYS, B1, F2, F2, I1, I2, F2, F1, b1, f8, f8, f8, f8), cost=16.0)
+@callee((BVH_ARRAYS, B1, F2, F2, I1, I2, F2, F1, b1, f8, f8, f8, f8, POSING), cost=16.0)
 def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, has_plane, margin, snap, min_sine,
-            diagonal):
+            diagonal, posing):
     """The stroke's patch and its located ends, settled, for ``blades`` (4, 3) handle and tip at t_i,
     then at t_(i+1): the source's ``bvh`` (BVHArrays as a tuple), ``boundary`` (n,) flags, ``vertices``,
     ``positions`` (n, 3), ``labels`` (n,), ``faces`` (m, 3); the guessed ``plane`` (4,) (``has_plane``
     False: none; the patch then takes every face in the box, and the plane ``locate`` chooses selects it
-    again) and ``margin``; ``snap`` the absolute snap distance.
+    again) and ``margin``; ``snap`` the absolute snap distance; ``posing`` (``posed_bounds.Posing``) poses
+    the region of each round first when active.
 
     returns settled (False: the ends' status is not OK, or the rounds ran out), the patch's face ids
     (q,), rows (p,), faces (q, 3) over 0..p-1, positions (p, 3), welded vertex of each vertex (p,),
@@ -35,6 +37,7 @@ def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, ha
     """
     a0, b0, a1, b1 = blades[0], blades[1], blades[2], blades[3]
     for round_ in range(ROUNDS):
+        _pose_blades(bvh, posing, blades, _region_pad(margin, snap))
         face_ids = _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal)
         rows, local, topology, tree = _patch_arrays(vertices, positions, labels, boundary, faces, face_ids)
         (patch_positions, welded, wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces,

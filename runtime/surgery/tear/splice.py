@@ -31,6 +31,7 @@ from ...tolerances import tol
 from ..bvh import BVH_ARRAYS
 from ..surface import WELDED_MESH
 from ..new_vertices import attribute_rule, interpolate_in_place
+from ..posed_bounds import POSING, _pose_blades
 from ..weld import _boundary_of
 from .guess import FOUND, FROM_MISSES, _guess
 from .records import JUMP_CARRIER, VERTEX, Ends, Path
@@ -87,7 +88,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     status, hit_faces, located = _stroke(
         source.bvh_arrays, source.boundary, source.vertices, source.positions, source.labels, source.faces,
         source.joints, source.weights, blades, source.top_label, source.diagonal, tol.snap, tol.min_sine, tol.on_edge,
-        opening, source.affines if posed else np.zeros((1, 12)), posed)
+        opening, source.affines if posed else np.zeros((1, 12)), posed, source.posing)
     source.check_hits(hit_faces)
     if status != FOUND:
         name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
@@ -111,13 +112,14 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     return Splice(rows, *arrays, attributes, stroke)
 
 
-@kernel((BVH_ARRAYS, B1, F2, F2, I1, I2, I2, F2, F2, i8, f8, f8, f8, f8, f8, F2, b1), cost=13.0, fused=True)
+@kernel((BVH_ARRAYS, B1, F2, F2, I1, I2, I2, F2, F2, i8, f8, f8, f8, f8, f8, F2, b1, POSING), cost=13.0, fused=True)
 def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, blades, top_label, diagonal, snap,
-            min_sine, on_edge, opening, affines, posed):
+            min_sine, on_edge, opening, affines, posed, posing):
     """Steps 2-7 of one stroke on a source's arrays (``stroke_splice``'s source interface; ``snap``,
     ``min_sine`` and ``on_edge`` the relative tolerances), compiled in one call: every step hands the
     next a dozen arrays, and from Python each returned array cost a boxing and each step a call (half
-    a small mesh's stroke).
+    a small mesh's stroke). ``posing`` (``posed_bounds.Posing``), when active, poses the parts of the
+    rest tree and mesh each query reaches first (``bvh`` is then the posed tree it fills).
 
     returns the guess's status (``guess.FOUND``, or which scalpel position missed) and hit faces (2,),
     then None when it missed, else (settled, the fields of ``Ends``, (found, the fields of ``Path``),
@@ -125,12 +127,13 @@ def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, 
     (rows (p,), ``_splice_arrays``' values as a tuple)
     """
     snap = snap * diagonal
+    _pose_blades(bvh, posing, blades, 2.0 * snap)      # the guess's queries stay within snap of the blades
     status, plane, margin, hit_faces = _guess(bvh, boundary, blades, snap, min_sine)
     located = None
     if status == FOUND:
         (settled, face_ids, rows, patch_faces, patch_positions, welded, mesh, patch_boundary, patch_vertices,
          patch_labels, tree, ends) = _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane,
-                                             plane.any(), margin, snap, min_sine, diagonal)
+                                             plane.any(), margin, snap, min_sine, diagonal, posing)
         _, ends_int, ends_pos, _, ends_faces, ends_plane, sides = ends
         found, path_int, path_float = False, np.empty((0, 4), np.int64), np.empty((0, 4))
         spliced = None

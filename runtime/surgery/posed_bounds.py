@@ -1,0 +1,259 @@
+"""Where a skinned surface lies in any pose, without skinning it: bone-carried bounds per BVH node.
+
+A vertex skinned by linear blending, Σ w_k A_k v with w_k >= 0 and Σ w_k = 1, lies in the convex hull
+of its rest position carried by each of its bones' maps A_k. So a node of a BVH built over the *rest*
+positions bounds its faces in every pose by its rest box carried by each bone that influences a vertex
+under it, the node's *bone mask* (Kavan & Žára, "Fast collision detection for skeletally deformable
+models", 2005; James & Pai's BD-Tree, 2004). A box [c - h, c + h] carried by a 3x4 map (M, t) lies in
+[M c + t - |M| h, M c + t + |M| h]; a dilating map scales it with the rest. The posed box of a node is
+the bounding box of those boxes over its bones, padded by ``tol.box_padding`` of its size (rounding,
+and weights that sum to 1 only to float precision).
+
+A stroke in a new pose then poses only what the blade can reach (``_pose_region``): from the root it
+computes the posed box of every node it visits (once per pose: a stamp per node), descends where the
+box meets the query box, and skins the vertices of the leaves it reaches (a stamp per vertex) with
+the blend loop of ``cgaskin.skin`` (the same numbers). Every node a later query of the stroke visits
+is a child of a node whose posed box met a box inside the query box, so its own box was computed.
+
+Masks are (N, W) uint64, bone b in word b // 64, bit b % 64; a node's children have larger indices
+than the node (top-down builds and leaf splits both append), so one backward sweep computes them all.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .._shared.jit import F1, F2, I1, I2, U2, helper, i8, kernel, record
+from ..generated.skinning import skin_blend
+from .bvh_build import N1
+
+__all__ = ["Posing", "POSING", "PosedScratch", "bone_masks", "refresh_masks", "used_bones",
+           "posed_scale", "no_posing", "pose_region"]
+
+
+class Posing(NamedTuple):
+    """What ``_pose_region`` reads and writes besides the posed tree (a stroke's BVHArrays, whose node
+    boxes and positions it fills).
+
+    rest_lo, rest_hi : (N, 3) float64 the rest tree's padded node boxes ; masks : (N, W) uint64 bone
+    masks ; node_stamp (N,), vertex_stamp (n,) int64: which nodes and vertices hold this pose's values ;
+    vertices (n, 3), joints (n, k), weights (n, k) : the rest mesh ; affines (B, 12) : the pose's bone
+    maps ; state (2,) int64 : [stamp of this pose, 1 when posing is active (0: the surface is as stored)] ;
+    pad (1,) float64 : relative padding of a posed box
+    """
+
+    rest_lo: np.ndarray
+    rest_hi: np.ndarray
+    masks: np.ndarray
+    node_stamp: np.ndarray
+    vertex_stamp: np.ndarray
+    vertices: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+    affines: np.ndarray
+    state: np.ndarray
+    pad: np.ndarray
+
+
+#: the numba type of ``Posing`` (as a plain tuple)
+POSING = record(F2, F2, U2, I1, I1, F2, I2, F2, F2, I1, F1)
+
+
+def no_posing() -> tuple:
+    """The inactive ``Posing`` of a surface torn as stored (empty arrays)."""
+    f2, i1 = np.empty((0, 3)), np.zeros(0, np.int64)
+    return (f2, f2, np.zeros((0, 1), np.uint64), i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
+            np.zeros((0, 12)), np.zeros(2, np.int64), np.zeros(1))
+
+
+# ---- bone masks ------------------------------------------------------------------------------------
+@helper
+def _vertex_bones(mask, node, v, joints, weights, n_bones):
+    """OR the bones that influence vertex v (weight != 0, index in range) into row ``node`` of mask."""
+    for k in range(joints.shape[1]):
+        b = joints[v, k]
+        if weights[v, k] != 0.0 and 0 <= b < n_bones:
+            mask[node, b >> 6] |= np.uint64(1) << np.uint64(b & 63)
+
+
+@helper
+def _node_mask(masks, node, left, right, start, count, order, faces, joints, weights, n_bones):
+    """Recompute row ``node`` of masks: its live faces' vertices' bones (a leaf), or its children's."""
+    for w in range(masks.shape[1]):
+        masks[node, w] = np.uint64(0)
+    if left[node] >= 0:
+        for w in range(masks.shape[1]):
+            masks[node, w] = masks[left[node], w] | masks[right[node], w]
+        return
+    for s in range(start[node], start[node] + count[node]):
+        for c in range(3):
+            _vertex_bones(masks, node, faces[order[s], c], joints, weights, n_bones)
+
+
+@kernel((N1, N1, N1, N1, N1, I2, I2, F2, i8, i8, i8), cost=0.4)
+def bone_masks(left, right, start, count, order, faces, joints, weights, n_nodes, n_bones, n_rows):
+    """(n_rows, W) uint64 bone masks of the tree's first ``n_nodes`` nodes (rows past them zero), for
+    faces (F, 3) over vertices with joints and weights (n, k); ``order`` the tree's leaf order."""
+    masks = np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64)
+    for node in range(n_nodes - 1, -1, -1):
+        _node_mask(masks, node, left, right, start, count, order, faces, joints, weights, n_bones)
+    return masks
+
+
+@kernel((U2, N1, N1, N1, N1, N1, N1, I2, I2, F2, I1, i8), cost=0.4)
+def refresh_masks(masks, left, right, parent, start, count, order, faces, joints, weights, dirty, n_bones):
+    """Recompute the masks of the ``dirty`` nodes (k,) of a tree whose faces changed (the leaves of the
+    faces that came, went or moved, and the nodes a split made), then their ancestors up to the first
+    that keeps its mask: the masks stay the exact union over the live faces."""
+    for i in range(dirty.shape[0]):
+        _node_mask(masks, dirty[i], left, right, start, count, order, faces, joints, weights, n_bones)
+    old = np.empty(masks.shape[1], np.uint64)
+    for i in range(dirty.shape[0]):
+        node = parent[dirty[i]]
+        while node >= 0:
+            same = True
+            for w in range(masks.shape[1]):
+                old[w] = masks[node, w]
+            _node_mask(masks, node, left, right, start, count, order, faces, joints, weights, n_bones)
+            for w in range(masks.shape[1]):
+                same = same and old[w] == masks[node, w]
+            if same:
+                break
+            node = parent[node]
+
+
+def used_bones(joints, weights, n_bones: int) -> np.ndarray:
+    """(u,) int64: the bones that influence some vertex (weight != 0), increasing. (A stroke's new
+    vertices take their bones from the vertices they lie between: they add none.)"""
+    bones = np.unique(np.asarray(joints)[np.asarray(weights) != 0])
+    return bones[(bones >= 0) & (bones < n_bones)].astype(np.int64)
+
+
+def posed_scale(affines, used) -> float:
+    """The largest scale (column norm of a 3x4 map's linear part) of the bones ``used`` (u,): how much
+    larger than at rest the posed surface can be, which scales a posed stroke's tolerances."""
+    if len(used) == 0:
+        return 1.0
+    linear = affines[used].reshape(-1, 3, 4)[:, :, :3]
+    return float(np.sqrt((linear * linear).sum(axis=1).max()))
+
+
+# ---- posed boxes and positions, where a query reaches ----------------------------------------------
+@helper
+def _posed_box(bvh, posing, node):
+    """Write node's posed box into the posed tree (bvh's lo, hi) from its rest box, mask and the bone
+    maps (an empty rest box, or no bone, gives an empty box)."""
+    lo, hi = bvh[0], bvh[1]
+    rest_lo, rest_hi, masks, affines, pad = posing[0], posing[1], posing[2], posing[8], posing[10][0]
+    for k in range(3):
+        lo[node, k], hi[node, k] = np.inf, -np.inf
+    if not rest_lo[node, 0] <= rest_hi[node, 0]:
+        return
+    for w in range(masks.shape[1]):
+        bits = masks[node, w]
+        b = 64 * w
+        while bits != np.uint64(0):
+            if bits & np.uint64(1):
+                for r in range(3):
+                    c, h = affines[b, 4 * r + 3], 0.0
+                    for k in range(3):
+                        m = affines[b, 4 * r + k]
+                        c += m * (0.5 * (rest_lo[node, k] + rest_hi[node, k]))
+                        h += abs(m) * (0.5 * (rest_hi[node, k] - rest_lo[node, k]))
+                    lo[node, r], hi[node, r] = min(lo[node, r], c - h), max(hi[node, r], c + h)
+            bits = bits >> np.uint64(1)
+            b += 1
+    if not lo[node, 0] <= hi[node, 0]:
+        return
+    size = 0.0
+    for k in range(3):
+        size = max(size, max(abs(lo[node, k]), abs(hi[node, k])) + (hi[node, k] - lo[node, k]))
+    for k in range(3):
+        lo[node, k] -= pad * size
+        hi[node, k] += pad * size
+
+
+@helper
+def _pose_region(bvh, posing, box_lo, box_hi):
+    """Pose what the closed box [box_lo, box_hi] reaches: the posed box of every node visited from the
+    root (descending where it meets the box) and the skinned positions of the vertices of the leaves
+    it meets, in bvh (BVHArrays as a tuple: lo, hi and positions are written). Nothing when posing
+    is not active."""
+    node_stamp, vertex_stamp, vertices, joints, weights, affines, state = (posing[3], posing[4], posing[5],
+                                                                          posing[6], posing[7], posing[8], posing[9])
+    if state[1] == 0:
+        return
+    lo, hi, left, right, start, count, order, positions, faces = bvh
+    stamp = state[0]
+    stack = np.empty(128, np.int64)
+    top = 0
+    stack[0] = 0
+    while top >= 0:
+        node = stack[top]
+        top -= 1
+        if node_stamp[node] != stamp:
+            _posed_box(bvh, posing, node)
+            node_stamp[node] = stamp
+        meets = True
+        for k in range(3):
+            meets = meets and lo[node, k] <= box_hi[k] and hi[node, k] >= box_lo[k]
+        if not meets:
+            continue
+        if left[node] >= 0:
+            if top + 3 > stack.shape[0]:
+                stack = np.concatenate((stack, np.empty_like(stack)))
+            stack[top + 1], stack[top + 2] = right[node], left[node]
+            top += 2
+            continue
+        for s in range(start[node], start[node] + count[node]):
+            for c in range(3):
+                v = faces[order[s], c]
+                if vertex_stamp[v] != stamp:
+                    skin_blend(vertices[v:v + 1], joints[v:v + 1], weights[v:v + 1], affines, positions[v:v + 1])
+                    vertex_stamp[v] = stamp
+
+
+@kernel()
+def pose_region(bvh, posing, box_lo, box_hi):
+    """``_pose_region`` from Python (tests check the bounds with it)."""
+    _pose_region(bvh, posing, box_lo, box_hi)
+
+
+@helper
+def _pose_blades(bvh, posing, blades, reach):
+    """``_pose_region`` for the box of ``blades`` (4, 3) widened by ``reach``."""
+    box_lo, box_hi = np.empty(3), np.empty(3)
+    for k in range(3):
+        box_lo[k] = min(min(blades[0, k], blades[1, k]), min(blades[2, k], blades[3, k])) - reach
+        box_hi[k] = max(max(blades[0, k], blades[1, k]), max(blades[2, k], blades[3, k])) + reach
+    _pose_region(bvh, posing, box_lo, box_hi)
+
+
+class PosedScratch:
+    """The arrays a surface's strokes in other poses write (posed node boxes, positions and their
+    stamps), grown as the tree and the mesh grow; each ``view`` is a new pose (a new stamp). Rows
+    are allocated, not written: only what strokes reach becomes resident."""
+
+    def __init__(self):
+        self._stamp = 0
+        self._lo = self._hi = self._positions = np.empty((0, 3))
+        self._node_stamp = self._vertex_stamp = np.zeros(0, np.int64)
+
+    def view(self, tree, n_nodes, masks, vertices, joints, weights, affines, pad) -> tuple:
+        """(BVHArrays of the posed tree as a tuple, ``Posing`` as a tuple) for ``tree`` (the rest BVH's
+        arrays: lo, hi, left, right, start, count, order, positions, faces; ``n_nodes`` of its rows in
+        use) with ``masks``, the rest mesh (n rows) and bone maps ``affines`` (B, 12)."""
+        n = len(vertices)
+        if len(self._lo) < n_nodes:
+            size = max(n_nodes, len(self._lo) * 3 // 2)
+            self._lo, self._hi, self._node_stamp = np.empty((size, 3)), np.empty((size, 3)), np.zeros(size, np.int64)
+        if len(self._positions) < n:
+            size = max(n, len(self._positions) * 3 // 2)
+            self._positions, self._vertex_stamp = np.empty((size, 3)), np.zeros(size, np.int64)
+        self._stamp += 1
+        positions = self._positions[:n]
+        bvh = (self._lo, self._hi, tree[2], tree[3], tree[4], tree[5], tree[6], positions, tree[8])
+        posing = (tree[0], tree[1], masks, self._node_stamp, self._vertex_stamp[:n], vertices, joints, weights,
+                  affines, np.array([self._stamp, 1]), np.array([pad]))
+        return bvh, posing
