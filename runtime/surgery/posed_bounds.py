@@ -15,6 +15,13 @@ box meets the query box, and skins the vertices of the leaves it reaches (a stam
 the blend loop of ``cgaskin.skin`` (the same numbers). Every node a later query of the stroke visits
 is a child of a node whose posed box met a box inside the query box, so its own box was computed.
 
+That bound is loose where weights blend over a long stretch (a vertex with 0.02 of the upper arm and
+0.98 of the forearm is carried by both, far apart). So each node also keeps the largest weight each of
+its bones has on it, for up to ``TABLE`` bones: with r the bone of the largest one, a skinned vertex is
+A_r v + Σ_k w_k (A_k - A_r) v, so it lies in A_r's carried box plus, per other bone k, the interval
+between 0 and h_k times the box carried by A_k - A_r (h_k the bone's largest weight). The posed box is
+the intersection of both bounds (both hold); a node with more bones keeps the first.
+
 Masks are (N, W) uint64, bone b in word b // 64, bit b % 64; a node's children have larger indices
 than the node (top-down builds and leaf splits both append), so one backward sweep computes them all.
 """
@@ -28,16 +35,35 @@ from .._shared.jit import F1, F2, I1, I2, U2, helper, i8, kernel, record
 from ..generated.skinning import skin_blend
 from .bvh_build import N1
 
-__all__ = ["Posing", "POSING", "PosedScratch", "bone_masks", "refresh_masks", "used_bones",
+__all__ = ["Influences", "Posing", "POSING", "PosedScratch", "bone_masks", "refresh_masks", "used_bones",
            "posed_scale", "no_posing", "pose_region"]
+
+
+#: bones per node whose largest weight the weight table keeps (past them: the mask's bound only)
+TABLE = 4
+#: a table slot that holds no bone, and a node whose bones overflow its table
+NO_BONE, OVERFLOW = -1, -2
+
+
+class Influences(NamedTuple):
+    """The bones under each node of a tree: masks (N, W) uint64, and the weight table: bones (N, TABLE)
+    int64 (NO_BONE in unused slots; OVERFLOW in slot 0 when the node has more bones) with the largest
+    weight (N, TABLE) float64 each has on a vertex under the node."""
+
+    masks: np.ndarray
+    bones: np.ndarray
+    weights: np.ndarray
+
+
+#: the numba type of ``Influences``
+INFLUENCES = record(U2, I2, F2)
 
 
 class Posing(NamedTuple):
     """What ``_pose_region`` reads and writes besides the posed tree (a stroke's BVHArrays, whose node
     boxes and positions it fills).
 
-    rest_lo, rest_hi : (N, 3) float64 the rest tree's padded node boxes ; masks : (N, W) uint64 bone
-    masks ; node_stamp (N,), vertex_stamp (n,) int64: which nodes and vertices hold this pose's values ;
+    rest_lo, rest_hi : (N, 3) float64 the rest tree's padded node boxes ; influences : ``Influences`` ; node_stamp (N,), vertex_stamp (n,) int64: which nodes and vertices hold this pose's values ;
     vertices (n, 3), joints (n, k), weights (n, k) : the rest mesh ; affines (B, 12) : the pose's bone
     maps ; state (2,) int64 : [stamp of this pose, 1 when posing is active (0: the surface is as stored)] ;
     pad (1,) float64 : relative padding of a posed box
@@ -45,7 +71,7 @@ class Posing(NamedTuple):
 
     rest_lo: np.ndarray
     rest_hi: np.ndarray
-    masks: np.ndarray
+    influences: tuple
     node_stamp: np.ndarray
     vertex_stamp: np.ndarray
     vertices: np.ndarray
@@ -57,67 +83,93 @@ class Posing(NamedTuple):
 
 
 #: the numba type of ``Posing`` (as a plain tuple)
-POSING = record(F2, F2, U2, I1, I1, F2, I2, F2, F2, I1, F1)
+POSING = record(F2, F2, INFLUENCES, I1, I1, F2, I2, F2, F2, I1, F1)
 
 
 def no_posing() -> tuple:
     """The inactive ``Posing`` of a surface torn as stored (empty arrays)."""
     f2, i1 = np.empty((0, 3)), np.zeros(0, np.int64)
-    return (f2, f2, np.zeros((0, 1), np.uint64), i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
+    return (f2, f2, (np.zeros((0, 1), np.uint64), np.zeros((0, TABLE), np.int64), np.zeros((0, TABLE))), i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
             np.zeros((0, 12)), np.zeros(2, np.int64), np.zeros(1))
 
 
 # ---- bone masks ------------------------------------------------------------------------------------
 @helper
-def _vertex_bones(mask, node, v, joints, weights, n_bones):
-    """OR the bones that influence vertex v (weight != 0, index in range) into row ``node`` of mask."""
-    for k in range(joints.shape[1]):
-        b = joints[v, k]
-        if weights[v, k] != 0.0 and 0 <= b < n_bones:
-            mask[node, b >> 6] |= np.uint64(1) << np.uint64(b & 63)
+def _add_bone(influences, node, b, w):
+    """Bone b with weight w on a vertex (or a child) under ``node``: into its mask and weight table."""
+    masks, bones, weights = influences
+    masks[node, b >> 6] |= np.uint64(1) << np.uint64(b & 63)
+    if bones[node, 0] == OVERFLOW:
+        return
+    for j in range(TABLE):
+        if bones[node, j] == b or bones[node, j] == NO_BONE:
+            bones[node, j], weights[node, j] = b, max(weights[node, j], w)
+            return
+    bones[node, 0] = OVERFLOW
 
 
 @helper
-def _node_mask(masks, node, left, right, start, count, order, faces, joints, weights, n_bones):
-    """Recompute row ``node`` of masks: its live faces' vertices' bones (a leaf), or its children's."""
+def _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones):
+    """Recompute row ``node`` of ``influences``: from its live faces' vertices (a leaf: the bones of
+    weight != 0, index in range), or from its children."""
+    masks, bones, table = influences
     for w in range(masks.shape[1]):
         masks[node, w] = np.uint64(0)
+    for j in range(TABLE):
+        bones[node, j], table[node, j] = NO_BONE, 0.0
     if left[node] >= 0:
-        for w in range(masks.shape[1]):
-            masks[node, w] = masks[left[node], w] | masks[right[node], w]
+        for child in (left[node], right[node]):
+            for w in range(masks.shape[1]):
+                masks[node, w] |= masks[child, w]
+            if bones[child, 0] == OVERFLOW:
+                bones[node, 0] = OVERFLOW
+            for j in range(TABLE):
+                if bones[child, j] >= 0:
+                    _add_bone(influences, node, bones[child, j], table[child, j])
         return
     for s in range(start[node], start[node] + count[node]):
         for c in range(3):
-            _vertex_bones(masks, node, faces[order[s], c], joints, weights, n_bones)
+            v = faces[order[s], c]
+            for k in range(joints.shape[1]):
+                b = joints[v, k]
+                if weights[v, k] != 0.0 and 0 <= b < n_bones:
+                    _add_bone(influences, node, b, weights[v, k])
 
 
-@kernel((N1, N1, N1, N1, N1, I2, I2, F2, i8, i8, i8), cost=0.4)
+@kernel((N1, N1, N1, N1, N1, I2, I2, F2, i8, i8, i8), cost=0.6)
 def bone_masks(left, right, start, count, order, faces, joints, weights, n_nodes, n_bones, n_rows):
-    """(n_rows, W) uint64 bone masks of the tree's first ``n_nodes`` nodes (rows past them zero), for
-    faces (F, 3) over vertices with joints and weights (n, k); ``order`` the tree's leaf order."""
-    masks = np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64)
+    """``Influences`` (as a tuple, n_rows rows) of the tree's first ``n_nodes`` nodes, for faces (F, 3)
+    over vertices with joints and weights (n, k); ``order`` the tree's leaf order."""
+    influences = (np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64), np.full((n_rows, TABLE), NO_BONE),
+                  np.zeros((n_rows, TABLE)))
     for node in range(n_nodes - 1, -1, -1):
-        _node_mask(masks, node, left, right, start, count, order, faces, joints, weights, n_bones)
-    return masks
+        _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones)
+    return influences
 
 
-@kernel((U2, N1, N1, N1, N1, N1, N1, I2, I2, F2, I1, i8), cost=0.4)
-def refresh_masks(masks, left, right, parent, start, count, order, faces, joints, weights, dirty, n_bones):
-    """Recompute the masks of the ``dirty`` nodes (k,) of a tree whose faces changed (the leaves of the
-    faces that came, went or moved, and the nodes a split made), then their ancestors up to the first
-    that keeps its mask: the masks stay the exact union over the live faces."""
+@kernel((INFLUENCES, N1, N1, N1, N1, N1, N1, I2, I2, F2, I1, i8), cost=0.6)
+def refresh_masks(influences, left, right, parent, start, count, order, faces, joints, weights, dirty, n_bones):
+    """Recompute the influences of the ``dirty`` nodes (k,) of a tree whose faces changed (the leaves
+    of the faces that came, went or moved, and the nodes a split made), then their ancestors up to the
+    first that keeps them: they stay exact over the live faces."""
+    masks, bones, table = influences
     for i in range(dirty.shape[0]):
-        _node_mask(masks, dirty[i], left, right, start, count, order, faces, joints, weights, n_bones)
-    old = np.empty(masks.shape[1], np.uint64)
+        _node_influences(influences, dirty[i], left, right, start, count, order, faces, joints, weights, n_bones)
+    old_mask = np.empty(masks.shape[1], np.uint64)
+    old_bones, old_table = np.empty(TABLE, np.int64), np.empty(TABLE)
     for i in range(dirty.shape[0]):
         node = parent[dirty[i]]
         while node >= 0:
+            for w in range(masks.shape[1]):
+                old_mask[w] = masks[node, w]
+            for j in range(TABLE):
+                old_bones[j], old_table[j] = bones[node, j], table[node, j]
+            _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones)
             same = True
             for w in range(masks.shape[1]):
-                old[w] = masks[node, w]
-            _node_mask(masks, node, left, right, start, count, order, faces, joints, weights, n_bones)
-            for w in range(masks.shape[1]):
-                same = same and old[w] == masks[node, w]
+                same = same and old_mask[w] == masks[node, w]
+            for j in range(TABLE):
+                same = same and old_bones[j] == bones[node, j] and old_table[j] == table[node, j]
             if same:
                 break
             node = parent[node]
@@ -141,11 +193,26 @@ def posed_scale(affines, used) -> float:
 
 # ---- posed boxes and positions, where a query reaches ----------------------------------------------
 @helper
+def _carried(affines, b, ref, rest_lo, rest_hi, node, r):
+    """(centre, half extent) along axis r of node's rest box carried by bone b's map less bone ref's
+    (ref < 0: b's map itself)."""
+    c, h = affines[b, 4 * r + 3], 0.0
+    if ref >= 0:
+        c -= affines[ref, 4 * r + 3]
+    for k in range(3):
+        m = affines[b, 4 * r + k] if ref < 0 else affines[b, 4 * r + k] - affines[ref, 4 * r + k]
+        c += m * (0.5 * (rest_lo[node, k] + rest_hi[node, k]))
+        h += abs(m) * (0.5 * (rest_hi[node, k] - rest_lo[node, k]))
+    return c, h
+
+
+@helper
 def _posed_box(bvh, posing, node):
-    """Write node's posed box into the posed tree (bvh's lo, hi) from its rest box, mask and the bone
-    maps (an empty rest box, or no bone, gives an empty box)."""
+    """Write node's posed box into the posed tree (bvh's lo, hi) from its rest box, influences and the
+    bone maps: the mask's bound, cut by the weight table's where the node has one (module docstring;
+    an empty rest box, or no bone, gives an empty box)."""
     lo, hi = bvh[0], bvh[1]
-    rest_lo, rest_hi, masks, affines, pad = posing[0], posing[1], posing[2], posing[8], posing[10][0]
+    rest_lo, rest_hi, (masks, bones, table), affines, pad = posing[0], posing[1], posing[2], posing[8], posing[10][0]
     for k in range(3):
         lo[node, k], hi[node, k] = np.inf, -np.inf
     if not rest_lo[node, 0] <= rest_hi[node, 0]:
@@ -156,16 +223,26 @@ def _posed_box(bvh, posing, node):
         while bits != np.uint64(0):
             if bits & np.uint64(1):
                 for r in range(3):
-                    c, h = affines[b, 4 * r + 3], 0.0
-                    for k in range(3):
-                        m = affines[b, 4 * r + k]
-                        c += m * (0.5 * (rest_lo[node, k] + rest_hi[node, k]))
-                        h += abs(m) * (0.5 * (rest_hi[node, k] - rest_lo[node, k]))
+                    c, h = _carried(affines, b, -1, rest_lo, rest_hi, node, r)
                     lo[node, r], hi[node, r] = min(lo[node, r], c - h), max(hi[node, r], c + h)
             bits = bits >> np.uint64(1)
             b += 1
     if not lo[node, 0] <= hi[node, 0]:
         return
+    if bones[node, 0] >= 0:
+        ref = 0
+        for j in range(1, TABLE):
+            if bones[node, j] >= 0 and table[node, j] > table[node, ref]:
+                ref = j
+        for r in range(3):
+            c, h = _carried(affines, bones[node, ref], -1, rest_lo, rest_hi, node, r)
+            low, high = c - h, c + h
+            for j in range(TABLE):
+                if j != ref and bones[node, j] >= 0:
+                    c, h = _carried(affines, bones[node, j], bones[node, ref], rest_lo, rest_hi, node, r)
+                    low += min(0.0, table[node, j] * (c - h))
+                    high += max(0.0, table[node, j] * (c + h))
+            lo[node, r], hi[node, r] = max(lo[node, r], low), min(hi[node, r], high)
     size = 0.0
     for k in range(3):
         size = max(size, max(abs(lo[node, k]), abs(hi[node, k])) + (hi[node, k] - lo[node, k]))
@@ -175,11 +252,38 @@ def _posed_box(bvh, posing, node):
 
 
 @helper
-def _pose_region(bvh, posing, box_lo, box_hi):
-    """Pose what the closed box [box_lo, box_hi] reaches: the posed box of every node visited from the
-    root (descending where it meets the box) and the skinned positions of the vertices of the leaves
-    it meets, in bvh (BVHArrays as a tuple: lo, hi and positions are written). Nothing when posing
-    is not active."""
+def _meets(lo, hi, node, query, a, b, reach):
+    """Whether node's box [lo, hi] meets the query: a segment a -> b within ``reach`` (``query`` (0,)),
+    or the box [a, b] where it holds points within ``reach`` of the plane ``query`` (4,) (n, d: the
+    signed distance n.x - d; an empty plane, all zero, takes the whole box)."""
+    if query.shape[0] == 0:
+        t0, t1 = 0.0, 1.0
+        for k in range(3):
+            low, high, d = lo[node, k] - reach, hi[node, k] + reach, b[k] - a[k]
+            if d == 0.0:
+                if a[k] < low or a[k] > high:
+                    return False
+                continue
+            u, v = (low - a[k]) / d, (high - a[k]) / d
+            t0, t1 = max(t0, min(u, v)), min(t1, max(u, v))
+            if t0 > t1:
+                return False
+        return True
+    smin = smax = -query[3]
+    for k in range(3):
+        if lo[node, k] > b[k] or hi[node, k] < a[k]:
+            return False
+        u, v = query[k] * lo[node, k], query[k] * hi[node, k]
+        smin, smax = smin + min(u, v), smax + max(u, v)
+    return smin <= reach and smax >= -reach
+
+
+@helper
+def _pose_region(bvh, posing, query, a, b, reach):
+    """Pose what a query reaches (``_meets``): the posed box of every node visited from the root
+    (descending where it meets the query) and the skinned positions of the vertices of the leaves it
+    meets, in bvh (BVHArrays as a tuple: lo, hi and positions are written). Nothing when posing is not
+    active."""
     node_stamp, vertex_stamp, vertices, joints, weights, affines, state = (posing[3], posing[4], posing[5],
                                                                           posing[6], posing[7], posing[8], posing[9])
     if state[1] == 0:
@@ -195,10 +299,7 @@ def _pose_region(bvh, posing, box_lo, box_hi):
         if node_stamp[node] != stamp:
             _posed_box(bvh, posing, node)
             node_stamp[node] = stamp
-        meets = True
-        for k in range(3):
-            meets = meets and lo[node, k] <= box_hi[k] and hi[node, k] >= box_lo[k]
-        if not meets:
+        if not _meets(lo, hi, node, query, a, b, reach):
             continue
         if left[node] >= 0:
             if top + 3 > stack.shape[0]:
@@ -215,19 +316,16 @@ def _pose_region(bvh, posing, box_lo, box_hi):
 
 
 @kernel()
-def pose_region(bvh, posing, box_lo, box_hi):
+def pose_region(bvh, posing, query, a, b, reach):
     """``_pose_region`` from Python (tests check the bounds with it)."""
-    _pose_region(bvh, posing, box_lo, box_hi)
+    _pose_region(bvh, posing, query, a, b, reach)
 
 
 @helper
 def _pose_blades(bvh, posing, blades, reach):
-    """``_pose_region`` for the box of ``blades`` (4, 3) widened by ``reach``."""
-    box_lo, box_hi = np.empty(3), np.empty(3)
-    for k in range(3):
-        box_lo[k] = min(min(blades[0, k], blades[1, k]), min(blades[2, k], blades[3, k])) - reach
-        box_hi[k] = max(max(blades[0, k], blades[1, k]), max(blades[2, k], blades[3, k])) + reach
-    _pose_region(bvh, posing, box_lo, box_hi)
+    """``_pose_region`` for both blade segments (handle -> tip, (4, 3)) within ``reach``."""
+    _pose_region(bvh, posing, np.empty(0), blades[0], blades[1], reach)
+    _pose_region(bvh, posing, np.empty(0), blades[2], blades[3], reach)
 
 
 class PosedScratch:
@@ -240,10 +338,10 @@ class PosedScratch:
         self._lo = self._hi = self._positions = np.empty((0, 3))
         self._node_stamp = self._vertex_stamp = np.zeros(0, np.int64)
 
-    def view(self, tree, n_nodes, masks, vertices, joints, weights, affines, pad) -> tuple:
+    def view(self, tree, n_nodes, influences, vertices, joints, weights, affines, pad) -> tuple:
         """(BVHArrays of the posed tree as a tuple, ``Posing`` as a tuple) for ``tree`` (the rest BVH's
         arrays: lo, hi, left, right, start, count, order, positions, faces; ``n_nodes`` of its rows in
-        use) with ``masks``, the rest mesh (n rows) and bone maps ``affines`` (B, 12)."""
+        use) with its ``Influences`` (a tuple), the rest mesh (n rows) and bone maps ``affines`` (B, 12)."""
         n = len(vertices)
         if len(self._lo) < n_nodes:
             size = max(n_nodes, len(self._lo) * 3 // 2)
@@ -254,6 +352,6 @@ class PosedScratch:
         self._stamp += 1
         positions = self._positions[:n]
         bvh = (self._lo, self._hi, tree[2], tree[3], tree[4], tree[5], tree[6], positions, tree[8])
-        posing = (tree[0], tree[1], masks, self._node_stamp, self._vertex_stamp[:n], vertices, joints, weights,
+        posing = (tree[0], tree[1], influences, self._node_stamp, self._vertex_stamp[:n], vertices, joints, weights,
                   affines, np.array([self._stamp, 1]), np.array([pad]))
         return bvh, posing

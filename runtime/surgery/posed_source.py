@@ -1,5 +1,5 @@
-"""A surface held at rest, torn in a pose: the source of a posed stroke, and the bone masks an editing
-session keeps for it.
+"""A surface held at rest, torn in a pose: the source of a posed stroke, and the bone influences
+(``posed_bounds.Influences``) an editing session keeps for it.
 
 A functional tear (``tear/rig_source.py``) and an editing session (``session.py``) both keep their
 surface in rest space with a BVH over the rest positions. A stroke in a pose does not skin the mesh
@@ -40,7 +40,7 @@ def padding(weights) -> float:
 class PosedSource:
     """``source`` (a stroke source whose positions are its rest vertices and whose BVH holds them) in
     the pose of bone maps ``affines`` (B, 12): ``tree`` the rest BVH's arrays (``n_nodes`` rows in use)
-    with bone ``masks``; ``used`` (u,) int64 the bones in use; ``scratch`` a ``PosedScratch``;
+    with its ``posed_bounds.Influences`` ``masks`` (a tuple); ``used`` (u,) int64 the bones in use; ``scratch`` a ``PosedScratch``;
     ``pad`` from ``padding``. The rest of the source interface is ``source``'s."""
 
     def __init__(self, source, affines, tree, n_nodes, masks, used, scratch: PosedScratch, pad: float):
@@ -59,14 +59,15 @@ class PosedSource:
 
 
 class SessionMasks:
-    """The bone masks of an editing session's ``DynamicBVH``, made on the first posed stroke and kept
-    exact across its edits from then on (``edited``)."""
+    """The bone influences (``posed_bounds.Influences``) of an editing session's ``DynamicBVH``, made on
+    the first posed stroke and kept exact across its edits from then on (``edited``)."""
 
     def __init__(self, bvh, n_bones: int):
         self._bvh, self.n_bones, self._masks, self._rebuilds = bvh, n_bones, None, bvh.rebuilds
 
     def masks(self, joints, weights) -> np.ndarray:
-        """(N, W) uint64 masks of the tree's nodes now (``joints``, ``weights`` the session's rows)."""
+        """The ``posed_bounds.Influences`` (a tuple) of the tree's nodes now (``joints``, ``weights`` the
+        session's rows)."""
         if self._masks is None or self._rebuilds != self._bvh.rebuilds:
             arrays, self._rebuilds = self._bvh.arrays, self._bvh.rebuilds
             self._masks = bone_masks(arrays[2], arrays[3], arrays[4], arrays[5], arrays[6], arrays[8], joints, weights,
@@ -84,10 +85,13 @@ class SessionMasks:
             self._masks = None                        # (a rebuild renumbered the nodes: made again when needed)
             return
         arrays, n_nodes = self._bvh.arrays, self._bvh.n_nodes
-        if len(self._masks) < len(arrays[0]):
-            grown = np.zeros((len(arrays[0]), self._masks.shape[1]), np.uint64)
-            grown[:len(self._masks)] = self._masks
-            self._masks = grown
+        if len(self._masks[0]) < len(arrays[0]):
+            grown = []
+            for old in self._masks:
+                new = np.zeros((len(arrays[0]), old.shape[1]), old.dtype)
+                new[:len(old)] = old
+                grown.append(new)
+            self._masks = tuple(grown)
         dirty = np.concatenate((leaves_before, self._bvh.leaves(inserted), self._bvh.leaves(moved),
                                 np.arange(first_node, n_nodes)))
         refresh_masks(self._masks, arrays[2], arrays[3], self._bvh.parents, arrays[4], arrays[5], arrays[6], arrays[8],

@@ -64,7 +64,7 @@ def test_posed_boxes_hold_every_skinned_vertex(tear_model, data):
     _, rig = tear_model
     pose = data.draw(poses(rig))
     bvh, posing = posed_tree(rig, pose)
-    pose_region(bvh, posing, np.full(3, -np.inf), np.full(3, np.inf))
+    pose_region(bvh, posing, np.zeros(4), np.full(3, -np.inf), np.full(3, np.inf), np.inf)
     lo, hi, left, right, start, count, order, positions, faces = bvh
     skinned = cgaskin.skin(rig, pose)
     used = np.unique(faces)
@@ -96,11 +96,11 @@ def test_posed_first_hit_is_the_skinned_surfaces(tear_model, data):
     direction = np.array(data.draw(st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda d: np.linalg.norm(d) > 0.1)))
     a = target + 0.3 * diagonal(skinned) * direction / np.linalg.norm(direction)
     b = target - 0.05 * diagonal(skinned) * direction / np.linalg.norm(direction)
-    pose_region(bvh, posing, np.minimum(a, b), np.maximum(a, b))
+    pose_region(bvh, posing, np.empty(0), a, b, 0.0)
     face, t = _first_hit(bvh, a, b)
     expected = brute.first_hit(a, b)
-    assert expected[0] >= 0
-    assert (int(face), float(t)) == expected
+    event("hits" if expected[0] >= 0 else "misses (the face is degenerate in this pose)")
+    assert int(face) == expected[0] and (expected[0] < 0 or float(t) == expected[1])
 
 
 def test_a_posed_stroke_equals_a_stroke_on_the_skinned_surface(tear_model):
@@ -164,8 +164,9 @@ def test_a_session_in_many_poses_equals_the_functional_chain(tear_model, data):
     tree = session._bvh.arrays
     fresh = bone_masks(*(tree[k] for k in (2, 3, 4, 5, 6, 8)), session.joints, session.weights,
                        session._bvh.n_nodes, rig.skeleton.n_bones, len(tree[0]))
-    np.testing.assert_array_equal(session._masks.masks(session.joints, session.weights)[:session._bvh.n_nodes],
-                                  fresh[:session._bvh.n_nodes])
+    kept = session._masks.masks(session.joints, session.weights)
+    for got, expected in zip(kept, fresh):
+        np.testing.assert_array_equal(got[:session._bvh.n_nodes], expected[:session._bvh.n_nodes])
 
 
 def test_strokes_along_a_playing_capsule():

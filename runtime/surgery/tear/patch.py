@@ -162,9 +162,22 @@ def _patch_arrays(vertices, positions, labels, boundary, faces, face_ids):
 
 
 @helper
-def _region_pad(margin, snap):
-    """How far the region's box reaches past the box of the blades (``_faces_in_region``)."""
-    return margin + 4.0 * snap
+def _region(blades, margin, plane, has_plane, snap, diagonal):
+    """The query of ``_faces_in_region``: (lo, hi) the box of ``blades`` (4, 3) widened by ``margin``
+    and a few snap distances, the plane (4,) (zero: none) and the distance ``delta`` from it."""
+    pad = margin + 4.0 * snap
+    lo, hi = np.empty(3), np.empty(3)
+    scale = diagonal
+    for k in range(3):
+        lo[k] = min(min(blades[0, k], blades[1, k]), min(blades[2, k], blades[3, k])) - pad
+        hi[k] = max(max(blades[0, k], blades[1, k]), max(blades[2, k], blades[3, k])) + pad
+        scale = max(scale, diagonal + max(abs(lo[k]), abs(hi[k])))
+    if not has_plane:
+        return lo, hi, np.zeros(4), np.inf
+    # (the rounding of normal·x - offset, which the classification computes otherwise, grows with the
+    # coordinates: a model far from the origin; the plane is a dual plane n̂ + d e∞: its signed
+    # distance is n̂·x - d)
+    return lo, hi, plane.copy(), 2.0 * snap + 16.0 * _EPS * scale
 
 
 @helper
@@ -173,16 +186,5 @@ def _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal):
     ``plane`` (any plane when not ``has_plane``) that touch the bounding box of ``blades`` (4, 3)
     (handle, tip, handle, tip) widened by ``margin`` and a few snap distances (the region's test rounds;
     a face that touches the box is kept); ``diagonal`` the surface's bounding-box diagonal."""
-    pad = _region_pad(margin, snap)
-    lo, hi = np.empty(3), np.empty(3)
-    scale = diagonal
-    for k in range(3):
-        lo[k] = min(min(blades[0, k], blades[1, k]), min(blades[2, k], blades[3, k])) - pad
-        hi[k] = max(max(blades[0, k], blades[1, k]), max(blades[2, k], blades[3, k])) + pad
-        scale = max(scale, diagonal + max(abs(lo[k]), abs(hi[k])))
-    if not has_plane:
-        return np.sort(_faces_near_plane(bvh, lo, hi, np.zeros(3), 0.0, np.inf))
-    # (the rounding of normal·x - offset, which the classification computes otherwise, grows with the
-    # coordinates: a model far from the origin; the plane is a dual plane n̂ + d e∞: its signed
-    # distance is n̂·x - d)
-    return np.sort(_faces_near_plane(bvh, lo, hi, plane[:3].copy(), plane[3], 2.0 * snap + 16.0 * _EPS * scale))
+    lo, hi, query, delta = _region(blades, margin, plane, has_plane, snap, diagonal)
+    return np.sort(_faces_near_plane(bvh, lo, hi, query[:3].copy(), query[3], delta))

@@ -75,7 +75,7 @@ class _Rest:
 
     @cached_property
     def masks(self) -> np.ndarray:
-        """(N, W) uint64 the bone masks of the BVH's nodes."""
+        """The ``posed_bounds.Influences`` (a tuple) of the BVH's nodes."""
         tree, mesh = self.bvh._arrays, self._mesh
         return bone_masks(tree.left, tree.right, tree.start, tree.count, tree.order, tree.faces, mesh.joints,
                           mesh.weights, len(tree.lo), self._n_bones, len(tree.lo))

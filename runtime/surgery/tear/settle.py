@@ -12,8 +12,8 @@ from __future__ import annotations
 from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8
 from ..bvh import BVH_ARRAYS
 from .locate import OK, _ends
-from ..posed_bounds import POSING, _pose_blades
-from .patch import _faces_in_region, _patch_arrays, _region_pad
+from ..posed_bounds import POSING, _pose_region
+from .patch import _faces_in_region, _patch_arrays, _region
 from .region import _margin
 
 #: how often the patch is taken again before giving up (the plane of a patch is its own: twice is enough)
@@ -37,7 +37,8 @@ def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, ha
     """
     a0, b0, a1, b1 = blades[0], blades[1], blades[2], blades[3]
     for round_ in range(ROUNDS):
-        _pose_blades(bvh, posing, blades, _region_pad(margin, snap))
+        lo, hi, query, delta = _region(blades, margin, plane, has_plane, snap, diagonal)
+        _pose_region(bvh, posing, query, lo, hi, delta)        # what the region query below reaches
         face_ids = _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal)
         rows, local, topology, tree = _patch_arrays(vertices, positions, labels, boundary, faces, face_ids)
         (patch_positions, welded, wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces,
