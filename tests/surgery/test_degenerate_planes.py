@@ -54,6 +54,16 @@ def check_tear(rig, result, blade_from, blade_to, opening):
     assert slivers(result.rig) == 0
 
 
+def turned_over(rig, result, blade_from, blade_to) -> int:
+    """Faces that the opening turned over: the same stroke with opening 0 makes the same faces, and
+    each of ``result``'s must keep the side it faces (area vectors with a positive dot product)."""
+    closed = tear_stroke(rig, blade_from, blade_to).rig
+    assert np.array_equal(closed.faces, result.rig.faces)
+    areas = [np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) for c in
+             (np.asarray(r.vertices)[np.asarray(r.faces)] for r in (closed, result.rig))]
+    return int(np.count_nonzero(np.sum(areas[0] * areas[1], axis=1) <= 0))
+
+
 def row_blade(x, row="top"):
     """A blade over the capsule at x, aimed at the axis through the top row (from +y) or the side row
     (from +z)."""
@@ -299,10 +309,12 @@ def test_random_axis_aligned_incisions_on_a_staircase(y, x0, step, direction, st
     """Incisions on a staircase in vertical grid planes (x = const or y = const, often through a row of
     vertices, along the side walls whose faces lie in them, or within rounding of one), up and down its
     steps, in strokes of random length: every stroke continues one slit, within the swept region, with
-    no sliver. (Found: a path that went back along an edge to a corner and down a wall's diagonal when
-    the straight way over the wall was shorter; a one-face path 1e-9 from the face's side that made a
-    zero-area piece; the second stroke of a path 1e-9 from a wall, from the first stroke's end at a
-    corner through a midpoint to an end inside the face, fanned from the midpoint: a zero-area piece.)"""
+    no sliver and no face turned over. (Found: a path that went back along an edge to a corner and down
+    a wall's diagonal when the straight way over the wall was shorter; a one-face path 1e-9 from the
+    face's side that made a zero-area piece; the second stroke of a path 1e-9 from a wall, from the
+    first stroke's end at a corner through a midpoint to an end inside the face, fanned from the
+    midpoint: a zero-area piece; an opening of 0.002 along a path 0.001 from a wall's edge, which moved
+    the far side onto the edge: zero-area and turned-over faces (the next test).)"""
     xs = x0 + direction * step * np.arange(strokes + 1)
     assume(0.05 <= xs.min() and xs.max() <= 3.95)
     rig = staircase(STEPS)
@@ -313,6 +325,27 @@ def test_random_axis_aligned_incisions_on_a_staircase(y, x0, step, direction, st
         blades = blade(xs[i]), blade(xs[i + 1])
         result = tear_stroke(rig, *blades, opening=opening)
         check_tear(rig, result, *blades, opening)
+        assert opening == 0 or turned_over(rig, result, *blades) == 0
+        assert not result.jumps.any() and (i == 0 or (result.kinds[0] == VERTEX and result.split[0]))
+        rig = result.rig
+    assert len(tear_topology(rig).boundary_loops()) == 1 and pieces(rig) == 1
+
+
+@pytest.mark.parametrize("x0, step", [(0.5, 0.25), (2.0, -0.5)])
+def test_opened_incision_closer_to_an_edge_than_half_the_opening(x0, step):
+    """Two opened strokes in the plane y = 0.001, opening 0.002, along the staircase's front wall
+    (y = 0): moving the far side by opening/2 put it on the wall's top edge, where the faces between
+    them had zero area (along a tread: 2; over a riser's top, where the path passes 0.001 from the
+    corner (1, 0, 2): 6, and the far side's copies there on that corner, which made non-manifold
+    edges). The side with too little room moves less and the other more: still the whole opening
+    apart, with no zero-area face and none turned over. (The staircase property test's case.)"""
+    rig = staircase(STEPS)
+    xs = x0 + step * np.arange(3)
+    for i in range(2):
+        blades = ([xs[i], 0.001, 5.0], [xs[i], 0.001, 0.5]), ([xs[i + 1], 0.001, 5.0], [xs[i + 1], 0.001, 0.5])
+        result = tear_stroke(rig, *blades, opening=0.002)
+        check_tear(rig, result, *blades, 0.002)
+        assert turned_over(rig, result, *blades) == 0
         assert not result.jumps.any() and (i == 0 or (result.kinds[0] == VERTEX and result.split[0]))
         rig = result.rig
     assert len(tear_topology(rig).boundary_loops()) == 1 and pieces(rig) == 1

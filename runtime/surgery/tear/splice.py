@@ -34,6 +34,7 @@ from ..new_vertices import attribute_rule, interpolate_in_place
 from ..posed_bounds import POSING, _pose_blades
 from ..weld import _boundary_of
 from .guess import FOUND, FROM_MISSES, _guess
+from .opening import _opening_offsets
 from .records import JUMP_CARRIER, VERTEX, Ends, Path
 from .retriangulate import _retriangulate
 from .settle import _settle
@@ -173,11 +174,12 @@ def _splice_arrays(path_int, path_float, faces, positions, vertex_welded, mesh, 
         path_int, path_float, faces, vertex_welded, mesh, affected, pieces[1], new_node)
     slit = _open_slit(torn_faces, torn_welded, node_welded, positions, new_positions, plane, candidates)
     split, twins, moved, side_a, side_b = slit
+    offsets = _opening_offsets(torn_faces, candidates, positions, new_positions, plane, slit, opening)
     added = new_node.shape[0] + twins.shape[0]
     read, changed, out_vertices, out_labels, out_joints, out_weights = _stroke_rows(
         new_src, twins, moved, rows, vertices, labels, joints, weights, added)
     residual = _vertex_data(out_vertices, out_joints, out_weights, out_labels, p, top_label, path_float, pieces, slit,
-                            opening, plane[:3].copy(), affines, posed)
+                            opening, plane[:3].copy(), affines, posed, offsets)
     boundary_rows, boundary_flags = _boundary_changes(out_vertices, out_labels, torn_faces, candidates, vertex_welded,
                                                       mesh[0].shape[0], path_int, p)
     removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(

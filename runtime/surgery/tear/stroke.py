@@ -51,8 +51,9 @@ blade at time t_i and ``scalpel_to = (a1, b1)`` at t_{i+1}. Steps (design.md sec
    hole) -- unless an end lies on an existing boundary (the end of an earlier slit, or a border of an
    open mesh): then it is split too, and the new slit continues the old one. A path of one segment
    (both ends in one face, or on one edge) gets its midpoint as a third vertex, which opens.
-   ``opening`` > 0 moves the two sides apart by ±opening/2 along the plane normal (the side the
-   normal points to goes +).
+   ``opening`` > 0 moves the two sides apart by ``opening`` along the plane normal (the side the
+   normal points to goes +): half each, less on a side where a face beside the path has too little
+   room for it (``opening.py``), so that no face folds over.
 7. **Posed tears** place every new vertex in rest space by inverting its blended 3x4 transform,
    so that skinning the torn rig in ``pose`` puts it exactly on the posed path (and the opening
    offset goes through the inverse blended linear part). The copies of one path point share one

@@ -8,7 +8,8 @@ from ..new_vertices import _blended, _solve_linear, _to_rest, blend_weight_rows
 
 
 @helper
-def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, opening, normal, affines, posed):
+def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, opening, normal, affines, posed,
+                 offsets=None):
     """Step 7 and the vertex arrays of the torn mesh: originals, new vertices, twins.
 
     New vertices get interpolated weights (``_blend_weights``) and, at rest, their path point as
@@ -17,14 +18,16 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
     position and stay welded even where their weights differ a little. Twins copy their vertex. The
     far side of the slit gets the new tear label (``top + 1`` + rank, ``top`` the highest label of the
     whole mesh, which the n rows here may be only a part of). With ``opening`` > 0
-    the near side moves by +opening/2 along ``normal`` and the far side by -opening/2: in a pose, the
-    offset goes through the inverse blended linear part of the node's first copy on that side (again
-    one offset per node and side, for the same reason).
+    the near side of each split node moves along ``normal`` by ``offsets[j, 0]`` and the far side
+    against it by ``offsets[j, 1]`` (``opening._opening_offsets``: they sum to ``opening``; opening/2
+    each where no face around the path loses too much of its area; opening/2 each when ``offsets`` is
+    not given): in a pose, the offset goes through the inverse blended linear part of the node's first
+    copy on that side (again one offset per node and side, for the same reason).
 
     out_v (N, 3) float64, out_j (N, 4) int64, out_w (N, 4) float64, out_l (N,) int64 with N = n + v + t:
         the vertex arrays of the torn mesh, the originals in their first n rows (the caller copies
         them: numpy's copy beats a compiled loop); filled here
-    path_float : (k, 4) Path.points ; pieces : Pieces, slit : Slit (as tuples)
+    path_float : (k, 4) Path.points ; pieces : Pieces, slit : Slit (as tuples) ; offsets : (k, 2) or None
     returns the largest placement residual |skinned new vertex - its posed path point| (0 at rest)
     """
     affected, tris, new_node, new_src, new_coef, _ = pieces
@@ -82,8 +85,12 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
             j = nodes[i]
             if not done[j, side]:
                 done[j, side] = True
+                if offsets is None:
+                    share = 0.5 * opening
+                else:
+                    share = offsets[j, side]
                 for c in range(3):
-                    delta[c] = signs[i] * (0.5 * opening * normal[c])
+                    delta[c] = signs[i] * (share * normal[c])
                 if posed:
                     delta = _solve_linear(_blended(out_j, out_w, affines, ids[i]), delta)
                 for c in range(3):
