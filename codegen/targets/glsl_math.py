@@ -13,7 +13,12 @@ sin cos x = k π/2 + r with π/2 in three 33-bit parts (exact products for |k| <
         beyond that the reduction loses accuracy), Taylor to r^17 / r^18 on |r| <= π/4
 atan2   ratio t in [0, 1]; t > tan(π/8): π/4 + atan((t-1)/(t+1)); Taylor to u^45 on |u| <= tan(π/8);
         octant, quadrant and the signed-zero cases as C's atan2
-acos    atan2(sqrt((1-x)(1+x)), x); atanh ±0.5 log1p(2|x|/(1-|x|)), log1p(u) = log(1+u) u/((1+u)-1)
+acos    |x| <= 1/2: π/2 - asin x; x > 1/2: 2 asin s, s = sqrt((1-x)/2) (1-x exact) with the rounding
+        of s corrected (s = h + (z - h²)/(s + h), h its leading 21 bits); x < -1/2: π - 2 asin s, s =
+        sqrt((1+x)/2); asin s = s + s z p(z), z = s² <= 1/4, Taylor to s^49: under 1 ulp (the float
+        include's atan2(sqrt((1-x)(1+x)), x) reached 3 ulp in double, at x = 0.55: the roundings of the
+        square root and of the ratio went through atan)
+atanh   ±0.5 log1p(2|x|/(1-|x|)), log1p(u) = log(1+u) u/((1+u)-1)
 sinh cosh  Taylor to x^21 for |x| < 1 (sinh), (e ± 1/e)/2 otherwise, e^(|x|/2)² /2 near overflow
 cbrt    (both precisions) x = m 2^(3q+r): a float pow estimate of cbrt(m 2^r) in [0.79, 1.59], Newton steps
         (two in double, one in float), times 2^q: no overflow or underflow at any finite x
@@ -22,13 +27,15 @@ The reductions are declared ``precise`` so that the compiler neither fuses nor r
 
 The float include uses GLSL's own exp, sin, cos and cosh (measured on Mesa llvmpipe: 1.1e-7 relative
 for sin/cos on [-10, 10], 1e-6 for exp/cosh) and the same algorithms as above, in float, for log,
-atan2, acos, atanh and sinh, which GLSL does not make accurate: llvmpipe's float atan is 2e-5 relative,
-acos 1.6e-4 absolute, log 1.6e-6 absolute near 1 (unbounded relative), sinh and atanh lose relative
-accuracy near 0 (GLSL 4.60 section 8.1 gives no precision for the trigonometric functions at all).
+atan2, atanh and sinh, and acos as atan2(sqrt((1-x)(1+x)), x) (within 4 float ulp), which GLSL does
+not make accurate: llvmpipe's float atan is 2e-5 relative, acos 1.6e-4 absolute, log 1.6e-6 absolute
+near 1 (unbounded relative), sinh and atanh lose relative accuracy near 0 (GLSL 4.60 section 8.1 gives
+no precision for the trigonometric functions at all).
 """
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 #: sympy function name -> GLSL helper name (without the prefix) in the double include
 DOUBLE_FUNCTIONS = ("exp", "log", "sin", "cos", "atan2", "acos", "atanh", "sinh", "cosh")
@@ -169,9 +176,32 @@ double P_lib_atan2(double y, double x) {
     return P_lib_signbit(y) ? -a : a;
 }
 
+// asin(s) - s for |s| <= 1/2, z = s^2: s z p(z), the Taylor series of asin to s^49
+double P_lib_asin_tail(double s, double z) {
+    double p = ASIN_SERIES;
+    return s * (z * p);
+}
+
 double P_lib_acos(double x) {
     if (!(abs(x) <= 1.0lf)) return P_lib_nan();
-    return P_lib_atan2(sqrt((1.0lf - x) * (1.0lf + x)), x);
+    if (abs(x) <= 0.5lf) {                               // π/2 - asin x
+        precise double v = 1.57079632679489655800e+00lf
+                           - (x - (6.12323399573676603587e-17lf - P_lib_asin_tail(x, x * x)));
+        return v;
+    }
+    if (x == 1.0lf) return 0.0lf;
+    if (x > 0.0lf) {                                     // 2 asin s, s = sqrt((1 - x)/2): 1 - x is exact
+        precise double z = (1.0lf - x) * 0.5lf;
+        double s = sqrt(z);
+        double h = packDouble2x32(uvec2(0u, unpackDouble2x32(s).y));      // s's leading 21 bits: h² is exact
+        precise double v = 2.0lf * (h + (P_lib_asin_tail(s, z) + (z - h * h) / (s + h)));
+        return v;
+    }
+    precise double z = (1.0lf + x) * 0.5lf;              // π - 2 asin s, s = sqrt((1 + x)/2)
+    double s = sqrt(z);
+    precise double v = 3.14159265358979311600e+00lf
+                       - 2.0lf * (s + (P_lib_asin_tail(s, z) - 6.12323399573676603587e-17lf));
+    return v;
 }
 
 double P_lib_atanh(double x) {
@@ -327,7 +357,9 @@ _SERIES = {"LOG_SERIES_F": _horner("s2", [1.0 / (2 * n + 1) for n in range(6)], 
            "ATAN_SERIES_F": _horner("u2", [(-1.0) ** n / (2 * n + 1) for n in range(1, 11)], ""),
            "SINH_SERIES_F": _horner("x2", [1.0 / math.factorial(2 * n + 1) for n in range(1, 7)], ""),
            "LOG_SERIES": _horner("s2", [1.0 / (2 * n + 1) for n in range(12)]),
-           "ATAN_SERIES": _horner("u2", [(-1.0) ** n / (2 * n + 1) for n in range(1, 23)])}
+           "ATAN_SERIES": _horner("u2", [(-1.0) ** n / (2 * n + 1) for n in range(1, 23)]),
+           "ASIN_SERIES": _horner("z", [float(Fraction(math.comb(2 * n, n), 4 ** n * (2 * n + 1)))
+                                        for n in range(1, 25)])}
 
 
 def library(prefix: str, double: bool) -> str:

@@ -145,9 +145,32 @@ double cgaskin_lib_atan2(double y, double x) {
     return cgaskin_lib_signbit(y) ? -a : a;
 }
 
+// asin(s) - s for |s| <= 1/2, z = s^2: s z p(z), the Taylor series of asin to s^49
+double cgaskin_lib_asin_tail(double s, double z) {
+    double p = (0.16666666666666666lf + z * (0.075lf + z * (0.044642857142857144lf + z * (0.030381944444444444lf + z * (0.022372159090909092lf + z * (0.017352764423076924lf + z * (0.01396484375lf + z * (0.011551800896139705lf + z * (0.009761609529194078lf + z * (0.008390335809616815lf + z * (0.0073125258735988454lf + z * (0.006447210311889649lf + z * (0.005740037670841924lf + z * (0.005153309682319905lf + z * (0.004660143486915096lf + z * (0.004240907093679363lf + z * (0.003880964558837669lf + z * (0.0035692053938259347lf + z * (0.003297059503473485lf + z * (0.0030578216492580306lf + z * (0.002846178401108942lf + z * (0.00265787063820729lf + z * (0.0024894486782468836lf + z * 0.002338091892111975lf)))))))))))))))))))))));
+    return s * (z * p);
+}
+
 double cgaskin_lib_acos(double x) {
     if (!(abs(x) <= 1.0lf)) return cgaskin_lib_nan();
-    return cgaskin_lib_atan2(sqrt((1.0lf - x) * (1.0lf + x)), x);
+    if (abs(x) <= 0.5lf) {                               // π/2 - asin x
+        precise double v = 1.57079632679489655800e+00lf
+                           - (x - (6.12323399573676603587e-17lf - cgaskin_lib_asin_tail(x, x * x)));
+        return v;
+    }
+    if (x == 1.0lf) return 0.0lf;
+    if (x > 0.0lf) {                                     // 2 asin s, s = sqrt((1 - x)/2): 1 - x is exact
+        precise double z = (1.0lf - x) * 0.5lf;
+        double s = sqrt(z);
+        double h = packDouble2x32(uvec2(0u, unpackDouble2x32(s).y));      // s's leading 21 bits: h² is exact
+        precise double v = 2.0lf * (h + (cgaskin_lib_asin_tail(s, z) + (z - h * h) / (s + h)));
+        return v;
+    }
+    precise double z = (1.0lf + x) * 0.5lf;              // π - 2 asin s, s = sqrt((1 + x)/2)
+    double s = sqrt(z);
+    precise double v = 3.14159265358979311600e+00lf
+                       - 2.0lf * (s + (cgaskin_lib_asin_tail(s, z) - 6.12323399573676603587e-17lf));
+    return v;
 }
 
 double cgaskin_lib_atanh(double x) {

@@ -269,7 +269,10 @@ def function_cases():
         "cos": ([np.concatenate([u(-1e5, 1e5), u(-10, 10), lu(1e-300, 1)])], np.cos, 2),
         "atan2": ([np.concatenate([lu(1e-300, 1e300), u(-2, 2)]), np.concatenate([lu(1e-300, 1e300), u(-2, 2)])],
                   np.arctan2, 2),
-        "acos": ([u(-1, 1)], np.arccos, 2),
+        # (and fixed points: where atan2(sqrt((1-x)(1+x)), x) was 3 ulp off, the branch ends ±1/2, near ±1)
+        "acos": ([np.concatenate([u(-1, 1), [0.5503139541055884], np.nextafter(0.5, [0.0, 1.0]),
+                                  np.nextafter(-0.5, [0.0, -1.0]), 1.0 - np.logspace(-16, -1, 31),
+                                  np.logspace(-16, -1, 31) - 1.0])], np.arccos, 2),
         "atanh": ([np.concatenate([u(-1, 1), lu(1e-300, 1)])], np.arctanh, 3),
         "sinh": ([np.concatenate([u(-710, 710), u(-2, 2), lu(1e-300, 1)])], np.sinh, 2),
         "cosh": ([np.concatenate([u(-710, 710), u(-2, 2)])], np.cosh, 2),
