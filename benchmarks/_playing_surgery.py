@@ -1,16 +1,18 @@
 """Tear strokes on a playing model: the rows of ``bench_animation`` that cut while the body moves.
 
-Each row runs in its own process (``python -m benchmarks._playing_surgery MODEL STROKES``) after a
+Each model runs in its own process (``python -m benchmarks._playing_surgery MODEL STROKES``) after a
 warm-up that compiles every kernel, and prints JSON. An incision (``bench_progressive.incision``) is
-made of short strokes; stroke k happens in frame k of the model's first clip: its two blades are the
-rest incision's blades carried by the bone that dominates the skin under them, in that frame's pose.
-Three ways, all in one process on the same strokes:
+made of short strokes, each continuing the slit: a stroke's blade at t_i goes through where the last
+stroke ended (that vertex skinned in the stroke's pose, as a tool that follows the skin would put it),
+its blade at t_(i+1) is the next rest blade carried by the bone that dominates the skin under it. Four
+ways, in one process:
 
-* ``fixed``: ``Surgery(rig, pose=P0)``: every stroke in the session's one pose (the baseline);
-* ``playing``: ``Surgery(rig)`` and, per frame, ``rig.pose(clip, t)``, ``cgaskin.skin`` of the whole
-  mesh (what a viewer draws) and ``session.tear(..., pose=)`` in that pose;
-* ``stroke only``: the same strokes in new poses, the pose sampled and the mesh skinned outside the
-  timing (what the stroke itself costs in a new pose), with the session's peak memory.
+* ``rest``: ``Surgery(rig)``, every stroke on the stored mesh (the incision at rest);
+* ``fixed``: ``Surgery(rig, pose=P0)``, every stroke in the session's one pose (the baseline);
+* ``stroke only``: ``Surgery(rig)``, stroke k in frame k of the model's first clip (``pose=``), the
+  pose sampled outside the timing: what a stroke costs in a new pose; with the session's peak memory;
+* ``playing``: the same, timing per frame ``rig.pose(clip, t)``, the skin of the session's whole mesh
+  (what a viewer draws) and the stroke.
 """
 from __future__ import annotations
 
@@ -25,87 +27,92 @@ from .bench_progressive import _rss, incision, mesh_bytes
 
 
 def model(name: str):
-    """(rig, label): Arm5.glb, or the issue's 1.52M-face capsule playing its ``wave`` clip."""
+    """(rig, label): Arm5.glb bending its forearm (a clip made with ``clip_from_poses``: the file has
+    none), or the issue's 1.52M-face capsule playing its ``wave`` clip."""
     import cgaskin
     from .bench_tear import models_dir
+    if name == "arm5" and (models_dir() / "Arm5.glb").exists():
+        rig = cgaskin.load(models_dir() / "Arm5.glb")
+        rest = rig.rest_pose()
+        keys = [rest, rest.rotate("Character1_RightForeArm", [0.3, 0.2, 1.0], 0.6),
+                rest.rotate("Character1_RightArm", [0.0, 0.0, 1.0], -0.4), rest]
+        return rig.with_clips(cgaskin.clip_from_poses("bend", [0.0, 0.7, 1.4, 2.0], keys)), "Arm5.glb (bend)"
     if name == "arm5":
-        path = models_dir() / "Arm5.glb"
-        if path.exists() and cgaskin.load(path).clips:
-            return cgaskin.load(path), "Arm5.glb"
         return cgaskin.capsule_arm(), "capsule_arm()"
     return cgaskin.capsule_arm(rings_per_segment=410, segments_around=512), "capsule_arm(410, 512)"
 
 
-def posed_blades(rig, blades, poses):
-    """(k, 2, 3) blades: blade k carried into poses[k] by the bone with the largest weight on the rest
-    vertex nearest to its tip (the skin under the blade moves with that bone)."""
+def _carrier(rig, blade):
+    """The bone that dominates the skin where ``blade`` (2, 3) meets the rest mesh."""
     from cgaskin.surgery.bvh import TriangleBVH
-    bvh = TriangleBVH(rig.vertices, rig.faces)
-    out = np.empty_like(blades)
-    for k, (blade, pose) in enumerate(zip(blades, poses)):
-        face, t = bvh.first_hit(blade[0], blade[1])
-        hit = blade[0] + t * (blade[1] - blade[0])
-        corners = rig.faces[face]
-        v = corners[np.argmin(np.linalg.norm(rig.vertices[corners] - hit, axis=1))]
-        bone = rig.joints[v, np.argmax(rig.weights[v])]
-        affine = pose.bone_affines()[bone].reshape(3, 4)
-        out[k] = blade @ affine[:, :3].T + affine[:, 3]
-    return out
+    face, t = TriangleBVH(rig.vertices, rig.faces).first_hit(blade[0], blade[1])
+    corners = rig.faces[face]
+    hit = blade[0] + t * (blade[1] - blade[0])
+    v = corners[np.argmin(np.linalg.norm(rig.vertices[corners] - hit, axis=1))]
+    return int(rig.joints[v, np.argmax(rig.weights[v])])
+
+
+def _carried(blade, affines, bone):
+    affine = affines[bone].reshape(3, 4)
+    return blade @ affine[:, :3].T + affine[:, 3]
+
+
+def incision_in_poses(session, rig, blades, bones, poses, name=None, play=None):
+    """Stroke k in poses[k], each from where the last one ended; seconds per stroke. ``name``: "rest"
+    or "fixed" tear in the session's own pose (``pose=None``), poses[k] only carries the blades; with
+    ``play`` (clip, times, draw) stroke k's pose is sampled in the timing (and the whole mesh skinned
+    when ``draw``)."""
+    from cgaskin.animation.skinning import skin_affine
+    seconds, end = [], None
+    for k in range(len(blades) - 1):
+        start = time.perf_counter()
+        pose = poses[k] if play is None else rig.pose(play[0], play[1][k])
+        affines = pose.bone_affines()
+        if play is not None and play[2]:            # what a viewer draws: the session's mesh skinned
+            skin_affine(session.vertices, session.joints, session.weights, affines)
+        scalpel_from, scalpel_to = _carried(blades[k], affines, bones[k]), _carried(blades[k + 1], affines, bones[k + 1])
+        if end is not None:                     # through where the slit ended, that vertex in this pose
+            p = skin_affine(session.vertices[[end]], session.joints[[end]], session.weights[[end]], affines)[0]
+            d = scalpel_from[1] - scalpel_from[0]
+            scalpel_from = scalpel_from + p - (scalpel_from[0] + (p - scalpel_from[0]) @ d / (d @ d) * d)
+        try:
+            stroke = session.tear(scalpel_from, scalpel_to, pose=None if name in ("rest", "fixed") else pose)
+            end = int(stroke.side_a[-1])
+        except ValueError as error:
+            print(f"{name} stroke {k}: {type(error).__name__}: {error}", file=sys.stderr)
+            seconds.append(float("nan"))
+            end = None
+            continue
+        seconds.append(time.perf_counter() - start)
+    return seconds
 
 
 def run(name: str, strokes: int) -> dict:
     import cgaskin
-    warm, _ = model("arm5") if name != "arm5" else (None, None)
+    for warm in ([model("arm5")[0]] if name != "arm5" else []) + [cgaskin.capsule_arm()]:   # compile first
+        w = incision(warm, 3)
+        b = [_carrier(warm, x) for x in w]
+        p = [warm.pose(0, 0.1 * i) for i in range(3)]
+        incision_in_poses(cgaskin.Surgery(warm), warm, w, b, p)
+        incision_in_poses(cgaskin.Surgery(warm), warm, w, b, p, play=(0, [0.0, 0.1, 0.2], True))
+        incision_in_poses(cgaskin.Surgery(warm, p[0]), warm, w, b, [p[0]] * 3, "fixed")
     rig, label = model(name)
-    for r in ([warm] if warm is not None else []) + [rig]:        # compile everything first
-        w = incision(r, 3)
-        s = cgaskin.Surgery(r)
-        clip = r.clips[0]
-        for i in range(2):
-            p = r.pose(clip.name, 0.1 * i)
-            s.tear(*posed_blades(r, w[i:i + 2], [p, p]), pose=p)
-        cgaskin.Surgery(r, r.pose(clip.name, 0.0)).tear(*posed_blades(r, w[:2], [p, p]))
     clip = rig.clips[0]
     times = np.linspace(0.0, clip.duration, strokes, endpoint=False)
     blades = incision(rig, strokes)
+    bones = [_carrier(rig, blade) for blade in blades]
     poses = [rig.pose(clip.name, t) for t in times]
-    pairs = [posed_blades(rig, blades[k:k + 2], [poses[k], poses[k]]) for k in range(strokes)]
-    fixed_pairs = [posed_blades(rig, blades[k:k + 2], [poses[0], poses[0]]) for k in range(strokes)]
+    rest = rig.rest_pose()
     out = {"label": label, "vertices": rig.n_vertices, "faces": rig.n_faces, "strokes": strokes,
            "mesh_bytes": mesh_bytes(rig)}
-
-    session = cgaskin.Surgery(rig, poses[0])
-    out["fixed"] = _timed(lambda k: session.tear(*fixed_pairs[k]), strokes)
-
-    session = cgaskin.Surgery(rig)
-
-    def playing(k):
-        pose = rig.pose(clip.name, times[k])
-        cgaskin.skin(rig, pose)
-        session.tear(*pairs[k], pose=pose)
-    out["playing"] = _timed(playing, strokes)
-
+    out["rest"] = incision_in_poses(cgaskin.Surgery(rig), rig, blades, bones, [rest] * strokes, "rest")
+    out["fixed"] = incision_in_poses(cgaskin.Surgery(rig, poses[0]), rig, blades, bones, [poses[0]] * strokes, "fixed")
+    out["playing"] = incision_in_poses(cgaskin.Surgery(rig), rig, blades, bones, poses, play=(clip.name, times, True))
     Path("/proc/self/clear_refs").write_text("5")         # VmHWM := VmRSS from here on
     resident = _rss("VmRSS")
-    session = cgaskin.Surgery(rig)
-    out["stroke only"] = _timed(lambda k: session.tear(*pairs[k], pose=poses[k]), strokes)
+    out["stroke only"] = incision_in_poses(cgaskin.Surgery(rig), rig, blades, bones, poses)
     out["peak"] = _rss("VmHWM") - resident
     return out
-
-
-def _timed(stroke, count: int) -> list:
-    """Seconds of ``stroke(k)`` for k = 0 .. count - 1 (a stroke that raises counts as NaN)."""
-    seconds = []
-    for k in range(count):
-        start = time.perf_counter()
-        try:
-            stroke(k)
-        except ValueError as error:
-            print(f"stroke {k}: {type(error).__name__}: {error}", file=sys.stderr)
-            seconds.append(float("nan"))
-            continue
-        seconds.append(time.perf_counter() - start)
-    return seconds
 
 
 if __name__ == "__main__":

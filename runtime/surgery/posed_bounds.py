@@ -15,21 +15,24 @@ box meets the query box, and skins the vertices of the leaves it reaches (a stam
 the blend loop of ``cgaskin.skin`` (the same numbers). Every node a later query of the stroke visits
 is a child of a node whose posed box met a box inside the query box, so its own box was computed.
 
-That bound is loose where weights blend over a long stretch (a vertex with 0.02 of the upper arm and
-0.98 of the forearm is carried by both, far apart). So each node also keeps the largest weight each of
-its bones has on it, for up to ``TABLE`` bones: with r the bone of the largest one, a skinned vertex is
-A_r v + Σ_k w_k (A_k - A_r) v, so it lies in A_r's carried box plus, per other bone k, the interval
-between 0 and h_k times the box carried by A_k - A_r (h_k the bone's largest weight). The posed box is
-the intersection of both bounds (both hold); a node with more bones keeps the first.
+That bound is loose where weights blend over a long stretch (a vertex with 0.3 of the upper arm and 0.7
+of the forearm is carried by both, far apart). So each node also keeps the lowest and highest weight
+each of its bones has on it, for up to ``TABLE`` bones: with r one of them, a skinned vertex is
+A_r v + Σ_k w_k (A_k - A_r) v (weights summing to 1), so it lies in A_r's carried box plus, per other
+bone k, [l_k, h_k] times the box carried by A_k - A_r: where the weights vary little across a node (a
+leaf), the bound is about the node's own size. The posed box is the intersection of both bounds (both
+hold); a node with more bones keeps the first.
 
 Masks are (N, W) uint64, bone b in word b // 64, bit b % 64; a node's children have larger indices
 than the node (top-down builds and leaf splits both append), so one backward sweep computes them all.
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
+from numba import types
 
 from .._shared.jit import F1, F2, I1, I2, U2, helper, i8, kernel, record
 from ..generated.skinning import skin_blend
@@ -39,24 +42,32 @@ __all__ = ["Influences", "Posing", "POSING", "PosedScratch", "bone_masks", "refr
            "posed_scale", "no_posing", "pose_region"]
 
 
-#: bones per node whose largest weight the weight table keeps (past them: the mask's bound only)
+#: bones per node whose weights the weight table bounds (past them: the mask's bound only)
 TABLE = 4
-#: a table slot that holds no bone, and a node whose bones overflow its table
+#: a table slot that holds no bone, and a node whose bones overflow its table (or whose bone index or
+#: weight the table cannot hold)
 NO_BONE, OVERFLOW = -1, -2
+#: the table holds weights in 16 bits, in steps of 1 / WEIGHT_STEPS rounded outwards (floor for the lowest,
+#: ceil for the highest), so that its bounds hold
+WEIGHT_STEPS = 65535
+#: table arrays: bone ids (int16) and weights in steps (uint16), 24 bytes a node for TABLE = 4
+H2, Q2 = types.int16[:, ::1], types.uint16[:, ::1]
 
 
 class Influences(NamedTuple):
     """The bones under each node of a tree: masks (N, W) uint64, and the weight table: bones (N, TABLE)
-    int64 (NO_BONE in unused slots; OVERFLOW in slot 0 when the node has more bones) with the largest
-    weight (N, TABLE) float64 each has on a vertex under the node."""
+    int16 (NO_BONE in unused slots; OVERFLOW in slot 0 when the node has more bones) with the lowest and
+    highest weight each has on the vertices under the node (0 on a vertex it does not influence),
+    (N, TABLE) uint16 each in 1 / WEIGHT_STEPS, rounded outwards."""
 
     masks: np.ndarray
     bones: np.ndarray
-    weights: np.ndarray
+    lows: np.ndarray
+    highs: np.ndarray
 
 
 #: the numba type of ``Influences``
-INFLUENCES = record(U2, I2, F2)
+INFLUENCES = record(U2, H2, Q2, Q2)
 
 
 class Posing(NamedTuple):
@@ -89,88 +100,136 @@ POSING = record(F2, F2, INFLUENCES, I1, I1, F2, I2, F2, F2, I1, F1)
 def no_posing() -> tuple:
     """The inactive ``Posing`` of a surface torn as stored (empty arrays)."""
     f2, i1 = np.empty((0, 3)), np.zeros(0, np.int64)
-    return (f2, f2, (np.zeros((0, 1), np.uint64), np.zeros((0, TABLE), np.int64), np.zeros((0, TABLE))), i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
+    return (f2, f2, (np.zeros((0, 1), np.uint64), np.zeros((0, TABLE), np.int16), np.zeros((0, TABLE), np.uint16),
+                      np.zeros((0, TABLE), np.uint16)), i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
             np.zeros((0, 12)), np.zeros(2, np.int64), np.zeros(1))
 
 
-# ---- bone masks ------------------------------------------------------------------------------------
+# ---- bone masks and weight tables ----------------------------------------------------------------
 @helper
-def _add_bone(influences, node, b, w):
-    """Bone b with weight w on a vertex (or a child) under ``node``: into its mask and weight table."""
-    masks, bones, weights = influences
+def _add_bone(influences, node, b, low, high, fresh):
+    """Bone b with weights from ``low`` to ``high`` (in steps; high > WEIGHT_STEPS: weights the table
+    cannot hold) on a vertex (or a child) under ``node``, into its mask and weight table; ``fresh``:
+    nothing under the node was added before (else a bone new to the table had weight 0 there)."""
+    masks, bones, lows, highs = influences
     masks[node, b >> 6] |= np.uint64(1) << np.uint64(b & 63)
     if bones[node, 0] == OVERFLOW:
         return
+    if b > 32767 or high > WEIGHT_STEPS:
+        bones[node, 0] = OVERFLOW
+        return
     for j in range(TABLE):
-        if bones[node, j] == b or bones[node, j] == NO_BONE:
-            bones[node, j], weights[node, j] = b, max(weights[node, j], w)
+        if bones[node, j] == b:
+            lows[node, j], highs[node, j] = min(lows[node, j], low), max(highs[node, j], high)
+            return
+        if bones[node, j] == NO_BONE:
+            bones[node, j], lows[node, j], highs[node, j] = b, low if fresh else 0, high
             return
     bones[node, 0] = OVERFLOW
 
 
 @helper
-def _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones):
+def _absent_is_zero(influences, node, other_bones, other_count):
+    """The table's bones of ``node`` that are not among ``other_bones[:other_count]`` (what the last
+    vertex or child added had) reach down to weight 0."""
+    bones, lows = influences[1], influences[2]
+    for j in range(TABLE):
+        if bones[node, j] < 0:
+            continue
+        found = False
+        for i in range(other_count):
+            found = found or other_bones[i] == bones[node, j]
+        if not found:
+            lows[node, j] = 0
+
+
+@helper
+def _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones, had):
     """Recompute row ``node`` of ``influences``: from its live faces' vertices (a leaf: the bones of
-    weight != 0, index in range), or from its children."""
-    masks, bones, table = influences
+    weight != 0, index in range), or from its children (``had``: room for TABLE and k bones)."""
+    masks, bones, lows, highs = influences
     for w in range(masks.shape[1]):
         masks[node, w] = np.uint64(0)
     for j in range(TABLE):
-        bones[node, j], table[node, j] = NO_BONE, 0.0
+        bones[node, j], lows[node, j], highs[node, j] = NO_BONE, 0, 0
+    fresh = True
     if left[node] >= 0:
         for child in (left[node], right[node]):
             for w in range(masks.shape[1]):
                 masks[node, w] |= masks[child, w]
             if bones[child, 0] == OVERFLOW:
                 bones[node, 0] = OVERFLOW
+            n_had = 0
             for j in range(TABLE):
                 if bones[child, j] >= 0:
-                    _add_bone(influences, node, bones[child, j], table[child, j])
+                    _add_bone(influences, node, bones[child, j], lows[child, j], highs[child, j], fresh)
+                    had[n_had] = bones[child, j]
+                    n_had += 1
+            _absent_is_zero(influences, node, had, n_had)
+            fresh = False
         return
     for s in range(start[node], start[node] + count[node]):
         for c in range(3):
             v = faces[order[s], c]
+            n_had = 0
             for k in range(joints.shape[1]):
-                b = joints[v, k]
-                if weights[v, k] != 0.0 and 0 <= b < n_bones:
-                    _add_bone(influences, node, b, weights[v, k])
+                b, w = joints[v, k], weights[v, k]
+                if w != 0.0 and 0 <= b < n_bones:
+                    high = WEIGHT_STEPS + 1 if not 0.0 <= w <= 1.0 else math.ceil(w * WEIGHT_STEPS)
+                    for i in range(n_had):
+                        if had[i] == b:       # a bone listed twice: its weight is the sum, past the table
+                            high = WEIGHT_STEPS + 1
+                    _add_bone(influences, node, b, math.floor(max(w, 0.0) * WEIGHT_STEPS), high, fresh)
+                    had[n_had] = b
+                    n_had += 1
+            _absent_is_zero(influences, node, had, n_had)
+            fresh = False
 
 
-@kernel((N1, N1, N1, N1, N1, I2, I2, F2, i8, i8, i8), cost=0.6)
+@kernel((N1, N1, N1, N1, N1, I2, I2, F2, i8, i8, i8), cost=0.8)
 def bone_masks(left, right, start, count, order, faces, joints, weights, n_nodes, n_bones, n_rows):
     """``Influences`` (as a tuple, n_rows rows) of the tree's first ``n_nodes`` nodes, for faces (F, 3)
     over vertices with joints and weights (n, k); ``order`` the tree's leaf order."""
-    influences = (np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64), np.full((n_rows, TABLE), NO_BONE),
-                  np.zeros((n_rows, TABLE)))
+    influences = (np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64), np.full((n_rows, TABLE), NO_BONE, np.int16),
+                  np.zeros((n_rows, TABLE), np.uint16), np.zeros((n_rows, TABLE), np.uint16))
+    had = np.empty(TABLE + joints.shape[1], np.int64)
     for node in range(n_nodes - 1, -1, -1):
-        _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones)
+        _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones, had)
     return influences
 
 
-@kernel((INFLUENCES, N1, N1, N1, N1, N1, N1, I2, I2, F2, I1, i8), cost=0.6)
+@helper
+def _same_row(influences, node, saved):
+    """Whether row ``node`` of ``influences`` equals ``saved`` (a copy of it, as arrays)."""
+    masks, bones, lows, highs = influences
+    same = True
+    for w in range(masks.shape[1]):
+        same = same and saved[0][w] == masks[node, w]
+    for j in range(TABLE):
+        same = same and saved[1][j] == bones[node, j] and saved[2][j] == lows[node, j] and saved[3][j] == highs[node, j]
+    return same
+
+
+@kernel((INFLUENCES, N1, N1, N1, N1, N1, N1, I2, I2, F2, I1, i8), cost=0.8)
 def refresh_masks(influences, left, right, parent, start, count, order, faces, joints, weights, dirty, n_bones):
-    """Recompute the influences of the ``dirty`` nodes (k,) of a tree whose faces changed (the leaves
+    """Recompute the influences of the ``dirty`` nodes (k,) distinct, of a tree whose faces changed (the leaves
     of the faces that came, went or moved, and the nodes a split made), then their ancestors up to the
     first that keeps them: they stay exact over the live faces."""
-    masks, bones, table = influences
+    masks, bones, lows, highs = influences
+    had = np.empty(TABLE + joints.shape[1], np.int64)
     for i in range(dirty.shape[0]):
-        _node_influences(influences, dirty[i], left, right, start, count, order, faces, joints, weights, n_bones)
-    old_mask = np.empty(masks.shape[1], np.uint64)
-    old_bones, old_table = np.empty(TABLE, np.int64), np.empty(TABLE)
+        _node_influences(influences, dirty[i], left, right, start, count, order, faces, joints, weights, n_bones, had)
+    saved = (np.empty(masks.shape[1], np.uint64), np.empty(TABLE, np.int16), np.empty(TABLE, np.uint16),
+             np.empty(TABLE, np.uint16))
     for i in range(dirty.shape[0]):
         node = parent[dirty[i]]
         while node >= 0:
             for w in range(masks.shape[1]):
-                old_mask[w] = masks[node, w]
+                saved[0][w] = masks[node, w]
             for j in range(TABLE):
-                old_bones[j], old_table[j] = bones[node, j], table[node, j]
-            _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones)
-            same = True
-            for w in range(masks.shape[1]):
-                same = same and old_mask[w] == masks[node, w]
-            for j in range(TABLE):
-                same = same and old_bones[j] == bones[node, j] and old_table[j] == table[node, j]
-            if same:
+                saved[1][j], saved[2][j], saved[3][j] = bones[node, j], lows[node, j], highs[node, j]
+            _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones, had)
+            if _same_row(influences, node, saved):
                 break
             node = parent[node]
 
@@ -212,7 +271,8 @@ def _posed_box(bvh, posing, node):
     bone maps: the mask's bound, cut by the weight table's where the node has one (module docstring;
     an empty rest box, or no bone, gives an empty box)."""
     lo, hi = bvh[0], bvh[1]
-    rest_lo, rest_hi, (masks, bones, table), affines, pad = posing[0], posing[1], posing[2], posing[8], posing[10][0]
+    rest_lo, rest_hi, (masks, bones, lows, highs), affines, pad = (posing[0], posing[1], posing[2], posing[8],
+                                                                   posing[10][0])
     for k in range(3):
         lo[node, k], hi[node, k] = np.inf, -np.inf
     if not rest_lo[node, 0] <= rest_hi[node, 0]:
@@ -230,9 +290,9 @@ def _posed_box(bvh, posing, node):
     if not lo[node, 0] <= hi[node, 0]:
         return
     if bones[node, 0] >= 0:
-        ref = 0
+        ref = 0                       # the bone with the largest lowest weight: the others' terms are small
         for j in range(1, TABLE):
-            if bones[node, j] >= 0 and table[node, j] > table[node, ref]:
+            if bones[node, j] >= 0 and lows[node, j] > lows[node, ref]:
                 ref = j
         for r in range(3):
             c, h = _carried(affines, bones[node, ref], -1, rest_lo, rest_hi, node, r)
@@ -240,8 +300,9 @@ def _posed_box(bvh, posing, node):
             for j in range(TABLE):
                 if j != ref and bones[node, j] >= 0:
                     c, h = _carried(affines, bones[node, j], bones[node, ref], rest_lo, rest_hi, node, r)
-                    low += min(0.0, table[node, j] * (c - h))
-                    high += max(0.0, table[node, j] * (c + h))
+                    w0, w1 = lows[node, j] / WEIGHT_STEPS, highs[node, j] / WEIGHT_STEPS
+                    low += min(w0 * (c - h), w1 * (c - h))
+                    high += max(w0 * (c + h), w1 * (c + h))
             lo[node, r], hi[node, r] = max(lo[node, r], low), min(hi[node, r], high)
     size = 0.0
     for k in range(3):
@@ -290,6 +351,8 @@ def _pose_region(bvh, posing, query, a, b, reach):
         return
     lo, hi, left, right, start, count, order, positions, faces = bvh
     stamp = state[0]
+    todo = np.empty(64, np.int64)           # the vertices to skin, in one call of the blend at the end
+    n_todo = 0
     stack = np.empty(128, np.int64)
     top = 0
     stack[0] = 0
@@ -311,8 +374,25 @@ def _pose_region(bvh, posing, query, a, b, reach):
             for c in range(3):
                 v = faces[order[s], c]
                 if vertex_stamp[v] != stamp:
-                    skin_blend(vertices[v:v + 1], joints[v:v + 1], weights[v:v + 1], affines, positions[v:v + 1])
                     vertex_stamp[v] = stamp
+                    if n_todo == todo.shape[0]:
+                        todo = np.concatenate((todo, np.empty_like(todo)))
+                    todo[n_todo] = v
+                    n_todo += 1
+    if n_todo == 0:
+        return
+    rest, bones, blend = np.empty((n_todo, 3)), np.empty((n_todo, joints.shape[1]), np.int64), \
+        np.empty((n_todo, joints.shape[1]))
+    for i in range(n_todo):
+        for k in range(3):
+            rest[i, k] = vertices[todo[i], k]
+        for k in range(joints.shape[1]):
+            bones[i, k], blend[i, k] = joints[todo[i], k], weights[todo[i], k]
+    skinned = np.empty((n_todo, 3))
+    skin_blend(rest, bones, blend, affines, skinned)       # cgaskin.skin's loop: the same numbers
+    for i in range(n_todo):
+        for k in range(3):
+            positions[todo[i], k] = skinned[i, k]
 
 
 @kernel()

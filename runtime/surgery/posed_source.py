@@ -70,8 +70,9 @@ class SessionMasks:
         session's rows)."""
         if self._masks is None or self._rebuilds != self._bvh.rebuilds:
             arrays, self._rebuilds = self._bvh.arrays, self._bvh.rebuilds
+            n_nodes = self._bvh.n_nodes            # (the tree's arrays have room for twice its faces: not used)
             self._masks = bone_masks(arrays[2], arrays[3], arrays[4], arrays[5], arrays[6], arrays[8], joints, weights,
-                                     self._bvh.n_nodes, self.n_bones, len(arrays[0]))
+                                     n_nodes, self.n_bones, n_nodes + n_nodes // 8)
         return self._masks
 
     def removing(self, faces) -> np.ndarray:
@@ -85,14 +86,14 @@ class SessionMasks:
             self._masks = None                        # (a rebuild renumbered the nodes: made again when needed)
             return
         arrays, n_nodes = self._bvh.arrays, self._bvh.n_nodes
-        if len(self._masks[0]) < len(arrays[0]):
+        if len(self._masks[0]) < n_nodes:
             grown = []
             for old in self._masks:
-                new = np.zeros((len(arrays[0]), old.shape[1]), old.dtype)
+                new = np.zeros((max(n_nodes, len(old) * 3 // 2), old.shape[1]), old.dtype)
                 new[:len(old)] = old
                 grown.append(new)
             self._masks = tuple(grown)
-        dirty = np.concatenate((leaves_before, self._bvh.leaves(inserted), self._bvh.leaves(moved),
-                                np.arange(first_node, n_nodes)))
+        dirty = np.unique(np.concatenate((leaves_before, self._bvh.leaves(inserted), self._bvh.leaves(moved),
+                                          np.arange(first_node, n_nodes))))
         refresh_masks(self._masks, arrays[2], arrays[3], self._bvh.parents, arrays[4], arrays[5], arrays[6], arrays[8],
                       joints, weights, dirty, self.n_bones)
