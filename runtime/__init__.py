@@ -8,6 +8,7 @@ from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelForm
                      PlacementWarning)
 from .algebra import versor
 from .animation.pose import Pose, clip_from_poses
+from .animation.poses import Poses
 from .animation.rig import Channel, Clip, Rig, Skeleton
 from .animation.skinning import skin, skin_affine, skin_normals, skin_vertices
 from .animation.validate import check_mesh

@@ -36,9 +36,10 @@ _OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 # argument types: C-contiguous arrays by dtype and rank ("r": read-only), and scalars
 F1, F2, F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+F4 = types.float64[:, :, :, ::1]
 I1, I2 = types.int64[::1], types.int64[:, ::1]
 S1, U2 = types.int8[::1], types.uint64[:, ::1]
-B1 = types.boolean[::1]
+B1, B2 = types.boolean[::1], types.boolean[:, ::1]
 F1r = types.Array(types.float64, 1, "C", readonly=True)
 F2r = types.Array(types.float64, 2, "C", readonly=True)
 i8, f8, b1 = types.int64, types.float64, types.boolean

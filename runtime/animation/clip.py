@@ -1,26 +1,33 @@
-"""Animation clips (``Channel``, ``Clip``) and their sampling with glTF 2.0 semantics, rotations
-through versors.
+"""Animation clips (``Channel``, ``Clip``) and their packed form for the compiled sampler.
 
-Translation and scale channels interpolate componentwise (STEP, LINEAR, CUBICSPLINE). Rotation
-channels interpolate as rotors: LINEAR is the geodesic (slerp) R0 exp(u log(R̃0 R1)) through the
-generated log/exp/product kernels — exactly glTF's slerp — or, with ``rotation_blend="linear"``, the
-normalised linear blend of the two rotors. Times before the first key clamp to the first value, after
-the last key to the last value.
+A clip is sampled with glTF 2.0 semantics by ``sampling.py`` (one compiled call per frame, or per
+batch of frames): translation and scale channels interpolate componentwise (STEP, LINEAR,
+CUBICSPLINE), rotation channels by glTF's shortest-path slerp (or, with ``rotation_blend="linear"``,
+the normalised linear blend); times before the first key clamp to the first value, after the last key
+to the last value. ``Clip.packed`` lays every channel of a clip out once in flat arrays with integer
+codes, which is what the sampler reads.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
-from .._shared.checks import real_number
-from ..algebra import versor
 from ..errors import InvalidInputError
 
 INTERPOLATIONS = ("STEP", "LINEAR", "CUBICSPLINE")
-
-
 CHANNEL_PATHS = {"translation": 3, "rotation": 4, "scale": 3}
+ROTATION_BLENDS = ("slerp", "linear")
+
+#: integer codes of the packed arrays: each is the name's index in the tuple above
+STEP, LINEAR, CUBICSPLINE = 0, 1, 2
+TRANSLATION, ROTATION, SCALE = 0, 1, 2
+SLERP, NLERP = 0, 1
+
+#: columns of ``ClipArrays.channels``
+NODE, PATH, INTERPOLATION, FIRST_KEY, KEYS, FIRST_VALUE = range(6)
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,9 +49,31 @@ class Channel:
     values: np.ndarray
 
 
+class ClipArrays(NamedTuple):
+    """Every channel of a clip in flat arrays (what the compiled sampler reads).
+
+    channels : (c, 6) int64 rows (node, path code, interpolation code, first key, key count,
+        first value), columns named by ``NODE``, ``PATH``, ... ; codes as ``TRANSLATION``, ``STEP``, ...
+    times : (K,) float64, the key times of every channel one after the other
+    values : (V,) float64, the values of every channel flattened in their (k, c) or (k, 3, c) order
+        (STEP and LINEAR rotation keys as unit quaternions)
+    nodes : (a,) int64, the animated nodes, ascending
+    last_node : int, the largest animated node (-1: none)
+    """
+
+    channels: np.ndarray
+    times: np.ndarray
+    values: np.ndarray
+    nodes: np.ndarray
+    last_node: int
+
+
 @dataclass(frozen=True, eq=False)
 class Clip:
-    """A named animation: a set of channels. ``duration`` is the last key time."""
+    """A named animation: a set of channels. ``duration`` is the last key time.
+
+    Channels are values: their arrays must not change after the clip is first sampled (``packed``
+    copies them once and keeps the copy for the clip's lifetime)."""
 
     name: str
     channels: tuple[Channel, ...]
@@ -53,72 +82,53 @@ class Clip:
     def duration(self) -> float:
         return max((float(c.times[-1]) for c in self.channels), default=0.0)
 
-
-ROTATION_BLENDS = ("slerp", "linear")
-
-
-def _segment(times: np.ndarray, t: float):
-    """(k, u, dt): key interval [k, k+1] holding t and the fraction u in [0, 1]; k = -1 / len-1 clamp."""
-    if t <= times[0]:
-        return 0, 0.0, 0.0
-    if t >= times[-1]:
-        return len(times) - 1, 0.0, 0.0
-    k = int(np.searchsorted(times, t, side="right")) - 1
-    dt = float(times[k + 1] - times[k])
-    return k, (t - times[k]) / dt, dt
+    @cached_property
+    def packed(self) -> ClipArrays:
+        """The channels in flat arrays, checked and built on first use (then cached with the clip)."""
+        return pack_channels(self.name, self.channels)
 
 
-def _quat_from_rotor(r):
-    """(..., 4) quaternions (x, y, z, w) of (..., 12) rotors R = w − x e23 + y e13 − z e12."""
-    return np.stack([-r[..., 3], r[..., 2], -r[..., 1], r[..., 0]], axis=-1)
-
-
-def blend_rotations(q0, q1, u, rotation_blend: str = "slerp") -> np.ndarray:
-    """Interpolate quaternions (k, 4) -> (k, 4) at fractions u (k,) as rotors.
-
-    "slerp": R0 exp(u log(R̃0 R1)), the geodesic along the shorter arc (log takes the angle in
-    [0, π]) — glTF's LINEAR rotation; "linear": the normalised blend (1−u) R0 + u R1."""
-    r0, r1 = versor.rotor_from_quaternion(q0), versor.rotor_from_quaternion(q1)
-    u = np.asarray(u, dtype=np.float64)
-    if rotation_blend == "linear":
-        blended = versor.blend_linear(np.stack([r0, r1], axis=-2), np.stack([1 - u, u], axis=-1))
-    else:
-        step = versor.compose(versor.reverse(r0), r1)
-        blended = versor.compose(r0, versor.exp(u[:, None] * versor.log(step)))
-    q = _quat_from_rotor(blended)
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
-
-
-def sample_clip(clip: Clip, t: float, rotation_blend: str = "slerp") -> dict:
-    """{(node, path): value} for every channel of ``clip`` at time ``t`` (seconds): (3,) for
-    translation/scale, unit (4,) (x, y, z, w) for rotation. Rotations between keys are blended as
-    rotors in one batch of kernel calls for the whole clip."""
-    if rotation_blend not in ROTATION_BLENDS:
-        raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
-    t = real_number(t, "time")
-    values = {}
-    pending = []                                    # LINEAR rotations: (key, q0, q1, u)
-    for channel in clip.channels:
-        key = (channel.node, channel.path)
-        data = channel.values
-        k, u, dt = _segment(channel.times, t)
+def pack_channels(name: str, channels) -> ClipArrays:
+    """``ClipArrays`` of ``channels``; InvalidInputError names the clip and channel that is malformed
+    (unknown path or interpolation, times not finite and strictly increasing, values of the wrong
+    shape or not finite)."""
+    rows, times, values = [], [], []
+    n_keys = n_values = 0
+    for c, channel in enumerate(channels):
+        where = f"clip {name!r} channel {c}"
+        if channel.path not in CHANNEL_PATHS:
+            raise InvalidInputError(f"{where}: path must be one of {tuple(CHANNEL_PATHS)}, got {channel.path!r}")
+        if channel.interpolation not in INTERPOLATIONS:
+            raise InvalidInputError(f"{where}: interpolation must be one of {INTERPOLATIONS}, "
+                                    f"got {channel.interpolation!r}")
+        if isinstance(channel.node, bool) or not isinstance(channel.node, (int, np.integer)) or channel.node < 0:
+            raise InvalidInputError(f"{where}: node must be a node index >= 0, got {channel.node!r}")
+        t = np.asarray(channel.times, dtype=np.float64)
+        v = np.asarray(channel.values, dtype=np.float64)
+        width = CHANNEL_PATHS[channel.path]
         cubic = channel.interpolation == "CUBICSPLINE"
-        if u == 0.0 or channel.interpolation == "STEP":
-            value = np.array(data[k, 1] if cubic else data[k], dtype=np.float64)
-        elif cubic:
-            u2, u3 = u * u, u * u * u
-            value = ((2 * u3 - 3 * u2 + 1) * data[k, 1] + (u3 - 2 * u2 + u) * dt * data[k, 2]
-                     + (-2 * u3 + 3 * u2) * data[k + 1, 1] + (u3 - u2) * dt * data[k + 1, 0])
-        elif channel.path == "rotation":
-            pending.append((key, data[k], data[k + 1], u))
-            continue
-        else:
-            value = (1 - u) * data[k] + u * data[k + 1]
-        if channel.path == "rotation":
-            value = value / np.linalg.norm(value)
-        values[key] = value
-    if pending:
-        keys, q0, q1, u = zip(*pending)
-        for key, q in zip(keys, blend_rotations(np.array(q0), np.array(q1), np.array(u), rotation_blend)):
-            values[key] = q
-    return values
+        shape = (len(t), 3, width) if cubic else (len(t), width)
+        if t.ndim != 1 or len(t) == 0 or not np.isfinite(t).all() or (np.diff(t) <= 0).any():
+            raise InvalidInputError(f"{where}: times must be a non-empty 1-D array of finite, strictly "
+                                    f"increasing seconds")
+        if v.shape != shape or not np.isfinite(v).all():
+            raise InvalidInputError(f"{where}: {channel.interpolation} {channel.path} values must be finite "
+                                    f"with shape {shape}, got {v.shape}")
+        if channel.path == "rotation" and not cubic:
+            # unit keys once here, so that the sampler blends them as they are (a cubic spline's
+            # tangents are not rotations: its keys stay as given, its result is normalised)
+            norm = np.linalg.norm(v, axis=1, keepdims=True)
+            if not (norm > 0).all():
+                raise InvalidInputError(f"{where}: rotation key {int(np.argmin(norm))} has zero length")
+            v = v / norm
+        rows.append((channel.node, list(CHANNEL_PATHS).index(channel.path),
+                     INTERPOLATIONS.index(channel.interpolation), n_keys, len(t), n_values))
+        times.append(t)
+        values.append(v.reshape(-1))
+        n_keys += len(t)
+        n_values += v.size
+    table = np.array(rows, dtype=np.int64).reshape(-1, 6)
+    nodes = np.unique(table[:, NODE])
+    return ClipArrays(channels=table, times=np.concatenate(times) if times else np.empty(0),
+                      values=np.concatenate(values) if values else np.empty(0), nodes=nodes,
+                      last_node=int(nodes[-1]) if len(nodes) else -1)

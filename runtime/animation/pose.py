@@ -13,13 +13,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.checks import float_array
-from .._shared.jit import B1, F2, F3, I1, helper, kernel
+from .._shared.jit import B1, F2, F3, I1, callee, helper, kernel
 from ..algebra import versor
 from ..algebra.transforms import matrix_to_trs, trs_matrix
 from ..errors import InvalidInputError
 from ..generated.kernels import gp_versor_versor, versor_to_affine
 from ..tolerances import tol
-from .clip import Channel, Clip, sample_clip
+from .clip import Channel, Clip
+from .sampling import sample_pose, shear_nodes
 from .skeleton import Skeleton
 
 FRAMES = ("parent", "local")
@@ -64,7 +65,7 @@ class Pose:
     @classmethod
     def rest(cls, skeleton: Skeleton) -> "Pose":
         """The rest (node) pose stored in the file."""
-        exact = _shear_nodes(skeleton)
+        exact = shear_nodes(skeleton)
         return cls.from_trs(skeleton, skeleton.rest_translations, skeleton.rest_rotations,
                             skeleton.rest_scales, exact)
 
@@ -89,17 +90,12 @@ class Pose:
         return cls(skeleton, np.tile(versor.identity(), (n, 1)), local, np.zeros(n, dtype=bool))
 
     @classmethod
-    def from_clip(cls, skeleton: Skeleton, clip, time: float, rotation_blend: str = "slerp") -> "Pose":
-        """The pose of ``clip`` at ``time`` seconds (glTF sampler semantics); unanimated properties
-        keep their rest values."""
-        t = skeleton.rest_translations.copy()
-        r = skeleton.rest_rotations.copy()
-        s = skeleton.rest_scales.copy()
-        exact = _shear_nodes(skeleton)
-        for (node, path), value in sample_clip(clip, time, rotation_blend).items():
-            {"translation": t, "rotation": r, "scale": s}[path][node] = value
-            exact[node] = None                     # an animated node is TRS by the glTF spec
-        return cls.from_trs(skeleton, t, r, s, exact)
+    def from_clip(cls, skeleton: Skeleton, clip: Clip, time: float, rotation_blend: str = "slerp") -> "Pose":
+        """The pose of ``clip`` at ``time`` seconds, glTF sampler semantics, in one compiled call
+        (``sampling.py``): a time before the first key clamps to the first key, after the last key to
+        the last; unanimated properties keep their rest values. InvalidInputError for a time that is
+        not a finite real number (NaN, inf, a string) and an unknown ``rotation_blend``."""
+        return cls(skeleton, *sample_pose(skeleton, clip, time, rotation_blend))
 
     # -- edits (each returns a new Pose) --------------------------------------------------------
     def _edit(self, joint, left=None, right=None) -> "Pose":
@@ -219,15 +215,6 @@ def clip_from_poses(name: str, times, poses, interpolation: str = "LINEAR") -> C
     return Clip(name=name, channels=tuple(channels))
 
 
-def _shear_nodes(skeleton: Skeleton) -> list:
-    """Per node: its exact rest matrix when the stored TRS does not reproduce it, else None."""
-    trs = trs_matrix(skeleton.rest_translations, skeleton.rest_rotations, skeleton.rest_scales)
-    out = []
-    for m, exact in zip(trs, skeleton.rest_matrices):
-        out.append(None if np.allclose(m, exact, rtol=0, atol=tol.trs_exact * max(1.0, np.abs(exact).max())) else exact)
-    return out
-
-
 @helper
 def _compose_affine(a, b):
     """Row-major 3x4 a ∘ 3x4 b (both as (12,) arrays), as (12,)."""
@@ -241,8 +228,15 @@ def _compose_affine(a, b):
     return out
 
 
-@kernel((I1, F2, F3, B1, I1, F2, F2), cost=1.8)
+@kernel((I1, F2, F3, B1, I1, F2, F2), cost=0.3, fused=True)
 def _bone_affines(parents, versors, matrices, similar, bone_nodes, ibm, out):
+    """Each bone's 3x4 map G @ IBM of one pose (``bone_affines_into``)."""
+    bone_affines_into(parents, versors, matrices, similar, bone_nodes, ibm, out)
+
+
+# compiled ahead on its own, then loaded by the kernels of one pose and of many (poses.py)
+@callee((I1, F2, F3, B1, I1, F2, F2), cost=2.5)
+def bone_affines_into(parents, versors, matrices, similar, bone_nodes, ibm, out):
     """Globals along the hierarchy (versor products while every ancestor is a similarity, exact
     matrices below any that is not), then each bone's 3x4 map G @ IBM."""
     n = parents.shape[0]

@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from .clip import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
 from .pose import Pose
+from .poses import Poses
 from .skeleton import Skeleton
 
 #: the whole data model in one import
@@ -79,10 +80,19 @@ class Rig:
         the inverse of its inverse bind matrix (differs from the rest pose in some files)."""
         return Pose.bind(self.skeleton)
 
-    def pose(self, clip=0, time: float = 0.0, rotation_blend: str = "slerp"):
-        """The pose of a clip (name or index) at ``time`` seconds, glTF sampler semantics; rotations
-        interpolate as rotors (``"slerp"``: geodesic, as glTF; ``"linear"``: normalised blend)."""
+    def pose(self, clip=0, time: float = 0.0, rotation_blend: str = "slerp") -> Pose:
+        """The pose of a clip (name or index) at ``time`` seconds, glTF sampler semantics, in one
+        compiled call: rotations by slerp on the shorter arc (``"slerp"``, as glTF) or the normalised
+        linear blend (``"linear"``); a time before the first key or after the last clamps to that key
+        (no error). InvalidInputError for an unknown clip (the message lists the rig's clips) and a
+        time that is not a finite real number."""
         return Pose.from_clip(self.skeleton, self.clips[self.clip_index(clip)], time, rotation_blend)
+
+    def poses(self, clip=0, times=(0.0,), rotation_blend: str = "slerp") -> Poses:
+        """The poses of a clip at each of ``times`` ((T,) finite seconds, any order, clamped like
+        ``pose``) in one compiled call: a ``Poses`` of T frames, frame i equal to
+        ``self.pose(clip, times[i])``; ``cgaskin.skin(rig, poses)`` skins them all ((T, n, 3))."""
+        return Poses.from_clip(self.skeleton, self.clips[self.clip_index(clip)], times, rotation_blend)
 
     def with_clips(self, *clips: Clip) -> "Rig":
         """A new rig with ``clips`` added after its own (names must stay unique)."""

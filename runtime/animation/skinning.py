@@ -10,12 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.checks import float_array, index_array
-from .._shared.jit import F2, I2, precompiled
+from .._shared.jit import F2, F3, I2, kernel, precompiled
 from ..algebra.versor import _versor_arg
 from ..errors import InvalidInputError
 from ..generated import kernels as K
 from ..generated.skinning import skin_blend, skin_blend_parallel
 from .pose import Pose
+from .poses import Poses
 from .rig import Rig
 
 # numba's thread pool costs ~10 ms per parallel call on a 2-core machine; below this many vertices
@@ -109,11 +110,13 @@ def skin_vertices(rest, joints, weights, versors, parallel=None, out=None) -> np
     return skin_affine(rest, joints, weights, bone_affines(versors), parallel=parallel, out=out)
 
 
-def check_pose(rig: Rig, pose) -> Pose:
-    """``pose`` itself when it is a ``Pose`` of ``rig``'s skeleton (that object, or one with the same
-    nodes and bones, as a cut or torn rig shares with its original); ``InvalidInputError`` if not."""
-    if not isinstance(pose, Pose):
-        raise InvalidInputError(f"pose must be a cgaskin.Pose or None, got {type(pose).__name__}")
+def check_pose(rig: Rig, pose, kinds=(Pose,)):
+    """``pose`` itself when it is a ``Pose`` (or another of ``kinds``) of ``rig``'s skeleton (that
+    object, or one with the same nodes and bones, as a cut or torn rig shares with its original);
+    ``InvalidInputError`` if not."""
+    if not isinstance(pose, kinds):
+        names = " or ".join(f"a cgaskin.{kind.__name__}" for kind in kinds)
+        raise InvalidInputError(f"pose must be {names} or None, got {type(pose).__name__}")
     a, b = rig.skeleton, pose.skeleton
     if b is not a and (b.n_nodes != a.n_nodes or list(b.names) != list(a.names)
                        or not np.array_equal(b.bone_nodes, a.bone_nodes)):
@@ -122,13 +125,50 @@ def check_pose(rig: Rig, pose) -> Pose:
     return pose
 
 
-def skin(rig: Rig, pose: Pose | None = None, out=None) -> np.ndarray:
-    """Skinned positions (n, 3) float64 of ``rig`` in ``pose`` (default: the rest pose).
+def skin(rig: Rig, pose: Pose | Poses | None = None, out=None) -> np.ndarray:
+    """Skinned positions (n, 3) float64 of ``rig`` in ``pose`` (default: the rest pose), or (T, n, 3)
+    for the T frames of a ``Poses`` (``rig.poses(clip, times)``: its bone maps and the blend of every
+    frame in one compiled call each). ``out``: an optional C-contiguous float64 array of that shape
+    to write into (reuse it across frames).
 
     glTF semantics for every format: Σ_i w_i (G[joint_i] · IBM_i) v; the mesh node's own transform is
     ignored."""
-    pose = rig.rest_pose() if pose is None else check_pose(rig, pose)
+    pose = rig.rest_pose() if pose is None else check_pose(rig, pose, (Pose, Poses))
+    if isinstance(pose, Poses):
+        return _skin_poses(rig, pose, out)
     return skin_affine(rig.vertices, rig.joints, rig.weights, pose.bone_affines(), out=out)
+
+
+def _skin_poses(rig: Rig, poses: Poses, out) -> np.ndarray:
+    rest, joints, weights = _mesh_args(rig.vertices, rig.joints, rig.weights)
+    # one compiled variant: the rig's own arrays are these types already (the loaders make them so)
+    joints, weights = np.ascontiguousarray(joints, np.int64), np.ascontiguousarray(weights, np.float64)
+    rest = np.ascontiguousarray(rest)
+    shape = (len(poses),) + rest.shape
+    if out is None:
+        out = np.empty(shape)
+    elif out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
+        raise InvalidInputError(f"out must be a C-contiguous float64 array of shape {shape}")
+    affines = poses.bone_affines()
+    if len(rest) >= PARALLEL_THRESHOLD:          # big meshes: each frame's blend on every core
+        for f in range(len(poses)):
+            skin_affine(rest, joints, weights, affines[f], parallel=True, out=out[f])
+        return out
+    if _skin_frames(rest, joints, weights, affines, out):
+        for f in range(len(poses)):              # name the first problem (the slow path)
+            skin_affine(rest, joints, weights, affines[f], parallel=False, out=out[f])
+    return out
+
+
+@kernel((F2, I2, F2, F3, F3), cost=0.3, fused=True)
+def _skin_frames(rest, joints, weights, affines, out):
+    """``skin_blend`` of every frame: affines (T, B, 12) -> out (T, n, 3); whether any frame reported
+    a bad joint index, weight or result."""
+    bad = False
+    for f in range(affines.shape[0]):
+        bad_joints, bad_weights, bad_values = skin_blend(rest, joints, weights, affines[f], out[f])
+        bad = bad or bad_joints > 0 or bad_weights > 0 or bad_values > 0
+    return bad
 
 
 def skin_normals(rig: Rig, pose: Pose | None = None, normals=None) -> np.ndarray:

@@ -53,7 +53,7 @@ def _verify(args) -> int:
 def _bench(args) -> int:
     import importlib
     names = {"skinning": "benchmarks.bench_skinning", "frame": "benchmarks.bench_frame",
-             "cut": "benchmarks.bench_cut", "tear": "benchmarks.bench_tear", "fig1": "benchmarks.fig1_compare"}
+             "animation": "benchmarks.bench_animation", "cut": "benchmarks.bench_cut", "tear": "benchmarks.bench_tear", "fig1": "benchmarks.fig1_compare"}
     try:
         module = importlib.import_module(names[args.which])
     except ImportError:
@@ -110,7 +110,7 @@ def main(argv=None) -> int:
     p.set_defaults(run=_precompile)
 
     p = sub.add_parser("bench", help="run a benchmark (prints tables)")
-    p.add_argument("which", choices=["skinning", "frame", "cut", "tear", "fig1"], nargs="?", default="skinning")
+    p.add_argument("which", choices=["skinning", "frame", "animation", "cut", "tear", "fig1"], nargs="?", default="skinning")
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options passed to the benchmark")
     p.set_defaults(run=_bench)
 

@@ -120,6 +120,11 @@ def _pose_of(rig, args, time=None):
     if clip is None and not args.edits and not args.rest:
         return None
     pose = rig.rest_pose() if clip is None else rig.pose(clip, args.time if time is None else time)
+    return _edited(rig, pose, args)
+
+
+def _edited(rig, pose, args):
+    """``pose`` with the --rotate/--translate/--dilate edits applied in the order given."""
     for kind, joint, values in args.edits:
         joint = _joint_of(rig, joint)
         if kind == "rotate":
@@ -211,13 +216,19 @@ def _skin(args) -> int:
         times = list(np.linspace(args.time, end, args.frames))
     out = Path(args.out)
     paths = [out] if len(times) == 1 else [out.with_name(f"{out.stem}_{i:04d}{out.suffix}") for i in range(len(times))]
-    items = zip(times, paths)
     if len(times) > 1:
-        items = progress(items, len(times), "skinning")
-    for t, path in items:
-        pose = _pose_of(rig, args, t)
+        # every frame's pose in one compiled call, then (without edits) every frame's skin in another
+        poses = rig.poses(_clip_of(rig, args), times)
+        edited = [_edited(rig, poses[i], args) for i in range(len(times))] if args.edits else None
+        vertices = skin(rig, poses) if edited is None else None
+        for i, path in progress(enumerate(paths), len(paths), "skinning"):
+            pose = poses[i] if edited is None else edited[i]
+            normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
+            save_mesh(skin(rig, pose) if vertices is None else vertices[i], rig.faces, path, normals=normals)
+    else:
+        pose = _pose_of(rig, args)
         normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
-        save_mesh(skin(rig, pose), rig.faces, path, normals=normals)
+        save_mesh(skin(rig, pose), rig.faces, paths[0], normals=normals)
     print(f"wrote {len(paths)} file(s): {paths[0]}{' ...' if len(paths) > 1 else ''}")
     return 0
 

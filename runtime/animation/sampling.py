@@ -1,0 +1,346 @@
+"""Clip sampling in compiled code: a clip at a time (or at many times) straight into a pose's fields.
+
+One kernel call does a whole frame: for every channel of the clip (``Clip.packed``: flat arrays and
+integer codes, built once per clip) it finds the key interval by binary search (in a batch, a forward
+cursor first: playback rarely leaves the interval it was in), interpolates with glTF 2.0 semantics
+into the node's TRS, and then composes each animated node's TRS into the pose's fields:
+
+* STEP holds the key's value; LINEAR blends translation and scale componentwise and rotations by
+  glTF's slerp along the shorter arc (``rotation_blend="linear"``: the normalised linear blend);
+  CUBICSPLINE is the Hermite spline with tangents scaled by the key interval, rotations normalised;
+* a time before the first key clamps to the first value, after the last key to the last value;
+* a node no channel animates keeps its rest transform (its exact matrix where the rest TRS is only an
+  approximation, a shear); an animated node is TRS, as glTF defines it;
+* a node whose scale is uniform and positive is a similarity: its versor is T R D through the
+  generated kernels (``versor_translator``, ``versor_rotor_quaternion``, ``versor_dilator``, the
+  motor product T R by ``gp_motor_motor``, then ``gp_versor_versor`` with D unless the scale is 1);
+  every node also gets its exact matrix T @ R @ S — the fields that ``Pose.from_trs`` makes of the
+  same TRS (equal to rounding; tests/animation/test_sampling.py checks 1e-12).
+
+Measured on Fox (25 nodes, 21 channels; 2-core machine): about 4 µs per frame inside the kernel
+(half the channels, with slerp's atan2 and sines; half the nodes' products), about 10 µs for
+``rig.pose`` end to end (argument checks, three output arrays, the Pose, numba's dispatch of 13
+arguments); ``benchmarks/bench_animation.py`` prints the table.
+
+The rest of the skeleton (TRS rows, and the rest pose's fields that unanimated nodes keep) is
+prepared once per skeleton, by the same kernel with no channels.
+"""
+from __future__ import annotations
+
+import math
+import weakref
+
+import numpy as np
+
+from .._shared.checks import float_array, real_number
+from .._shared.jit import B1, B2, F1, F2, F3, F4, I1, I2, callee, f8, helper, i8, kernel
+from ..algebra.transforms import trs_matrix
+from ..algebra.versor import SCALE_RANGE
+from ..errors import InvalidInputError
+from ..generated.kernels import (gp_motor_motor, gp_versor_versor, versor_dilator, versor_rotor_quaternion,
+                                 versor_translator)
+from ..tolerances import tol
+from .clip import (CUBICSPLINE, FIRST_KEY, FIRST_VALUE, INTERPOLATION, KEYS, NLERP, NODE, PATH, ROTATION,
+                   ROTATION_BLENDS, SCALE, SLERP, STEP, pack_channels)
+
+#: a node's TRS row in the kernels' scratch: translation, rotation (x, y, z, w), scale
+TRS_T, TRS_Q, TRS_S, TRS_SIZE = 0, 3, 7, 10
+#: what a sampling kernel reports: every node composed, or the first node that could not be
+OK, SCALE_OUT_OF_RANGE, NOT_FINITE = 0, 1, 2
+_SCALE_LOW, _SCALE_HIGH = SCALE_RANGE
+_EMPTY = pack_channels("rest", ())
+_BLEND_CODES = {"slerp": SLERP, "linear": NLERP}
+
+
+# ---- the kernels -----------------------------------------------------------------------------------
+@helper
+def _key(times, first, count, t, hint):
+    """(k, u, dt): the interval [k, k+1] of the channel's keys times[first:first+count] that holds t,
+    u in [0, 1) the fraction of it, dt its length; k = 0 or count - 1 with u = 0 when t clamps.
+    ``hint``: the interval of the previous frame, tried (and the next one) before a binary search."""
+    last = first + count - 1
+    if t <= times[first]:
+        return 0, 0.0, 0.0
+    if t >= times[last]:
+        return count - 1, 0.0, 0.0
+    k = hint
+    if not (k < count - 1 and times[first + k] <= t < times[first + k + 1]):
+        k = hint + 1
+        if not (k < count - 1 and times[first + k] <= t < times[first + k + 1]):
+            lo, hi = 0, count - 1               # times[first + lo] <= t < times[first + hi]
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if times[first + mid] <= t:
+                    lo = mid
+                else:
+                    hi = mid
+            k = lo
+    dt = times[first + k + 1] - times[first + k]
+    return k, (t - times[first + k]) / dt, dt
+
+
+@helper
+def _blend_rotation(values, a, b, u, blend, out, node, at):
+    """out[node, at:at+4] = the unit quaternion between the unit keys values[a:a+4] and values[b:b+4]
+    at u, on the shorter arc: slerp (glTF), or with blend NLERP the normalised linear blend."""
+    dot = 0.0
+    for c in range(4):
+        dot += values[a + c] * values[b + c]
+    sign = -1.0 if dot < 0.0 else 1.0           # q and -q are one rotation: take the nearer one
+    wa, wb = 1.0 - u, u
+    if blend != NLERP:
+        # the angle θ between the keys from the chords |qa - qb| = 2 sin(θ/2), |qa + qb| = 2 cos(θ/2)
+        # (accurate at small angles, where acos of the dot product loses half the digits)
+        d2 = s2 = 0.0
+        for c in range(4):
+            qa, qb = values[a + c], sign * values[b + c]
+            d2 += (qa - qb) * (qa - qb)
+            s2 += (qa + qb) * (qa + qb)
+        chord_d, chord_s = math.sqrt(d2), math.sqrt(s2)
+        theta = 2.0 * math.atan2(chord_d, chord_s)
+        if theta > 0.0:
+            inv_sin = 2.0 / (chord_d * chord_s)          # sin θ = 2 sin(θ/2) cos(θ/2)
+            wa, wb = math.sin((1.0 - u) * theta) * inv_sin, math.sin(u * theta) * inv_sin
+    wb *= sign
+    q0 = wa * values[a] + wb * values[b]
+    q1 = wa * values[a + 1] + wb * values[b + 1]
+    q2 = wa * values[a + 2] + wb * values[b + 2]
+    q3 = wa * values[a + 3] + wb * values[b + 3]
+    inv_norm = 1.0 / math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    out[node, at] = q0 * inv_norm
+    out[node, at + 1] = q1 * inv_norm
+    out[node, at + 2] = q2 * inv_norm
+    out[node, at + 3] = q3 * inv_norm
+
+
+@helper
+def _sample_channel(channels, c, times, values, t, blend, hints, trs):
+    """Write channel ``c`` (row c of ``ClipArrays.channels``) at time t into its node's TRS row.
+    (Rows are indexed, never taken as views: a view costs a reference count, atomically, each time.)"""
+    node, path, interpolation = channels[c, NODE], channels[c, PATH], channels[c, INTERPOLATION]
+    width = 4 if path == ROTATION else 3
+    at = TRS_Q if path == ROTATION else (TRS_S if path == SCALE else TRS_T)
+    k, u, dt = _key(times, channels[c, FIRST_KEY], channels[c, KEYS], t, hints[c])
+    hints[c] = k
+    stride = 3 * width if interpolation == CUBICSPLINE else width
+    middle = width if interpolation == CUBICSPLINE else 0    # a cubic key is (in-tangent, value, out)
+    here = channels[c, FIRST_VALUE] + k * stride + middle
+    if u == 0.0 or interpolation == STEP:
+        for i in range(width):
+            trs[node, at + i] = values[here + i]
+    elif interpolation == CUBICSPLINE:
+        # Hermite basis; the out-tangent of key k follows its value, the in-tangent of k+1 precedes it
+        u2, u3 = u * u, u * u * u
+        there = here + stride
+        for i in range(width):
+            trs[node, at + i] = ((2 * u3 - 3 * u2 + 1) * values[here + i]
+                                 + (u3 - 2 * u2 + u) * dt * values[here + width + i]
+                                 + (-2 * u3 + 3 * u2) * values[there + i]
+                                 + (u3 - u2) * dt * values[there - width + i])
+    elif path == ROTATION:
+        _blend_rotation(values, here, here + stride, u, blend, trs, node, at)
+        return
+    else:
+        for i in range(width):
+            trs[node, at + i] = (1 - u) * values[here + i] + u * values[here + stride + i]
+    if path == ROTATION:
+        norm = 0.0
+        for i in range(4):
+            norm += trs[node, at + i] * trs[node, at + i]
+        inv_norm = 1.0 / math.sqrt(norm)
+        for i in range(4):
+            trs[node, at + i] *= inv_norm
+
+
+@helper
+def _compose_node(trs, node, versors, matrices):
+    """The fields of one node from its TRS row: versor T R D (identity unless the scale is uniform and
+    positive) and matrix T @ R @ S (as ``trs_matrix``); returns (similar, status)."""
+    x, y, z, w = trs[node, TRS_Q], trs[node, TRS_Q + 1], trs[node, TRS_Q + 2], trs[node, TRS_Q + 3]
+    sx, sy, sz = trs[node, TRS_S], trs[node, TRS_S + 1], trs[node, TRS_S + 2]
+    tx, ty, tz = trs[node, TRS_T], trs[node, TRS_T + 1], trs[node, TRS_T + 2]
+    similar = sx == sy and sx == sz and sx > 0.0
+    if similar and not _SCALE_LOW <= sx <= _SCALE_HIGH:
+        return similar, SCALE_OUT_OF_RANGE      # a dilation float64 cannot hold (versor.dilator refuses it)
+    finite = 0.0
+    if similar:
+        # T R as motors (the product of 8 blades; T and R have no e∞0 part), then the dilator
+        m = gp_motor_motor(versor_translator((tx, ty, tz)), versor_rotor_quaternion((x, y, z, w)))
+        v = (m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], 0.0, 0.0, 0.0, 0.0)
+        if sx != 1.0:       # the dilator of 1 is the identity (the product would only add zeros)
+            v = gp_versor_versor(v, versor_dilator(sx))
+        for c in range(12):
+            versors[node, c] = v[c]
+            finite += v[c] * 0.0
+    else:
+        for c in range(12):
+            versors[node, c] = 0.0
+        versors[node, 0] = 1.0
+    inv_n = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x * inv_n, y * inv_n, z * inv_n, w * inv_n
+    # the rotation matrix of the unit quaternion (as quat_to_matrix), its columns scaled (R @ S)
+    m00, m01, m02 = (1 - 2 * (y * y + z * z)) * sx, 2 * (x * y - z * w) * sy, 2 * (x * z + y * w) * sz
+    m10, m11, m12 = 2 * (x * y + z * w) * sx, (1 - 2 * (x * x + z * z)) * sy, 2 * (y * z - x * w) * sz
+    m20, m21, m22 = 2 * (x * z - y * w) * sx, 2 * (y * z + x * w) * sy, (1 - 2 * (x * x + y * y)) * sz
+    matrices[node, 0, 0], matrices[node, 0, 1], matrices[node, 0, 2], matrices[node, 0, 3] = m00, m01, m02, tx
+    matrices[node, 1, 0], matrices[node, 1, 1], matrices[node, 1, 2], matrices[node, 1, 3] = m10, m11, m12, ty
+    matrices[node, 2, 0], matrices[node, 2, 1], matrices[node, 2, 2], matrices[node, 2, 3] = m20, m21, m22, tz
+    matrices[node, 3, 0], matrices[node, 3, 1], matrices[node, 3, 2], matrices[node, 3, 3] = 0.0, 0.0, 0.0, 1.0
+    finite += (m00 * 0.0 + m01 * 0.0 + m02 * 0.0 + tx * 0.0 + m10 * 0.0 + m11 * 0.0 + m12 * 0.0 + ty * 0.0
+               + m20 * 0.0 + m21 * 0.0 + m22 * 0.0 + tz * 0.0)
+    return similar, OK if finite == 0.0 else NOT_FINITE          # NaN * 0 and inf * 0 are NaN
+
+
+# compiled ahead on its own (it holds all the arithmetic), then loaded by the two kernels that call it
+@callee((I2, F1, F1, I1, F2, F2, F3, B1, f8, i8, I1, F2, B1, F2, F3, B1), cost=5.5)
+def _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
+                 t, blend, hints, trs, animated, versors, matrices, similar):
+    """One frame: the rest fields for the nodes that are not ``animated``, the clip's channels at t
+    into the animated nodes' TRS rows (from their rest TRS), composed. Returns (status, the first
+    node that failed)."""
+    for i in range(rest_versors.shape[0]):
+        if animated[i]:
+            continue
+        for c in range(12):
+            versors[i, c] = rest_versors[i, c]
+        for r in range(4):
+            for c in range(4):
+                matrices[i, r, c] = rest_matrices[i, r, c]
+        similar[i] = rest_similar[i]
+    for a in range(nodes.shape[0]):
+        for c in range(TRS_SIZE):
+            trs[nodes[a], c] = rest_trs[nodes[a], c]
+    for c in range(channels.shape[0]):
+        _sample_channel(channels, c, times, values, t, blend, hints, trs)
+    for a in range(nodes.shape[0]):
+        node = nodes[a]
+        is_similar, status = _compose_node(trs, node, versors, matrices)
+        similar[node] = is_similar
+        if status != OK:
+            return status, node
+    return OK, -1
+
+
+@helper
+def _scratch(channels, nodes, rest_trs):
+    """A kernel's working arrays: the TRS rows (j, 10), each channel's key interval of the previous
+    frame (c,), and whether each node is animated (j,)."""
+    animated = np.zeros(rest_trs.shape[0], dtype=np.bool_)
+    for a in range(nodes.shape[0]):
+        animated[nodes[a]] = True
+    return np.empty((rest_trs.shape[0], TRS_SIZE)), np.zeros(channels.shape[0], dtype=np.int64), animated
+
+
+@kernel((I2, F1, F1, I1, F2, F2, F3, B1, f8, i8, F2, F3, B1), cost=0.8, fused=True)
+def _sample_pose(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
+                 t, blend, versors, matrices, similar):
+    """One frame of a clip into versors (j, 12), matrices (j, 4, 4), similar (j,); (status, node)."""
+    trs, hints, animated = _scratch(channels, nodes, rest_trs)
+    return _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
+                        t, blend, hints, trs, animated, versors, matrices, similar)
+
+
+@kernel((I2, F1, F1, I1, F2, F2, F3, B1, F1, i8, F3, F4, B2), cost=0.7, fused=True)
+def _sample_poses(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
+                  frame_times, blend, versors, matrices, similar):
+    """Frames at frame_times (T,) into versors (T, j, 12), matrices (T, j, 4, 4), similar (T, j);
+    returns (status, node, frame) of the first failure (status OK: none). Each channel's key interval
+    of the previous frame is tried first: increasing times search only when they cross a key."""
+    trs, hints, animated = _scratch(channels, nodes, rest_trs)
+    for f in range(frame_times.shape[0]):
+        status, node = _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices,
+                                    rest_similar, frame_times[f], blend, hints, trs, animated, versors[f],
+                                    matrices[f], similar[f])
+        if status != OK:
+            return status, node, f
+    return OK, -1, -1
+
+
+# ---- the Python side ----------------------------------------------------------------------------------
+_REST = weakref.WeakKeyDictionary()            # skeleton -> its rest arrays, while it lives
+
+
+def shear_nodes(skeleton) -> list:
+    """Per node: its exact rest matrix when the stored TRS does not reproduce it, else None."""
+    trs = trs_matrix(skeleton.rest_translations, skeleton.rest_rotations, skeleton.rest_scales)
+    out = []
+    for m, exact in zip(trs, skeleton.rest_matrices):
+        out.append(None if np.allclose(m, exact, rtol=0, atol=tol.trs_exact * max(1.0, np.abs(exact).max())) else exact)
+    return out
+
+
+def _rest(skeleton) -> tuple:
+    """(trs (j, 10), versors (j, 12), matrices (j, 4, 4), similar (j,)) of the skeleton's rest: the TRS
+    rows every animated node starts from, and the fields that unanimated nodes keep (those of
+    ``Pose.rest``), made by the sampling kernel itself, with no channels."""
+    rest = _REST.get(skeleton)
+    if rest is None:
+        j = skeleton.n_nodes
+        trs = np.ascontiguousarray(np.concatenate([skeleton.rest_translations, skeleton.rest_rotations,
+                                                   skeleton.rest_scales], axis=1), dtype=np.float64)
+        exact = shear_nodes(skeleton)
+        versors = np.zeros((j, 12))
+        versors[:, 0] = 1.0
+        matrices = np.array(skeleton.rest_matrices, dtype=np.float64, order="C")   # writable C: one kernel type
+        similar = np.zeros(j, dtype=bool)
+        computed = np.array([i for i in range(j) if exact[i] is None], dtype=np.int64)
+        out = (np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=bool))
+        status, node = _sample_pose(_EMPTY.channels, _EMPTY.times, _EMPTY.values, computed, trs, versors,
+                                    matrices, similar, 0.0, 0, *out)
+        _check(status, node, "the rest pose", skeleton)
+        rest = _REST[skeleton] = (trs, *out)
+    return rest
+
+
+def _check(status, node, what: str, skeleton) -> None:
+    if status == SCALE_OUT_OF_RANGE:
+        low, high = SCALE_RANGE
+        raise InvalidInputError(f"{what}: node {skeleton.names[node]!r} has a uniform scale outside "
+                                f"[{low:g}, {high:g}], which a dilation in float64 cannot hold")
+    if status == NOT_FINITE:
+        raise InvalidInputError(f"{what}: node {skeleton.names[node]!r} has a transform that is not finite "
+                                f"(a zero-length rotation, or values that overflow float64)")
+
+
+def _prepare(skeleton, clip, rotation_blend: str):
+    """(packed clip, rest arrays, blend code) after the checks that do not depend on the time."""
+    packed = clip.packed
+    if packed.last_node >= skeleton.n_nodes:
+        raise InvalidInputError(f"clip {clip.name!r} animates node {packed.last_node}, but the skeleton "
+                                f"has {skeleton.n_nodes} nodes")
+    blend = _BLEND_CODES.get(rotation_blend) if isinstance(rotation_blend, str) else None
+    if blend is None:
+        raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
+    return packed, _rest(skeleton), blend
+
+
+def sample_pose(skeleton, clip, time, rotation_blend: str = "slerp") -> tuple:
+    """The fields of ``clip``'s pose at ``time`` seconds (times outside the keys clamp, as glTF says).
+
+    Returns versors (j, 12) float64, matrices (j, 4, 4) float64, similar (j,) bool, as ``Pose`` holds
+    them. InvalidInputError for a time that is not a finite real number, an unknown
+    ``rotation_blend``, or a clip that does not fit the skeleton.
+    """
+    t = real_number(time, "time")
+    packed, rest, blend = _prepare(skeleton, clip, rotation_blend)
+    j = skeleton.n_nodes
+    versors, matrices, similar = np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=np.bool_)
+    status, node = _sample_pose(packed.channels, packed.times, packed.values, packed.nodes, *rest, t, blend,
+                                versors, matrices, similar)
+    if status != OK:
+        _check(status, node, f"clip {clip.name!r} at t={t}", skeleton)
+    return versors, matrices, similar
+
+
+def sample_poses(skeleton, clip, times, rotation_blend: str = "slerp") -> tuple:
+    """``sample_pose`` at each of ``times`` ((T,) finite seconds, any order): versors (T, j, 12),
+    matrices (T, j, 4, 4), similar (T, j), in one compiled call."""
+    times = np.array(float_array(times, "times", ndim=1), order="C")      # the caller's array stays theirs
+    packed, rest, blend = _prepare(skeleton, clip, rotation_blend)
+    n, j = len(times), skeleton.n_nodes
+    versors, matrices, similar = np.empty((n, j, 12)), np.empty((n, j, 4, 4)), np.empty((n, j), dtype=np.bool_)
+    status, node, frame = _sample_poses(packed.channels, packed.times, packed.values, packed.nodes, *rest,
+                                        times, blend, versors, matrices, similar)
+    if status != OK:
+        _check(status, node, f"clip {clip.name!r} at t={times[frame]} (times[{frame}])", skeleton)
+    return times, versors, matrices, similar
