@@ -11,9 +11,10 @@ and weights that sum to 1 only to float precision).
 
 A stroke in a new pose then poses only what the blade can reach (``_pose_region``): from the root it
 computes the posed box of every node it visits (once per pose: a stamp per node), descends where the
-box meets the query box, and skins the vertices of the leaves it reaches (a stamp per vertex) with
-the blend loop of ``cgaskin.skin`` (the same numbers). Every node a later query of the stroke visits
-is a child of a node whose posed box met a box inside the query box, so its own box was computed.
+box meets the query (a blade segment within a reach, or the region's box and plane slab: the stroke's
+own queries, ``_meets``), and skins the vertices of the leaves it meets (a stamp per vertex) with the
+blend loop of ``cgaskin.skin`` (the same numbers). Every node the stroke's query then visits is a child
+of a node whose posed box met that query, so its own box was computed.
 
 That bound is loose where weights blend over a long stretch (a vertex with 0.3 of the upper arm and 0.7
 of the forearm is carried by both, far apart). So each node also keeps the lowest and highest weight
@@ -23,51 +24,20 @@ bone k, [l_k, h_k] times the box carried by A_k - A_r: where the weights vary li
 leaf), the bound is about the node's own size. The posed box is the intersection of both bounds (both
 hold); a node with more bones keeps the first.
 
-Masks are (N, W) uint64, bone b in word b // 64, bit b % 64; a node's children have larger indices
-than the node (top-down builds and leaf splits both append), so one backward sweep computes them all.
+The masks and weight tables are ``bone_influences.py``'s.
 """
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import types
 
-from .._shared.jit import F1, F2, I1, I2, U2, helper, i8, kernel, record
+from .._shared.jit import F1, F2, I1, I2, helper, kernel, record
 from ..generated.skinning import skin_blend
+from .bone_influences import INFLUENCES, TABLE, WEIGHT_STEPS
 from .bvh_build import N1
 
-__all__ = ["Influences", "Posing", "POSING", "PosedScratch", "bone_masks", "refresh_masks", "used_bones",
-           "posed_scale", "no_posing", "pose_region"]
-
-
-#: bones per node whose weights the weight table bounds (past them: the mask's bound only)
-TABLE = 4
-#: a table slot that holds no bone, and a node whose bones overflow its table (or whose bone index or
-#: weight the table cannot hold)
-NO_BONE, OVERFLOW = -1, -2
-#: the table holds weights in 16 bits, in steps of 1 / WEIGHT_STEPS rounded outwards (floor for the lowest,
-#: ceil for the highest), so that its bounds hold
-WEIGHT_STEPS = 65535
-#: table arrays: bone ids (int16) and weights in steps (uint16), 24 bytes a node for TABLE = 4
-H2, Q2 = types.int16[:, ::1], types.uint16[:, ::1]
-
-
-class Influences(NamedTuple):
-    """The bones under each node of a tree: masks (N, W) uint64, and the weight table: bones (N, TABLE)
-    int16 (NO_BONE in unused slots; OVERFLOW in slot 0 when the node has more bones) with the lowest and
-    highest weight each has on the vertices under the node (0 on a vertex it does not influence),
-    (N, TABLE) uint16 each in 1 / WEIGHT_STEPS, rounded outwards."""
-
-    masks: np.ndarray
-    bones: np.ndarray
-    lows: np.ndarray
-    highs: np.ndarray
-
-
-#: the numba type of ``Influences``
-INFLUENCES = record(U2, H2, Q2, Q2)
+__all__ = ["Posing", "POSING", "PosedScratch", "no_posing", "pose_region"]
 
 
 class Posing(NamedTuple):
@@ -103,151 +73,6 @@ def no_posing() -> tuple:
     return (f2, f2, (np.zeros((0, 1), np.uint64), np.zeros((0, TABLE), np.int16), np.zeros((0, TABLE), np.uint16),
                       np.zeros((0, TABLE), np.uint16)), i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
             np.zeros((0, 12)), np.zeros(2, np.int64), np.zeros(1))
-
-
-# ---- bone masks and weight tables ----------------------------------------------------------------
-@helper
-def _add_bone(influences, node, b, low, high, fresh):
-    """Bone b with weights from ``low`` to ``high`` (in steps; high > WEIGHT_STEPS: weights the table
-    cannot hold) on a vertex (or a child) under ``node``, into its mask and weight table; ``fresh``:
-    nothing under the node was added before (else a bone new to the table had weight 0 there)."""
-    masks, bones, lows, highs = influences
-    masks[node, b >> 6] |= np.uint64(1) << np.uint64(b & 63)
-    if bones[node, 0] == OVERFLOW:
-        return
-    if b > 32767 or high > WEIGHT_STEPS:
-        bones[node, 0] = OVERFLOW
-        return
-    for j in range(TABLE):
-        if bones[node, j] == b:
-            lows[node, j], highs[node, j] = min(lows[node, j], low), max(highs[node, j], high)
-            return
-        if bones[node, j] == NO_BONE:
-            bones[node, j], lows[node, j], highs[node, j] = b, low if fresh else 0, high
-            return
-    bones[node, 0] = OVERFLOW
-
-
-@helper
-def _absent_is_zero(influences, node, other_bones, other_count):
-    """The table's bones of ``node`` that are not among ``other_bones[:other_count]`` (what the last
-    vertex or child added had) reach down to weight 0."""
-    bones, lows = influences[1], influences[2]
-    for j in range(TABLE):
-        if bones[node, j] < 0:
-            continue
-        found = False
-        for i in range(other_count):
-            found = found or other_bones[i] == bones[node, j]
-        if not found:
-            lows[node, j] = 0
-
-
-@helper
-def _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones, had):
-    """Recompute row ``node`` of ``influences``: from its live faces' vertices (a leaf: the bones of
-    weight != 0, index in range), or from its children (``had``: room for TABLE and k bones)."""
-    masks, bones, lows, highs = influences
-    for w in range(masks.shape[1]):
-        masks[node, w] = np.uint64(0)
-    for j in range(TABLE):
-        bones[node, j], lows[node, j], highs[node, j] = NO_BONE, 0, 0
-    fresh = True
-    if left[node] >= 0:
-        for child in (left[node], right[node]):
-            for w in range(masks.shape[1]):
-                masks[node, w] |= masks[child, w]
-            if bones[child, 0] == OVERFLOW:
-                bones[node, 0] = OVERFLOW
-            n_had = 0
-            for j in range(TABLE):
-                if bones[child, j] >= 0:
-                    _add_bone(influences, node, bones[child, j], lows[child, j], highs[child, j], fresh)
-                    had[n_had] = bones[child, j]
-                    n_had += 1
-            _absent_is_zero(influences, node, had, n_had)
-            fresh = False
-        return
-    for s in range(start[node], start[node] + count[node]):
-        for c in range(3):
-            v = faces[order[s], c]
-            n_had = 0
-            for k in range(joints.shape[1]):
-                b, w = joints[v, k], weights[v, k]
-                if w != 0.0 and 0 <= b < n_bones:
-                    high = WEIGHT_STEPS + 1 if not 0.0 <= w <= 1.0 else math.ceil(w * WEIGHT_STEPS)
-                    for i in range(n_had):
-                        if had[i] == b:       # a bone listed twice: its weight is the sum, past the table
-                            high = WEIGHT_STEPS + 1
-                    _add_bone(influences, node, b, math.floor(max(w, 0.0) * WEIGHT_STEPS), high, fresh)
-                    had[n_had] = b
-                    n_had += 1
-            _absent_is_zero(influences, node, had, n_had)
-            fresh = False
-
-
-@kernel((N1, N1, N1, N1, N1, I2, I2, F2, i8, i8, i8), cost=0.8)
-def bone_masks(left, right, start, count, order, faces, joints, weights, n_nodes, n_bones, n_rows):
-    """``Influences`` (as a tuple, n_rows rows) of the tree's first ``n_nodes`` nodes, for faces (F, 3)
-    over vertices with joints and weights (n, k); ``order`` the tree's leaf order."""
-    influences = (np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64), np.full((n_rows, TABLE), NO_BONE, np.int16),
-                  np.zeros((n_rows, TABLE), np.uint16), np.zeros((n_rows, TABLE), np.uint16))
-    had = np.empty(TABLE + joints.shape[1], np.int64)
-    for node in range(n_nodes - 1, -1, -1):
-        _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones, had)
-    return influences
-
-
-@helper
-def _same_row(influences, node, saved):
-    """Whether row ``node`` of ``influences`` equals ``saved`` (a copy of it, as arrays)."""
-    masks, bones, lows, highs = influences
-    same = True
-    for w in range(masks.shape[1]):
-        same = same and saved[0][w] == masks[node, w]
-    for j in range(TABLE):
-        same = same and saved[1][j] == bones[node, j] and saved[2][j] == lows[node, j] and saved[3][j] == highs[node, j]
-    return same
-
-
-@kernel((INFLUENCES, N1, N1, N1, N1, N1, N1, I2, I2, F2, I1, i8), cost=0.8)
-def refresh_masks(influences, left, right, parent, start, count, order, faces, joints, weights, dirty, n_bones):
-    """Recompute the influences of the ``dirty`` nodes (k,) distinct, of a tree whose faces changed (the leaves
-    of the faces that came, went or moved, and the nodes a split made), then their ancestors up to the
-    first that keeps them: they stay exact over the live faces."""
-    masks, bones, lows, highs = influences
-    had = np.empty(TABLE + joints.shape[1], np.int64)
-    for i in range(dirty.shape[0]):
-        _node_influences(influences, dirty[i], left, right, start, count, order, faces, joints, weights, n_bones, had)
-    saved = (np.empty(masks.shape[1], np.uint64), np.empty(TABLE, np.int16), np.empty(TABLE, np.uint16),
-             np.empty(TABLE, np.uint16))
-    for i in range(dirty.shape[0]):
-        node = parent[dirty[i]]
-        while node >= 0:
-            for w in range(masks.shape[1]):
-                saved[0][w] = masks[node, w]
-            for j in range(TABLE):
-                saved[1][j], saved[2][j], saved[3][j] = bones[node, j], lows[node, j], highs[node, j]
-            _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones, had)
-            if _same_row(influences, node, saved):
-                break
-            node = parent[node]
-
-
-def used_bones(joints, weights, n_bones: int) -> np.ndarray:
-    """(u,) int64: the bones that influence some vertex (weight != 0), increasing. (A stroke's new
-    vertices take their bones from the vertices they lie between: they add none.)"""
-    bones = np.unique(np.asarray(joints)[np.asarray(weights) != 0])
-    return bones[(bones >= 0) & (bones < n_bones)].astype(np.int64)
-
-
-def posed_scale(affines, used) -> float:
-    """The largest scale (column norm of a 3x4 map's linear part) of the bones ``used`` (u,): how much
-    larger than at rest the posed surface can be, which scales a posed stroke's tolerances."""
-    if len(used) == 0:
-        return 1.0
-    linear = affines[used].reshape(-1, 3, 4)[:, :, :3]
-    return float(np.sqrt((linear * linear).sum(axis=1).max()))
 
 
 # ---- posed boxes and positions, where a query reaches ----------------------------------------------
@@ -408,15 +233,39 @@ def _pose_blades(bvh, posing, blades, reach):
     _pose_region(bvh, posing, np.empty(0), blades[2], blades[3], reach)
 
 
+@kernel((I1, N1, I1), cost=0.1)
+def _forget_nodes(node_stamp, parents, nodes):
+    """Clear the stamps of ``nodes`` (k,) and of all their ancestors (their boxes or influences changed)."""
+    for i in range(nodes.shape[0]):
+        node = nodes[i]
+        while 0 <= node < node_stamp.shape[0]:
+            node_stamp[node] = 0
+            node = parents[node]
+
+
 class PosedScratch:
-    """The arrays a surface's strokes in other poses write (posed node boxes, positions and their
-    stamps), grown as the tree and the mesh grow; each ``view`` is a new pose (a new stamp). Rows
-    are allocated, not written: only what strokes reach becomes resident."""
+    """The arrays a surface's strokes in poses write (posed node boxes, positions and their stamps),
+    grown as the tree and the mesh grow. A ``view`` in another pose than the last one is a new stamp;
+    in the same pose it keeps what earlier strokes posed, less what ``forget`` was told changed since
+    (a session in one pose poses each part once). Rows are allocated, not written: only what strokes
+    reach becomes resident."""
 
     def __init__(self):
-        self._stamp = 0
+        self._stamp, self._affines = 0, None
         self._lo = self._hi = self._positions = np.empty((0, 3))
         self._node_stamp = self._vertex_stamp = np.zeros(0, np.int64)
+
+    def reset(self) -> None:
+        """Nothing posed holds any more (the tree was built anew)."""
+        self._affines = None
+
+    def forget(self, nodes, parents, rows) -> None:
+        """The tree's ``nodes`` (k,) int64 (with their ancestors, ``parents`` (N,) int32) and the mesh's
+        ``rows`` (r,) int64 changed: pose them again when a query reaches them."""
+        if self._affines is None:
+            return
+        _forget_nodes(self._node_stamp, parents, nodes)
+        self._vertex_stamp[rows[rows < len(self._vertex_stamp)]] = 0
 
     def view(self, tree, n_nodes, influences, vertices, joints, weights, affines, pad) -> tuple:
         """(BVHArrays of the posed tree as a tuple, ``Posing`` as a tuple) for ``tree`` (the rest BVH's
@@ -429,7 +278,8 @@ class PosedScratch:
         if len(self._positions) < n:
             size = max(n, len(self._positions) * 3 // 2)
             self._positions, self._vertex_stamp = np.empty((size, 3)), np.zeros(size, np.int64)
-        self._stamp += 1
+        if self._affines is None or not np.array_equal(affines, self._affines):
+            self._stamp, self._affines = self._stamp + 1, affines.copy()
         positions = self._positions[:n]
         bvh = (self._lo, self._hi, tree[2], tree[3], tree[4], tree[5], tree[6], positions, tree[8])
         posing = (tree[0], tree[1], influences, self._node_stamp, self._vertex_stamp[:n], vertices, joints, weights,

@@ -37,8 +37,9 @@ from .._shared.memory import release_free_memory
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
 from .dynamic_bvh import DynamicBVH
-from .posed_bounds import PosedScratch, no_posing, used_bones
-from .posed_source import PosedSource, SessionMasks, bone_affines_of, padding
+from .bone_influences import weight_summary
+from .posed_bounds import PosedScratch, no_posing
+from .posed_source import PosedSource, SessionInfluences, bone_affines_of
 from .rows import Rows
 from .session_write import _write_splice
 from .surface import TEAR_LABEL
@@ -113,8 +114,8 @@ class Surgery:
         self._attributes = {name: (Rows(values), tail) for name, (values, tail) in source.attributes.items()}
         self._faces, self._alive = Rows(source.faces), Rows(np.ones(len(source.faces), bool))
         self.top_label = source.top_label
-        self._masks, self._scratch = SessionMasks(self._bvh, rig.skeleton.n_bones), PosedScratch()
-        self._used, self._pad = used_bones(source.joints, source.weights, rig.skeleton.n_bones), padding(source.weights)
+        self._influences, self._scratch = SessionInfluences(self._bvh, rig.skeleton.n_bones), PosedScratch()
+        self._used = self._pad = None               # (what a posed stroke needs: made by the first one)
         self._labelled = TEAR_LABEL in rig.attributes
         self._set_bounds(np.stack([source.positions.min(axis=0), source.positions.max(axis=0)]))
         self._snapshot = None
@@ -122,7 +123,7 @@ class Surgery:
         release_free_memory()          # the builds' temporaries (half a millisecond)
 
     def _state(self) -> tuple:
-        return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._masks,
+        return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._influences,
                 self._used, self._pad, self.top_label, self._labelled, self._bounds)
 
     # ---- the source interface of tear/splice.py -------------------------------------------------------
@@ -183,9 +184,10 @@ class Surgery:
         if isinstance(record, _Undo):
             self._revert(record)
         else:
-            (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._masks,
+            (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._influences,
              self._used, self._pad, self.top_label, self._labelled, bounds) = record
             self._set_bounds(bounds)
+            self._scratch.reset()                   # (what it posed was of the tree the cut made)
         self._snapshot = None
 
     @property
@@ -224,14 +226,21 @@ class Surgery:
     def _posed(self, pose) -> PosedSource:
         """The session in ``pose`` (None: its own), as a stroke's source."""
         affines = self._affines if pose is None else bone_affines_of(self._template, pose)
-        return PosedSource(self, affines, self._bvh.arrays, self._bvh.n_nodes, self._masks.masks(self.joints, self.weights),
+        if self._used is None:          # (the rows a stroke adds change neither: weight_summary)
+            self._used, self._pad = weight_summary(self.joints, self.weights, self._template.skeleton.n_bones)
+        return PosedSource(self, affines, self._bvh.arrays, self._bvh.n_nodes, self._influences.influences(self.joints, self.weights),
                            self._used, self._scratch, self._pad)
 
-    def _edit_bvh(self, removed, inserted, near, moved, positions, faces) -> None:
-        """``DynamicBVH.edit``, with the bone masks kept."""
-        leaves, first_node = self._masks.removing(removed), self._bvh.n_nodes
+    def _edit_bvh(self, removed, inserted, near, moved, positions, faces, rows) -> None:
+        """``DynamicBVH.edit``, with the bone influences kept and what is posed of the changed nodes and
+        ``rows`` (their rest positions changed, or they are new) forgotten."""
+        leaves, first_node = self._influences.removing(removed), self._bvh.n_nodes
         self._bvh.edit(removed, inserted, near, moved, positions, faces)
-        self._masks.edited(leaves, first_node, inserted, moved, self.joints, self.weights)
+        changed = self._influences.edited(leaves, first_node, inserted, moved, self.joints, self.weights)
+        if changed is None:
+            self._scratch.reset()
+        else:
+            self._scratch.forget(changed, self._bvh.parents, rows)
 
     # ---- a stroke's rows in, and out again ------------------------------------------------------------
     def _apply(self, splice) -> _Undo:
@@ -256,7 +265,7 @@ class Surgery:
         self.top_label = max(self.top_label, top)
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
         self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
-                       self.faces)
+                       self.faces, np.concatenate((moved, np.arange(n, self.n_vertices))))
         self._grow_bounds(moved, n, old_positions)
         return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, old_positions,
                      splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
@@ -274,7 +283,7 @@ class Surgery:
             self._set_bounds(box)
 
     def _revert(self, record: _Undo) -> None:
-        rows, m = record.rows, self._faces.n
+        rows, m, n = record.rows, self._faces.n, self.n_vertices
         self._faces.truncate(record.m)
         self._alive.truncate(record.m)
         self._faces.view[record.kept] = record.old_kept
@@ -294,7 +303,7 @@ class Surgery:
         # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
         # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
         self._edit_bvh(np.arange(record.m, m), record.removed, np.full(len(record.removed), -1), record.moved_faces,
-                       self._arrays["vertices"].data, self._faces.data)
+                       self._arrays["vertices"].data, self._faces.data, np.concatenate((record.moved, np.arange(record.n, n))))
 
 
 @kernel((F2, I1, i8, F2), cost=0.1)

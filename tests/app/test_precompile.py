@@ -54,6 +54,8 @@ WORKLOAD = textwrap.dedent("""
         posed = rig.rest_pose().rotate(joint, [1, 0, 0], 0.1).translate(joint, [0.01, 0, 0]).dilate(joint, 1.05)
         for pose in (rig.rest_pose(), posed) + ((rig.pose(0, 0.25),) if rig.clips else ()):
             cgaskin.skin(rig, pose)
+        if rig.clips:                             # many frames: sampled, their bone maps and skins
+            cgaskin.skin(rig, rig.poses(0, np.linspace(0.0, 1.0, 5)))
         for pose in (None, posed):
             centre = cgaskin.skin(rig, posed).mean(axis=0)
             cgaskin.cut(rig, [0.3, 1, 0.1], centre, pose=pose, cap=True)
@@ -63,11 +65,11 @@ WORKLOAD = textwrap.dedent("""
             session = cgaskin.Surgery(rig, pose)
             session.tear(blade[0], blade[1], opening=0.01)
             session.tear(blade[1], blade[2])
-            session.tear(blade[2], blade[1], pose=posed)        # a stroke in another pose than the session's
             session.undo()
             session.cut([0.3, 1, 0.1], centre)
             session.undo()
             cgaskin.skin(session.rig, posed)
+            cgaskin.Surgery(rig).tear(blade[0], blade[1], pose=posed)   # a stroke in a pose the session is not in
     print(" ".join(sorted(set(compiled))))
 """)
 

@@ -14,8 +14,8 @@ from hypothesis import HealthCheck, event, given, settings, strategies as st
 import cgaskin
 from cgaskin import InvalidInputError, MissesMeshError, Surgery, TearPathError
 from cgaskin.surgery.bvh import TriangleBVH, _first_hit
-from cgaskin.surgery.posed_bounds import PosedScratch, bone_masks, pose_region
-from cgaskin.surgery.posed_source import padding
+from cgaskin.surgery.bone_influences import tree_influences, weight_summary
+from cgaskin.surgery.posed_bounds import PosedScratch, pose_region
 
 from tests.helpers.tear_checks import diagonal, strokes, surface
 from tests.surgery.test_session import assert_same_boundary, assert_same_mesh
@@ -49,11 +49,13 @@ def posed_tree(rig, pose):
     """(posed BVHArrays, Posing) of rig's rest BVH in pose, nothing posed yet."""
     bvh = TriangleBVH(rig.vertices, rig.faces)
     tree = tuple(bvh._arrays)
-    masks = bone_masks(*(tree[k] for k in (2, 3, 4, 5, 6, 8)), np.ascontiguousarray(rig.joints, np.int64),
+    masks = tree_influences(*(tree[k] for k in (2, 3, 4, 5, 6, 8)), np.ascontiguousarray(rig.joints, np.int64),
                        np.ascontiguousarray(rig.weights, np.float64), len(tree[0]), rig.skeleton.n_bones, len(tree[0]))
     return PosedScratch().view(tree, len(tree[0]), masks, np.ascontiguousarray(rig.vertices, np.float64),
                                np.ascontiguousarray(rig.joints, np.int64), np.ascontiguousarray(rig.weights, np.float64),
-                               pose.bone_affines(), padding(rig.weights))
+                               pose.bone_affines(), weight_summary(np.ascontiguousarray(rig.joints, np.int64),
+                                                                 np.ascontiguousarray(rig.weights, np.float64),
+                                                                 rig.skeleton.n_bones)[1])
 
 
 @settings(max_examples=15, **SETTINGS)
@@ -135,7 +137,7 @@ def test_a_posed_stroke_equals_a_stroke_on_the_skinned_surface(tear_model):
 @given(data=st.data())
 def test_a_session_in_many_poses_equals_the_functional_chain(tear_model, data):
     """Each operation in a pose of its own (a playing model): the session follows the functional chain
-    with the same poses, undo included; its bone masks stay those of its tree built anew."""
+    with the same poses, undo included; its bone influences stay those of its tree built anew."""
     _, rig = tear_model
     session, chain = Surgery(rig), [rig]
     for _ in range(data.draw(st.integers(1, 5), label="operations")):
@@ -162,9 +164,9 @@ def test_a_session_in_many_poses_equals_the_functional_chain(tear_model, data):
         assert_same_mesh(session.rig, chain[-1], diagonal(points))
         assert_same_boundary(session, chain[-1])
     tree = session._bvh.arrays
-    fresh = bone_masks(*(tree[k] for k in (2, 3, 4, 5, 6, 8)), session.joints, session.weights,
+    fresh = tree_influences(*(tree[k] for k in (2, 3, 4, 5, 6, 8)), session.joints, session.weights,
                        session._bvh.n_nodes, rig.skeleton.n_bones, len(tree[0]))
-    kept = session._masks.masks(session.joints, session.weights)
+    kept = session._influences.influences(session.joints, session.weights)
     for got, expected in zip(kept, fresh):
         np.testing.assert_array_equal(got[:session._bvh.n_nodes], expected[:session._bvh.n_nodes])
 

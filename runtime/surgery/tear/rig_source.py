@@ -1,7 +1,7 @@
 """A rig as the source of a tear stroke (``splice.py``), and the torn rig made from a stroke's splice.
 
 What a stroke needs of the whole rig is built once per rig (its arrays, tear labels, boundary flags, the
-rest surface's BVH and its bone masks) and kept while the rig lives (``_shared.cache``); a stroke in a
+rest surface's BVH and its nodes' bone influences) and kept while the rig lives (``_shared.cache``); a stroke in a
 pose poses only what it reaches (``posed_source.PosedSource``), so nothing is built per pose. A torn rig gets its boundary flags and highest label from the stroke that made
 it, so that a chain of functional tears never rebuilds the whole welded topology.
 """
@@ -15,8 +15,9 @@ from ..._shared.cache import rig_cached, seed
 from ...animation.skinning import skin
 from ...errors import InvalidInputError
 from ..bvh import TriangleBVH
-from ..posed_bounds import PosedScratch, bone_masks, no_posing, posed_scale, used_bones
-from ..posed_source import PosedSource, bone_affines_of, padding
+from ..bone_influences import posed_scale, tree_influences, weight_summary
+from ..posed_bounds import PosedScratch, no_posing
+from ..posed_source import PosedSource, bone_affines_of
 from ..surface import TEAR_LABEL, _labels, mesh_arrays
 from ..topology import boundary_flags
 
@@ -49,7 +50,7 @@ def _top_label(rig) -> int:
 
 class _Rest:
     """The surface of a rig as stored: positions, bounding-box diagonal, and its BVH (built on first
-    use: an editing session keeps a BVH of its own) with the bone masks of its nodes."""
+    use: an editing session keeps a BVH of its own) with its nodes' bone influences."""
 
     def __init__(self, rig):
         mesh = mesh_arrays(rig)
@@ -58,14 +59,9 @@ class _Rest:
         self._mesh, self._n_bones = mesh, rig.skeleton.n_bones
 
     @cached_property
-    def used(self) -> np.ndarray:
-        """(u,) int64 the bones in use (``posed_bounds.used_bones``)."""
-        return used_bones(self._mesh.joints, self._mesh.weights, self._n_bones)
-
-    @cached_property
-    def pad(self) -> float:
-        """A posed box's relative padding (``posed_source.padding``)."""
-        return padding(self._mesh.weights)
+    def weights(self) -> tuple:
+        """(the bones in use, a posed box's relative padding): ``bone_influences.weight_summary``."""
+        return weight_summary(self._mesh.joints, self._mesh.weights, self._n_bones)
 
     @property
     def bvh(self) -> TriangleBVH:
@@ -74,10 +70,10 @@ class _Rest:
         return self._bvh
 
     @cached_property
-    def masks(self) -> np.ndarray:
-        """The ``posed_bounds.Influences`` (a tuple) of the BVH's nodes."""
+    def influences(self) -> tuple:
+        """The ``bone_influences.Influences`` (a tuple) of the BVH's nodes."""
         tree, mesh = self.bvh._arrays, self._mesh
-        return bone_masks(tree.left, tree.right, tree.start, tree.count, tree.order, tree.faces, mesh.joints,
+        return tree_influences(tree.left, tree.right, tree.start, tree.count, tree.order, tree.faces, mesh.joints,
                           mesh.weights, len(tree.lo), self._n_bones, len(tree.lo))
 
 
@@ -100,13 +96,13 @@ class RigSource:
             self.affines = bone_affines_of(rig, pose)
             if bvh is None:
                 self._posed = PosedSource(self, self.affines, tuple(rest.bvh._arrays), rest.bvh.n_nodes,
-                                          rest.masks, rest.used,
-                                          PosedScratch(), rest.pad)
+                                          rest.influences, rest.weights[0],
+                                          PosedScratch(), rest.weights[1])
                 self.positions, self.diagonal, self.posing = (self._posed.positions, self._posed.diagonal,
                                                               self._posed.posing)
             else:
                 self.positions = skin(rig, pose)
-                self.diagonal = rest.diagonal * posed_scale(self.affines, rest.used)
+                self.diagonal = rest.diagonal * posed_scale(self.affines, rest.weights[0])
         if bvh is not None and (not isinstance(bvh, TriangleBVH) or bvh.n_faces != len(self.faces)
                                 or bvh._arrays.positions.shape != self.positions.shape):
             raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {len(self.positions)} vertices "
