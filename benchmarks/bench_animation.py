@@ -1,7 +1,7 @@
 """Frames from clips: sampling a clip into a pose against skinning it, per frame and in batches, in one
 process.
 
-    python -m benchmarks.bench_animation [--frames 1000] [--repeat 21]
+    python -m benchmarks.bench_animation [--frames 1000] [--repeat 21] [--strokes 60] [--large-strokes 30]
 
 Models: Fox (its "Walk" clip) and the largest other shared glTF rig by node count; a rig without
 clips gets a synthetic one (``clip_from_poses``: 30 keys, every node turned, so every node has
@@ -15,11 +15,20 @@ beside ``skin`` alone):
 * ``rig.poses`` + ``skin(rig, poses)`` over ``--frames`` frames, per frame (and the sampling alone).
 
 Each group of rows is a function of a ``Case`` returning rows; add a group to ``ROW_GROUPS``.
+
+A second table, surgery on a playing model (``_playing_surgery.py``, each model in its own process):
+an incision of short strokes on Arm5 bending its forearm and on the issue's 1.52M-face capsule playing
+``wave``, each stroke from where the last one ended: in a ``Surgery`` at rest, in its one pose, in a new
+pose per stroke (the stroke alone, and per frame the pose, the skin of the whole mesh and the stroke),
+with ratios to the fixed pose and the peak memory of the new-pose session over the mesh's own arrays.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -93,8 +102,29 @@ def batch_rows(case: Case) -> list:
 
 
 # Row groups, each a function of a Case returning rows (``case.time_us`` times its calls beside skin
-# alone, ``case.row`` makes the columns). A later group goes here: tear strokes on a playing model.
+# alone, ``case.row`` makes the columns)
 ROW_GROUPS = [frame_rows, batch_rows]
+
+
+def stroke_rows(name: str, strokes: int) -> list:
+    """Surgery on a playing model: ``_playing_surgery`` run in a process of its own."""
+    out = subprocess.run([sys.executable, "-m", "benchmarks._playing_surgery", name, str(strokes)],
+                         capture_output=True, text=True, cwd=Path(__file__).resolve().parent.parent)
+    if out.returncode:
+        print(out.stderr, file=sys.stderr)
+        raise SystemExit(f"bench_animation: the {name} strokes failed")
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    ms = {way: np.array(r[way]) * 1e3 for way in ("rest", "fixed", "stroke only", "playing")}
+    fixed = float(np.nanmedian(ms["fixed"]))
+    rows = []
+    for way, what in (("rest", "Surgery(rig).tear, at rest"), ("fixed", "Surgery(rig, pose).tear, its one pose"),
+                      ("stroke only", "tear(..., pose=) in a new pose per stroke"),
+                      ("playing", "per frame: pose + skin (whole mesh) + stroke")):
+        median = float(np.nanmedian(ms[way]))
+        peak = f"{r['peak'] / r['mesh_bytes']:.2f}" if way == "stroke only" else ""
+        rows.append([r["label"], r["faces"], what, int(np.isfinite(ms[way]).sum()), median,
+                     float(ms[way][0]), median / fixed, peak])
+    return rows
 
 
 def _load(path: Path):
@@ -132,6 +162,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=1000)
     ap.add_argument("--repeat", type=int, default=21)
+    ap.add_argument("--strokes", type=int, default=60, help="strokes on Arm5 (0: no stroke rows)")
+    ap.add_argument("--large-strokes", type=int, default=30, help="strokes on the 1.52M-face capsule (0: none)")
     args = ap.parse_args(argv)
     rows = []
     for case in cases(args.frames, args.repeat):
@@ -144,6 +176,13 @@ def main(argv=None):
     print_table(f"Frames from clips (median µs per frame of {args.repeat} interleaved rounds; x skin: over skin "
                 f"alone of the same model in the same rounds)", ["model", "what", "µs/frame", "joints/s", "x ACL", "x skin"],
                 rows)
+    strokes = [row for name, count in (("arm5", args.strokes), ("large", args.large_strokes)) if count > 0
+               for row in stroke_rows(name, count)]
+    if strokes:
+        print_table("Surgery on a playing model: an incision, each stroke from where the last one ended (median ms "
+                    "per stroke; first: the first stroke, which makes the bone influences of the session's tree; x fixed: over the session in its one pose; peak: the new-pose session's peak memory "
+                    "over the mesh's arrays)", ["model", "faces", "what", "strokes", "median ms", "first ms",
+                                                "x fixed", "peak / mesh"], strokes)
 
 
 if __name__ == "__main__":

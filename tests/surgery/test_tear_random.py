@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
-from cgaskin import TearPathError, tear_stroke
+from cgaskin import TearPathError, TriangleBVH, tear_stroke
 from cgaskin.surgery.tear.patch import patch_surface
 from cgaskin.surgery.tear.rig_source import RigSource
 from cgaskin.surgery.tear import tear_topology
@@ -30,7 +30,10 @@ def run_random_stroke(name, rig, pose, data, opening=0.0):
     scalpel_from, scalpel_to = data.draw(strokes(rig, points))
     original = copy.deepcopy((rig.vertices, rig.faces, rig.joints, rig.weights, rig.attributes))
     blades = np.asarray(scalpel_from, np.float64), np.asarray(scalpel_to, np.float64)
-    whole = patch_surface(RigSource(rig, pose, None), np.arange(rig.n_faces)).surface     # the whole mesh
+    # the whole mesh in the pose (a BVH of the whole skinned surface: a posed stroke itself poses only
+    # what its blade reaches)
+    whole = patch_surface(RigSource(rig, pose, None if pose is None else TriangleBVH(points, rig.faces)),
+                          np.arange(rig.n_faces)).surface
     ends = locate(whole, whole.faces, *blades[0], *blades[1])
     within = blades, margin(points, rig.faces, ends.hit_faces, *ends.points)
     try:
