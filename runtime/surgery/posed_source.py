@@ -68,6 +68,11 @@ class SessionInfluences:
                                      n_nodes, self.n_bones, n_nodes + n_nodes // 8)
         return self._influences
 
+    @property
+    def kept(self) -> bool:
+        """Whether the influences are made and followed (after the first posed stroke)."""
+        return self._influences is not None and self._rebuilds == self._bvh.rebuilds
+
     def removing(self, faces) -> np.ndarray:
         """The leaves that hold ``faces`` before an edit removes them (what ``edited`` needs of them)."""
         return self._bvh.leaves(faces) if self._influences is not None else faces

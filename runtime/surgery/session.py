@@ -231,16 +231,22 @@ class Surgery:
         return PosedSource(self, affines, self._bvh.arrays, self._bvh.n_nodes, self._influences.influences(self.joints, self.weights),
                            self._used, self._scratch, self._pad)
 
-    def _edit_bvh(self, removed, inserted, near, moved, positions, faces, rows) -> None:
-        """``DynamicBVH.edit``, with the bone influences kept and what is posed of the changed nodes and
-        ``rows`` (their rest positions changed, or they are new) forgotten."""
+    def _edit_bvh(self, removed, inserted, near, moved, positions, faces, moved_rows, first_row, end_row) -> None:
+        """``DynamicBVH.edit``, with the bone influences kept (once a posed stroke made them) and what is
+        posed of the changed nodes and rows forgotten (``moved_rows`` and the rows from ``first_row`` to
+        ``end_row``: their rest positions changed, or they are new or gone)."""
+        if not self._influences.kept:
+            self._bvh.edit(removed, inserted, near, moved, positions, faces)
+            self._scratch.reset()
+            return
         leaves, first_node = self._influences.removing(removed), self._bvh.n_nodes
         self._bvh.edit(removed, inserted, near, moved, positions, faces)
         changed = self._influences.edited(leaves, first_node, inserted, moved, self.joints, self.weights)
         if changed is None:
             self._scratch.reset()
         else:
-            self._scratch.forget(changed, self._bvh.parents, rows)
+            self._scratch.forget(changed, self._bvh.parents,
+                                 np.concatenate((moved_rows, np.arange(first_row, end_row))))
 
     # ---- a stroke's rows in, and out again ------------------------------------------------------------
     def _apply(self, splice) -> _Undo:
@@ -265,7 +271,7 @@ class Surgery:
         self.top_label = max(self.top_label, top)
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
         self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
-                       self.faces, np.concatenate((moved, np.arange(n, self.n_vertices))))
+                       self.faces, moved, n, self.n_vertices)
         self._grow_bounds(moved, n, old_positions)
         return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, old_positions,
                      splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
@@ -303,7 +309,7 @@ class Surgery:
         # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
         # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
         self._edit_bvh(np.arange(record.m, m), record.removed, np.full(len(record.removed), -1), record.moved_faces,
-                       self._arrays["vertices"].data, self._faces.data, np.concatenate((record.moved, np.arange(record.n, n))))
+                       self._arrays["vertices"].data, self._faces.data, record.moved, record.n, n)
 
 
 @kernel((F2, I1, i8, F2), cost=0.1)
