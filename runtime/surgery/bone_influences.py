@@ -131,16 +131,23 @@ def _node_influences(influences, node, left, right, start, count, order, faces, 
             fresh = False
 
 
-@kernel((N1, N1, N1, N1, N1, I2, I2, F2, i8, i8, i8), cost=0.8)
-def tree_influences(left, right, start, count, order, faces, joints, weights, n_nodes, n_bones, n_rows):
-    """``Influences`` (as a tuple, n_rows rows) of the tree's first ``n_nodes`` nodes, for faces (F, 3)
-    over vertices with joints and weights (n, k); ``order`` the tree's leaf order."""
-    influences = (np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64), np.full((n_rows, TABLE), NO_BONE, np.int16),
+def tree_influences(left, right, start, count, order, faces, joints, weights, n_nodes, n_bones, n_rows) -> tuple:
+    """``Influences`` (as a tuple, n_rows >= n_nodes rows) of the tree's first ``n_nodes`` nodes, for
+    faces (F, 3) over vertices with joints and weights (n, k); ``order`` the tree's leaf order. The rows
+    past n_nodes are room for a tree that grows, allocated (by numpy: zero pages) but not written, so
+    not resident until used."""
+    influences = (np.zeros((n_rows, (max(n_bones, 1) + 63) // 64), np.uint64), np.zeros((n_rows, TABLE), np.int16),
                   np.zeros((n_rows, TABLE), np.uint16), np.zeros((n_rows, TABLE), np.uint16))
+    _fill_influences(influences, left, right, start, count, order, faces, joints, weights, n_nodes, n_bones)
+    return influences
+
+
+@kernel((INFLUENCES, N1, N1, N1, N1, N1, I2, I2, F2, i8, i8), cost=0.8)
+def _fill_influences(influences, left, right, start, count, order, faces, joints, weights, n_nodes, n_bones):
+    """Rows 0 .. n_nodes - 1 of ``influences`` (``tree_influences``), children before parents."""
     had = np.empty(TABLE + joints.shape[1], np.int64)
     for node in range(n_nodes - 1, -1, -1):
         _node_influences(influences, node, left, right, start, count, order, faces, joints, weights, n_bones, had)
-    return influences
 
 
 @helper

@@ -63,9 +63,9 @@ class SessionInfluences:
         session's rows)."""
         if self._influences is None or self._rebuilds != self._bvh.rebuilds:
             arrays, self._rebuilds = self._bvh.arrays, self._bvh.rebuilds
-            n_nodes = self._bvh.n_nodes            # (the tree's arrays have room for twice its faces: not used)
-            self._influences = tree_influences(arrays[2], arrays[3], arrays[4], arrays[5], arrays[6], arrays[8], joints, weights,
-                                     n_nodes, self.n_bones, n_nodes + n_nodes // 8)
+            # (rows for the tree's room too, as the tree has them: written only once nodes use them)
+            self._influences = tree_influences(arrays[2], arrays[3], arrays[4], arrays[5], arrays[6], arrays[8],
+                                               joints, weights, self._bvh.n_nodes, self.n_bones, len(arrays[0]))
         return self._influences
 
     @property
@@ -86,11 +86,11 @@ class SessionInfluences:
             self._influences = None
             return None
         arrays, n_nodes = self._bvh.arrays, self._bvh.n_nodes
-        if len(self._influences[0]) < n_nodes:
+        if len(self._influences[0]) < len(arrays[0]):          # the tree's room grew (by doubling)
             grown = []
             for old in self._influences:
-                new = np.zeros((max(n_nodes, len(old) * 3 // 2), old.shape[1]), old.dtype)
-                new[:len(old)] = old
+                new = np.zeros((len(arrays[0]), old.shape[1]), old.dtype)
+                new[:first_node] = old[:first_node]
                 grown.append(new)
             self._influences = tuple(grown)
         dirty = np.unique(np.concatenate((leaves_before, self._bvh.leaves(inserted), self._bvh.leaves(moved),
