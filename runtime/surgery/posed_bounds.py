@@ -35,6 +35,7 @@ import numpy as np
 from .._shared.jit import F1, F2, I1, I2, helper, kernel, record
 from ..generated.skinning import skin_blend
 from .bone_influences import INFLUENCES, TABLE, WEIGHT_STEPS
+from .bvh import _push_children
 from .bvh_build import N1
 
 __all__ = ["Posing", "POSING", "PosedScratch", "no_posing", "pose_region"]
@@ -190,10 +191,7 @@ def _pose_region(bvh, posing, query, a, b, reach):
         if not _meets(lo, hi, node, query, a, b, reach):
             continue
         if left[node] >= 0:
-            if top + 3 > stack.shape[0]:
-                stack = np.concatenate((stack, np.empty_like(stack)))
-            stack[top + 1], stack[top + 2] = right[node], left[node]
-            top += 2
+            stack, top = _push_children(stack, top, left[node], right[node])
             continue
         for s in range(start[node], start[node] + count[node]):
             for c in range(3):
