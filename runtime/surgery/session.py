@@ -61,7 +61,6 @@ class _Undo(NamedTuple):
     rows: np.ndarray
     old_rows: dict
     moved: np.ndarray
-    old_positions: np.ndarray
     removed: np.ndarray
     kept: np.ndarray
     old_kept: np.ndarray
@@ -273,7 +272,7 @@ class Surgery:
         self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
                        self.faces, moved, n, self.n_vertices)
         self._grow_bounds(moved, n, old_positions)
-        return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, old_positions,
+        return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved,
                      splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
 
     def _grow_bounds(self, moved, first_new, old) -> None:
