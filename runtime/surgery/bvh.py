@@ -99,6 +99,23 @@ def _segment_box(lo, hi, a, d, t_max):
 
 
 @helper
+def _near_box(lo, hi, a, d, t_max, reach):
+    """Whether a + t d, t in [0, t_max], comes within ``reach`` of the box [lo, hi] in every axis."""
+    t0, t1 = 0.0, t_max
+    for k in range(3):
+        low, high = lo[k] - reach, hi[k] + reach
+        if d[k] == 0.0:
+            if a[k] < low or a[k] > high:
+                return False
+            continue
+        u, v = (low - a[k]) / d[k], (high - a[k]) / d[k]
+        t0, t1 = max(t0, min(u, v)), min(t1, max(u, v))
+        if t0 > t1:
+            return False
+    return True
+
+
+@helper
 def _push_children(stack, top, left, right):
     """Push a node's children on a traversal stack (the left one on top: visited first), growing it
     when full; returns (stack, top)."""

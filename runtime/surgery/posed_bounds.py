@@ -35,7 +35,7 @@ import numpy as np
 from .._shared.jit import F1, F2, I1, I2, helper, kernel, record
 from ..generated.skinning import skin_blend
 from .bone_influences import INFLUENCES, TABLE, WEIGHT_STEPS
-from .bvh import _push_children
+from .bvh import _near_box, _push_children
 from .bvh_build import N1
 
 __all__ = ["Posing", "POSING", "PosedScratch", "no_posing", "pose_region"]
@@ -139,23 +139,13 @@ def _posed_box(bvh, posing, node):
 
 
 @helper
-def _meets(lo, hi, node, query, a, b, reach):
-    """Whether node's box [lo, hi] meets the query: a segment a -> b within ``reach`` (``query`` (0,)),
-    or the box [a, b] where it holds points within ``reach`` of the plane ``query`` (4,) (n, d: the
-    signed distance n.x - d; an empty plane, all zero, takes the whole box)."""
+def _meets(lo, hi, node, query, a, b, d, reach):
+    """Whether node's box [lo, hi] meets the query: a segment a -> b (d = b - a) within ``reach``
+    (``query`` (0,): the guess's own test, ``bvh._near_box``), or the box [a, b] where it holds points
+    within ``reach`` of the plane ``query`` (4,) (n, d: the signed distance n.x - d; an empty plane, all
+    zero, takes the whole box)."""
     if query.shape[0] == 0:
-        t0, t1 = 0.0, 1.0
-        for k in range(3):
-            low, high, d = lo[node, k] - reach, hi[node, k] + reach, b[k] - a[k]
-            if d == 0.0:
-                if a[k] < low or a[k] > high:
-                    return False
-                continue
-            u, v = (low - a[k]) / d, (high - a[k]) / d
-            t0, t1 = max(t0, min(u, v)), min(t1, max(u, v))
-            if t0 > t1:
-                return False
-        return True
+        return _near_box(lo[node], hi[node], a, d, 1.0, reach)
     smin = smax = -query[3]
     for k in range(3):
         if lo[node, k] > b[k] or hi[node, k] < a[k]:
@@ -176,7 +166,7 @@ def _pose_region(bvh, posing, query, a, b, reach):
     if state[1] == 0:
         return
     lo, hi, left, right, start, count, order, positions, faces = bvh
-    stamp = state[0]
+    stamp, d = state[0], b - a
     todo = np.empty(64, np.int64)           # the vertices to skin, in one call of the blend at the end
     n_todo = 0
     stack = np.empty(128, np.int64)
@@ -188,7 +178,7 @@ def _pose_region(bvh, posing, query, a, b, reach):
         if node_stamp[node] != stamp:
             _posed_box(bvh, posing, node)
             node_stamp[node] = stamp
-        if not _meets(lo, hi, node, query, a, b, reach):
+        if not _meets(lo, hi, node, query, a, b, d, reach):
             continue
         if left[node] >= 0:
             stack, top = _push_children(stack, top, left[node], right[node])

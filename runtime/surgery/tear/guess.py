@@ -6,27 +6,10 @@ import numpy as np
 
 from ..._shared.jit import B1, F2, callee, f8, helper
 from ...generated.kernels import plane_from_points
-from ..bvh import BVH_ARRAYS, _first_hit, _push_children
+from ..bvh import BVH_ARRAYS, _first_hit, _near_box, _push_children
 
 #: what ``_guess`` found: both points, or which scalpel position missed the surface
 FOUND, FROM_MISSES, TO_MISSES = 0, 1, 2
-
-
-@helper
-def _near_box(lo, hi, a, d, t_max, reach):
-    """Whether a + t d, t in [0, t_max], comes within ``reach`` of the box [lo, hi] in every axis."""
-    t0, t1 = 0.0, t_max
-    for k in range(3):
-        low, high = lo[k] - reach, hi[k] + reach
-        if d[k] == 0.0:
-            if a[k] < low or a[k] > high:
-                return False
-            continue
-        u, v = (low - a[k]) / d[k], (high - a[k]) / d[k]
-        t0, t1 = max(t0, min(u, v)), min(t1, max(u, v))
-        if t0 > t1:
-            return False
-    return True
 
 
 @helper
