@@ -70,7 +70,8 @@ def incision_in_poses(session, rig, blades, bones, poses, name=None, play=None):
         affines = pose.bone_affines()
         if play is not None and play[2]:            # what a viewer draws: the session's mesh skinned
             skin_affine(session.vertices, session.joints, session.weights, affines)
-        scalpel_from, scalpel_to = _carried(blades[k], affines, bones[k]), _carried(blades[k + 1], affines, bones[k + 1])
+        scalpel_from = _carried(blades[k], affines, bones[k])
+        scalpel_to = _carried(blades[k + 1], affines, bones[k + 1])
         if end is not None:                     # through where the slit ended, that vertex in this pose
             p = skin_affine(session.vertices[[end]], session.joints[[end]], session.weights[[end]], affines)[0]
             d = scalpel_from[1] - scalpel_from[0]

@@ -174,13 +174,15 @@ def main(argv=None):
         for group in ROW_GROUPS:
             rows += group(case)
     print_table(f"Frames from clips (median µs per frame of {args.repeat} interleaved rounds; x skin: over skin "
-                f"alone of the same model in the same rounds)", ["model", "what", "µs/frame", "joints/s", "x ACL", "x skin"],
+                f"alone of the same model in the same rounds)",
+                ["model", "what", "µs/frame", "joints/s", "x ACL", "x skin"],
                 rows)
     strokes = [row for name, count in (("arm5", args.strokes), ("large", args.large_strokes)) if count > 0
                for row in stroke_rows(name, count)]
     if strokes:
         print_table("Surgery on a playing model: an incision, each stroke from where the last one ended (median ms "
-                    "per stroke; first: the first stroke, which makes the bone influences of the session's tree; x fixed: over the session in its one pose; peak: the new-pose session's peak memory "
+                    "per stroke; first: the first stroke, which makes the bone influences of the session's tree; "
+                    "x fixed: over the session in its one pose; peak: the new-pose session's peak memory "
                     "over the mesh's arrays)", ["model", "faces", "what", "strokes", "median ms", "first ms",
                                                 "x fixed", "peak / mesh"], strokes)
 

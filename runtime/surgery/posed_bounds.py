@@ -45,7 +45,8 @@ class Posing(NamedTuple):
     """What ``_pose_region`` reads and writes besides the posed tree (a stroke's BVHArrays, whose node
     boxes and positions it fills).
 
-    rest_lo, rest_hi : (N, 3) float64 the rest tree's padded node boxes ; influences : ``Influences`` ; node_stamp (N,), vertex_stamp (n,) int64: which nodes and vertices hold this pose's values ;
+    rest_lo, rest_hi : (N, 3) float64 the rest tree's padded node boxes ; influences : ``Influences`` ;
+    node_stamp (N,), vertex_stamp (n,) int64: which nodes and vertices hold this pose's values ;
     vertices (n, 3), joints (n, k), weights (n, k) : the rest mesh ; affines (B, 12) : the pose's bone
     maps ; state (2,) int64 : [stamp of this pose, 1 when posing is active (0: the surface is as stored)] ;
     pad (1,) float64 : relative padding of a posed box

@@ -34,7 +34,8 @@ class PosedSource:
     """``source`` (a stroke source whose positions are its rest vertices and whose BVH holds them) in
     the pose of bone maps ``affines`` (B, 12): ``tree`` the rest BVH's arrays (``n_nodes`` rows in use)
     with its ``bone_influences.Influences`` ``influences`` (a tuple); ``used`` (u,) int64 the bones in
-    use; ``scratch`` a ``PosedScratch``; ``pad`` from ``bone_influences.weight_summary``. The rest of the source interface is ``source``'s."""
+    use; ``scratch`` a ``PosedScratch``; ``pad`` from ``bone_influences.weight_summary``. The rest of
+    the source interface is ``source``'s."""
 
     def __init__(self, source, affines, tree, n_nodes, influences, used, scratch: PosedScratch, pad: float):
         self._source = source
@@ -95,6 +96,7 @@ class SessionInfluences:
             self._influences = tuple(grown)
         dirty = np.unique(np.concatenate((leaves_before, self._bvh.leaves(inserted), self._bvh.leaves(moved),
                                           np.arange(first_node, n_nodes))))
-        refresh_influences(self._influences, arrays[2], arrays[3], self._bvh.parents, arrays[4], arrays[5], arrays[6], arrays[8],
+        refresh_influences(self._influences, arrays[2], arrays[3], self._bvh.parents, arrays[4], arrays[5], arrays[6],
+                           arrays[8],
                       joints, weights, dirty, self.n_bones)
         return dirty

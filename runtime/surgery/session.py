@@ -227,7 +227,8 @@ class Surgery:
         affines = self._affines if pose is None else bone_affines_of(self._template, pose)
         if self._used is None:          # (the rows a stroke adds change neither: weight_summary)
             self._used, self._pad = weight_summary(self.joints, self.weights, self._template.skeleton.n_bones)
-        return PosedSource(self, affines, self._bvh.arrays, self._bvh.n_nodes, self._influences.influences(self.joints, self.weights),
+        influences = self._influences.influences(self.joints, self.weights)
+        return PosedSource(self, affines, self._bvh.arrays, self._bvh.n_nodes, influences,
                            self._used, self._scratch, self._pad)
 
     def _edit_bvh(self, removed, inserted, near, moved, positions, faces, moved_rows, first_row, end_row) -> None:

@@ -41,7 +41,8 @@ def poses(draw, rig):
         elif edit == "dilate":
             pose = pose.dilate(joint, draw(st.floats(0.5, 2.0)))
         else:
-            pose = pose.translate(joint, np.array(draw(st.tuples(*[st.floats(-0.2, 0.2)] * 3))) * diagonal(rig.vertices))
+            shift = np.array(draw(st.tuples(*[st.floats(-0.2, 0.2)] * 3)))
+            pose = pose.translate(joint, shift * diagonal(rig.vertices))
     return pose
 
 
@@ -52,7 +53,8 @@ def posed_tree(rig, pose):
     masks = tree_influences(*(tree[k] for k in (2, 3, 4, 5, 6, 8)), np.ascontiguousarray(rig.joints, np.int64),
                        np.ascontiguousarray(rig.weights, np.float64), len(tree[0]), rig.skeleton.n_bones, len(tree[0]))
     return PosedScratch().view(tree, len(tree[0]), masks, np.ascontiguousarray(rig.vertices, np.float64),
-                               np.ascontiguousarray(rig.joints, np.int64), np.ascontiguousarray(rig.weights, np.float64),
+                               np.ascontiguousarray(rig.joints, np.int64),
+                               np.ascontiguousarray(rig.weights, np.float64),
                                pose.bone_affines(), weight_summary(np.ascontiguousarray(rig.joints, np.int64),
                                                                  np.ascontiguousarray(rig.weights, np.float64),
                                                                  rig.skeleton.n_bones)[1])

@@ -1,9 +1,10 @@
 """A rig as the source of a tear stroke (``splice.py``), and the torn rig made from a stroke's splice.
 
-What a stroke needs of the whole rig is built once per rig (its arrays, tear labels, boundary flags, the
-rest surface's BVH and its nodes' bone influences) and kept while the rig lives (``_shared.cache``); a stroke in a
-pose poses only what it reaches (``posed_source.PosedSource``), so nothing is built per pose. A torn rig gets its boundary flags and highest label from the stroke that made
-it, so that a chain of functional tears never rebuilds the whole welded topology.
+What a stroke needs of the whole rig is built once per rig (its arrays, tear labels, boundary flags,
+the rest surface's BVH and its nodes' bone influences) and kept while the rig lives (``_shared.cache``);
+a stroke in a pose poses only what it reaches (``posed_source.PosedSource``), so nothing is built per
+pose. A torn rig gets its boundary flags and highest label from the stroke that made it, so that a
+chain of functional tears never rebuilds the whole welded topology.
 """
 from __future__ import annotations
 
@@ -59,9 +60,11 @@ class _Rest:
         self._mesh, self._n_bones = mesh, rig.skeleton.n_bones
 
     @cached_property
-    def weights(self) -> tuple:
-        """(the bones in use, a posed box's relative padding): ``bone_influences.weight_summary``."""
+    def _summary(self) -> tuple:
         return weight_summary(self._mesh.joints, self._mesh.weights, self._n_bones)
+
+    used = property(lambda self: self._summary[0], doc="(u,) int64 the bones in use (``weight_summary``)")
+    pad = property(lambda self: self._summary[1], doc="a posed box's relative padding (``weight_summary``)")
 
     @property
     def bvh(self) -> TriangleBVH:
@@ -74,7 +77,7 @@ class _Rest:
         """The ``bone_influences.Influences`` (a tuple) of the BVH's nodes."""
         tree, mesh = self.bvh._arrays, self._mesh
         return tree_influences(tree.left, tree.right, tree.start, tree.count, tree.order, tree.faces, mesh.joints,
-                          mesh.weights, len(tree.lo), self._n_bones, len(tree.lo))
+                               mesh.weights, len(tree.lo), self._n_bones, len(tree.lo))
 
 
 class RigSource:
@@ -96,13 +99,12 @@ class RigSource:
             self.affines = bone_affines_of(rig, pose)
             if bvh is None:
                 self._posed = PosedSource(self, self.affines, tuple(rest.bvh._arrays), rest.bvh.n_nodes,
-                                          rest.influences, rest.weights[0],
-                                          PosedScratch(), rest.weights[1])
+                                          rest.influences, rest.used, PosedScratch(), rest.pad)
                 self.positions, self.diagonal, self.posing = (self._posed.positions, self._posed.diagonal,
                                                               self._posed.posing)
             else:
                 self.positions = skin(rig, pose)
-                self.diagonal = rest.diagonal * posed_scale(self.affines, rest.weights[0])
+                self.diagonal = rest.diagonal * posed_scale(self.affines, rest.used)
         if bvh is not None and (not isinstance(bvh, TriangleBVH) or bvh.n_faces != len(self.faces)
                                 or bvh._arrays.positions.shape != self.positions.shape):
             raise InvalidInputError(f"bvh must be a TriangleBVH over the rig's {len(self.positions)} vertices "
