@@ -25,6 +25,15 @@ class MissesMeshError(CgaskinError, ValueError):
     """A cutting plane or a scalpel does not meet the mesh."""
 
 
+class TearPathError(CgaskinError, ValueError):
+    """The tear plane's section of the surface does not lead from S_i to S_{i+1} (they lie on
+    different pieces of it, or a boundary of the mesh is in the way)."""
+
+
+class InternalError(CgaskinError, RuntimeError):
+    """A bug in cgaskin, not bad input: please report it with the inputs (the model and the call)."""
+
+
 class StaleGeneratedError(CgaskinError):
     """``generated/`` does not match what ``codegen/`` emits now."""
 
@@ -32,3 +41,11 @@ class StaleGeneratedError(CgaskinError):
 class PlacementWarning(RuntimeWarning):
     """A new vertex made on a posed mesh (a posed cut or tear) could not be placed exactly on its
     posed target: its blended transform is singular or nearly so."""
+
+
+#: the tear's name for it (``cgaskin.TearPlacementWarning``)
+TearPlacementWarning = PlacementWarning
+
+
+class PlaneMissesMeshWarning(UserWarning):
+    """The cutting plane does not cross the mesh: one half is empty."""

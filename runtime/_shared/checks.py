@@ -62,3 +62,18 @@ def index_array(value, name: str, upper: int) -> np.ndarray:
     if arr.size and (arr.min() < 0 or arr.max() >= upper):
         raise InvalidInputError(f"{name} holds indices outside [0, {upper}): min {arr.min()}, max {arr.max()}")
     return arr
+
+
+def item_index(value, count: int, what: str, has: str) -> int | None:
+    """``value`` as an index into ``count`` items (clips, skeleton nodes) when it is an integer, else
+    None (a name, for the caller to look up). One rule for every index a user gives: an int or numpy
+    integer in [0, count). A bool is refused (``True`` is not clip 1), and so is a negative index
+    (-1 marks a root in a skeleton's parents; it is not "the last node"). ``has`` ends the range
+    error, e.g. "the rig has 2 clips"."""
+    if isinstance(value, (bool, np.bool_)):
+        raise InvalidInputError(f"{what} must be a name or an index in [0, {count}), got {value!r} (a bool)")
+    if not isinstance(value, (int, np.integer)):
+        return None
+    if not 0 <= value < count:
+        raise InvalidInputError(f"{what} index {value} out of range [0, {count}): {has}")
+    return int(value)

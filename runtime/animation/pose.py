@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.checks import float_array
+from .._shared.frozen import kernel_array
 from .._shared.jit import B1, F2, F3, I1, callee, helper, kernel
 from ..algebra import versor
 from ..algebra.transforms import matrix_to_trs, trs_matrix
@@ -98,9 +99,25 @@ class Pose:
         return cls(skeleton, *sample_pose(skeleton, clip, time, rotation_blend))
 
     # -- edits (each returns a new Pose) --------------------------------------------------------
-    def _edit(self, joint, left=None, right=None) -> "Pose":
-        """local' = left · local · right (versors), on the versor or, for matrix nodes, the matrix."""
+    def _edit(self, joint, what: str, left=None, right=None) -> "Pose":
+        """local' = left · local · right (versors), on the versor or, for matrix nodes, the matrix.
+        ``what`` names the edit for the error when the result is not finite."""
         i = self.skeleton.node_index(joint)
+        # large but finite values make a finite pose (the versor check's |V|² may overflow on the
+        # way, harmlessly); a transform float64 cannot hold is the caller's to fix, not a warning
+        too_large = (f"{what}: the transform of joint {self.skeleton.names[i]!r} would overflow float64 "
+                     f"(or, as a versor, leave the scales [{versor.SCALE_RANGE[0]:g}, "
+                     f"{versor.SCALE_RANGE[1]:g}] it holds); give a smaller value")
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):
+                versors, matrices = self._edited(i, left, right)
+        except InvalidInputError:       # the inputs are checked: only the composed result can fail
+            raise InvalidInputError(too_large) from None
+        if not (np.isfinite(versors[i]).all() and np.isfinite(matrices[i]).all()):
+            raise InvalidInputError(too_large)
+        return Pose(self.skeleton, versors, matrices, self.similar)
+
+    def _edited(self, i: int, left, right) -> tuple:
         versors, matrices = self.versors.copy(), self.matrices.copy()
         if self.similar[i]:
             parts = [p for p in (left, versors[i], right) if p is not None]
@@ -113,7 +130,7 @@ class Pose:
             if right is not None:
                 m = m @ versor.to_matrix(right)
             matrices[i] = m
-        return Pose(self.skeleton, versors, matrices, self.similar)
+        return versors, matrices
 
     def rotate(self, joint, axis, angle, frame: str = "parent") -> "Pose":
         """Rotate ``joint`` (name or index) by ``angle`` radians about ``axis`` through the joint's
@@ -121,27 +138,33 @@ class Pose:
         if frame not in FRAMES:
             raise InvalidInputError(f"frame must be one of {FRAMES}, got {frame!r}")
         rot = versor.rotor(axis, angle)
+        what = f"rotate({joint!r}, ...)"
         if frame == "local":
-            return self._edit(joint, right=rot)
+            return self._edit(joint, what, right=rot)
         pivot = self.matrices[self.skeleton.node_index(joint)][:3, 3]
-        return self._edit(joint, left=versor.compose(versor.translator(pivot), rot, versor.translator(-pivot)))
+        with np.errstate(over="ignore", invalid="ignore"):      # (checked in _edit)
+            left = versor.compose(versor.translator(pivot), rot, versor.translator(-pivot))
+        return self._edit(joint, what, left=left)
 
     def translate(self, joint, vector) -> "Pose":
-        """Move ``joint`` by ``vector`` in its parent's frame."""
-        return self._edit(joint, left=versor.translator(float_array(vector, "vector", 3)))
+        """Move ``joint`` by ``vector`` in its parent's frame. InvalidInputError when the joint's
+        transform would overflow float64."""
+        vector = float_array(vector, "vector", 3)
+        return self._edit(joint, f"translate({joint!r}, {vector.tolist()})", left=versor.translator(vector))
 
     def dilate(self, joint, scale) -> "Pose":
         """Scale ``joint``'s subtree by ``scale`` about the joint's origin; ``scale`` in
         ``versor.SCALE_RANGE`` ([1e-12, 1e12]), else InvalidInputError."""
-        return self._edit(joint, right=versor.dilator(scale))
+        return self._edit(joint, f"dilate({joint!r}, {scale!r})", right=versor.dilator(scale))
 
     # -- evaluation ----------------------------------------------------------------------------
     def bone_affines(self) -> np.ndarray:
         """(B, 12) row-major 3x4 maps G[bone_nodes[b]] @ inverse_bind[b] for the blend loop."""
         sk = self.skeleton
         out = np.empty((sk.n_bones, 12))
-        _bone_affines(sk.parents, self.versors, self.matrices, self.similar, sk.bone_nodes,
-                      sk.inverse_bind_rows, out)
+        # (the writeable buffers behind the skeleton's read-only arrays: the kernel's one compiled type)
+        _bone_affines(kernel_array(sk.parents), self.versors, self.matrices, self.similar,
+                      kernel_array(sk.bone_nodes), sk.inverse_bind_rows, out)
         return out
 
     def global_matrices(self) -> np.ndarray:
@@ -150,7 +173,7 @@ class Pose:
         out = np.empty((sk.n_nodes, 12))
         ident = np.zeros((sk.n_nodes, 12))
         ident[:, [0, 5, 10]] = 1.0
-        _bone_affines(sk.parents, self.versors, self.matrices, self.similar,
+        _bone_affines(kernel_array(sk.parents), self.versors, self.matrices, self.similar,
                       np.arange(sk.n_nodes), ident, out)
         m = np.zeros((sk.n_nodes, 4, 4))
         m[:, :3, :] = out.reshape(-1, 3, 4)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._shared.frozen import kernel_array
 from .._shared.jit import B2, F2, F3, F4, I1, kernel
 from ..errors import InvalidInputError
 from .clip import Clip
@@ -61,8 +62,10 @@ class Poses:
         sk = self.skeleton
         out = np.empty((len(self), sk.n_bones, 12))
         # slices of a frame range need not be contiguous arrays of their own: the kernel takes C arrays
-        _bone_affines_frames(sk.parents, np.ascontiguousarray(self.versors), np.ascontiguousarray(self.matrices),
-                             np.ascontiguousarray(self.similar), sk.bone_nodes, sk.inverse_bind_rows, out)
+        # (and the writeable buffers behind the skeleton's read-only arrays: the kernel's one type)
+        _bone_affines_frames(kernel_array(sk.parents), np.ascontiguousarray(self.versors),
+                             np.ascontiguousarray(self.matrices), np.ascontiguousarray(self.similar),
+                             kernel_array(sk.bone_nodes), sk.inverse_bind_rows, out)
         return out
 
 

@@ -11,6 +11,12 @@ Conventions (glTF 2.0 semantics, whatever the source format):
   in the pose. ``Rig.joints`` indexes bones.
 * ``Rig.vertices`` are the bind-pose positions as stored in the file (attribute-split: vertices are
   duplicated along UV/normal seams exactly as the file has them).
+
+A rig is checked where it is made (constructor, ``with_mesh``, ``dataclasses.replace``) by
+``validate.check_mesh``, the rule loaders and ``save`` apply too, and is immutable: its arrays (and
+its skeleton's) are read-only copies, its attributes a read-only dict, because values derived from
+it are cached per rig (``_shared.cache``) and an edit in place would leave them stale. To change a
+mesh, make a new rig: ``rig.with_mesh(edited copies...)``.
 """
 from __future__ import annotations
 
@@ -18,11 +24,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._shared.checks import float_array, item_index
+from .._shared.frozen import FrozenDict, frozen
 from ..errors import InvalidInputError
 from .clip import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
 from .pose import Pose
 from .poses import Poses
 from .skeleton import Skeleton
+from .validate import check_mesh
 
 #: the whole data model in one import
 __all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATHS"]
@@ -30,17 +39,23 @@ __all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATH
 
 @dataclass(frozen=True, eq=False)
 class Rig:
-    """A skinned triangle mesh.
+    """A skinned triangle mesh, immutable: every array is a read-only copy of what it was made from.
 
-    vertices : (n, 3) float64 bind-pose positions
-    faces : (m, 3) int64 vertex indices, counter-clockwise
-    joints : (n, 4) int64 bone indices (unused slots hold 0 with weight 0)
-    weights : (n, 4) float64, finite, >= 0, each row sums to 1
+    vertices : (n, 3) float64 bind-pose positions, finite
+    faces : (m, 3) int64 vertex indices in [0, n), counter-clockwise
+    joints : (n, 4) int64 bone indices in [0, skeleton.n_bones) (unused slots hold 0 with weight 0)
+    weights : (n, 4) float64, finite, >= 0, each row sums to 1 (at least one weight > 0 per vertex)
     skeleton : Skeleton
     clips : list[Clip]
-    attributes : dict name -> (n, k) float64 per-vertex data carried through cut/tear/export
-        (glTF names: "NORMAL", "TEXCOORD_0")
+    attributes : read-only dict name -> (n, ...) real per-vertex data carried through cut/tear/export
+        (glTF names: "NORMAL", "TEXCOORD_0"), finite, dtype kept
     name : str
+
+    Made from any arrays that ``check_mesh`` accepts (other real dtypes, 1 to 3 or more than 4
+    influences, rows not summing to 1): they are normalised as it does, with the same warnings.
+    ``InvalidInputError`` names the first bad row and its value: a non-finite vertex, a face outside
+    the vertices, a negative or non-finite weight, a vertex without any weight, a weighted joint
+    outside the skeleton's bones, an attribute with the wrong row count or non-finite values.
     """
 
     vertices: np.ndarray
@@ -51,6 +66,16 @@ class Rig:
     clips: list = field(default_factory=list)
     attributes: dict = field(default_factory=dict)
     name: str = "rig"
+
+    def __post_init__(self):
+        if not isinstance(self.skeleton, Skeleton):
+            raise InvalidInputError(f"skeleton must be a cgaskin.Skeleton, got {type(self.skeleton).__name__}")
+        # (check_mesh works on copies: the maker's arrays are never modified, nor held)
+        arrays = check_mesh(self.vertices, self.faces, self.joints, self.weights,
+                            n_bones=self.skeleton.n_bones, source=self.name)
+        for name, values in zip(("vertices", "faces", "joints", "weights"), arrays):
+            object.__setattr__(self, name, frozen(values))
+        object.__setattr__(self, "attributes", _checked_attributes(self.attributes, len(arrays[0])))
 
     @property
     def n_vertices(self) -> int:
@@ -63,10 +88,9 @@ class Rig:
     def clip_index(self, clip) -> int:
         """Index of a clip given by name or index; a clear error lists the valid names."""
         names = [c.name for c in self.clips]
-        if isinstance(clip, (int, np.integer)):
-            if not 0 <= clip < len(self.clips):
-                raise InvalidInputError(f"clip index {clip} out of range: the rig has {len(self.clips)} clips")
-            return int(clip)
+        index = item_index(clip, len(self.clips), "clip", f"the rig has {len(self.clips)} clips")
+        if index is not None:
+            return index
         if clip in names:
             return names.index(clip)
         raise InvalidInputError(f"unknown clip {clip!r}; valid clips: {', '.join(map(repr, names)) or 'none'}")
@@ -109,7 +133,46 @@ class Rig:
             names.append(clip.name)
         return replace(self, clips=list(self.clips) + list(clips))
 
+    @classmethod
+    def of_checked(cls, vertices, faces, joints, weights, skeleton, clips=(), attributes=None,
+                   name: str = "rig") -> "Rig":
+        """A rig of arrays that cgaskin's own operations made from checked rigs (a cut's halves, a torn
+        mesh, a session's snapshot), frozen but not checked again: those operations keep every rule of
+        ``check_mesh`` (their property tests check it), and checking would cost more than the cut.
+        Users make rigs with the constructor or ``with_mesh``."""
+        rig = object.__new__(cls)
+        for name_, values in (("vertices", vertices), ("faces", faces), ("joints", joints), ("weights", weights)):
+            object.__setattr__(rig, name_, frozen(values))
+        for name_, value in (("skeleton", skeleton), ("clips", list(clips)), ("name", name),
+                             ("attributes", FrozenDict({k: frozen(np.asarray(v)) for k, v in
+                                                        ({} if attributes is None else attributes).items()}))):
+            object.__setattr__(rig, name_, value)
+        return rig
+
+    def with_checked_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
+        """``with_mesh`` for cgaskin's own operations (``of_checked``)."""
+        return Rig.of_checked(vertices, faces, joints, weights, self.skeleton, self.clips, attributes, self.name)
+
     def with_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
-        """A new rig with the same skeleton and clips and another mesh."""
+        """A new rig with the same skeleton and clips and another mesh (checked and copied as the
+        constructor does: ``InvalidInputError`` names the first bad row)."""
         return replace(self, vertices=vertices, faces=faces, joints=joints, weights=weights,
                        attributes={} if attributes is None else attributes)
+
+
+def _checked_attributes(attributes, n: int) -> FrozenDict:
+    """Read-only copies of per-vertex attributes: real numbers (dtype kept), finite, ``n`` rows."""
+    if not hasattr(attributes, "items"):
+        raise InvalidInputError(f"attributes must be a dict name -> (n, k) array, got {type(attributes).__name__}")
+    out = {}
+    for name, values in attributes.items():
+        what = f"attribute {name!r}"
+        values = np.asarray(values)
+        if values.dtype.kind not in "iub":           # NaN, inf, strings, complex refused, naming where
+            checked = float_array(values, what)
+            values = values if values.dtype.kind == "f" else checked
+        if values.ndim == 0 or len(values) != n:
+            rows = "a scalar" if values.ndim == 0 else f"{len(values)} rows"
+            raise InvalidInputError(f"{what} has {rows} for {n} vertices; give one row per vertex")
+        out[name] = frozen(np.array(values, order="C"))
+    return FrozenDict(out)

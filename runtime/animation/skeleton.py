@@ -7,6 +7,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .._shared.checks import item_index
+from .._shared.frozen import frozen
 from ..errors import InvalidInputError
 from ..tolerances import tol
 
@@ -34,6 +36,13 @@ class Skeleton:
     bone_nodes: np.ndarray
     inverse_bind: np.ndarray
 
+    def __post_init__(self):
+        # read-only copies (the maker's arrays stay theirs): values derived from them are cached
+        # (``inverse_bind_rows``, the rest pose of sampling), so an edit in place would leave those stale
+        for name in ("parents", "rest_translations", "rest_rotations", "rest_scales", "rest_matrices",
+                     "bone_nodes", "inverse_bind"):
+            object.__setattr__(self, name, frozen(np.array(getattr(self, name), order="C")))
+
     @property
     def n_nodes(self) -> int:
         return len(self.names)
@@ -52,11 +61,9 @@ class Skeleton:
 
     def node_index(self, joint) -> int:
         """Index of a node given by name or index; a clear error lists the valid names."""
-        if isinstance(joint, (int, np.integer)):
-            if not -self.n_nodes <= joint < self.n_nodes:
-                raise InvalidInputError(
-                    f"joint index {joint} out of range: the skeleton has {self.n_nodes} nodes")
-            return int(joint) % self.n_nodes
+        index = item_index(joint, self.n_nodes, "joint", f"the skeleton has {self.n_nodes} nodes")
+        if index is not None:
+            return index
         try:
             return self.names.index(joint)
         except ValueError:

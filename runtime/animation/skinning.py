@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.checks import float_array, index_array
+from .._shared.frozen import kernel_array
 from .._shared.jit import F2, F3, I2, kernel, precompiled
 from ..algebra.versor import _versor_arg
 from ..errors import InvalidInputError
@@ -136,11 +137,13 @@ def skin(rig: Rig, pose: Pose | Poses | None = None, out=None) -> np.ndarray:
     pose = rig.rest_pose() if pose is None else check_pose(rig, pose, (Pose, Poses))
     if isinstance(pose, Poses):
         return _skin_poses(rig, pose, out)
-    return skin_affine(rig.vertices, rig.joints, rig.weights, pose.bone_affines(), out=out)
+    # (the writeable buffers behind the rig's read-only arrays: the blend loop's one compiled type)
+    return skin_affine(kernel_array(rig.vertices), kernel_array(rig.joints), kernel_array(rig.weights),
+                       pose.bone_affines(), out=out)
 
 
 def _skin_poses(rig: Rig, poses: Poses, out) -> np.ndarray:
-    rest, joints, weights = _mesh_args(rig.vertices, rig.joints, rig.weights)
+    rest, joints, weights = _mesh_args(kernel_array(rig.vertices), kernel_array(rig.joints), kernel_array(rig.weights))
     # one compiled variant: the rig's own arrays are these types already (the loaders make them so)
     joints, weights = np.ascontiguousarray(joints, np.int64), np.ascontiguousarray(weights, np.float64)
     rest = np.ascontiguousarray(rest)

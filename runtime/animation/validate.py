@@ -30,6 +30,8 @@ WEIGHT_SUM_TOLERANCE = tol.weight_sum
 #: lands within ~8e-16 (4 roundings and 3 additions of 2^-53 each), so a second ``check_mesh`` never
 #: changes a row again: the function is idempotent, which save -> load round trips rely on.
 EXACT_SUM_TOLERANCE = tol.exact_weight_sum
+#: dtype kinds of numpy's floating / integer types (bool, complex, strings and objects are neither)
+_REAL, _INTEGER = "fiu", "iu"
 
 
 def _prefix(source: str) -> str:
@@ -47,6 +49,48 @@ def _first_bad_row(mask: np.ndarray) -> int:
     """Index of the first True row of a (n,) or (n, k) boolean mask."""
     rows = mask if mask.ndim == 1 else mask.any(axis=1)
     return int(np.flatnonzero(rows)[0])
+
+
+def _row_sums(weights: np.ndarray) -> np.ndarray:
+    """(n,) sums of the rows, added left to right (as ``weights.sum(axis=1)`` does for a few columns,
+    and several times faster on them): one summation order for both paths of ``check_mesh``."""
+    columns = weights.T
+    total = columns[0]
+    for column in columns[1:]:
+        total = total + column
+    return total
+
+
+def _clean_joints(joints, weights, n_bones):
+    """``joints`` with unused slots set to bone 0 when the influences (float64 / int64, shapes
+    checked) are otherwise already what ``check_mesh`` makes of them, so that it would return them
+    unchanged; None sends them through the full check and its repairs. The cheap tests of a rig made
+    from another rig's arrays (every cut and tear makes one), slot by slot: columns, not rows."""
+    if weights.shape[1] != MAX_INFLUENCES or len(weights) == 0:
+        return None
+    if not (weights.min() >= 0.0 and np.isfinite(weights.sum())):       # (NaN fails the comparison)
+        return None
+    used = weights > 0
+    slot = used.T
+    # weighted slots first, so slot 0 weighted means no empty row
+    if not slot[0].all() or (slot[2] > slot[1]).any() or (slot[3] > slot[2]).any():
+        return None
+    joints = np.where(used, joints, 0)
+    if joints.min() < 0 or (n_bones is not None and joints.max() >= n_bones):
+        return None
+    bone = joints.T
+    twice = (slot[1] & (bone[0] == bone[1])) | (slot[2] & ((bone[0] == bone[2]) | (bone[1] == bone[2]))) \
+        | (slot[3] & ((bone[0] == bone[3]) | (bone[1] == bone[3]) | (bone[2] == bone[3])))
+    if twice.any() or np.abs(_row_sums(weights) - 1.0).max() > EXACT_SUM_TOLERANCE:
+        return None
+    return joints
+
+
+def warn_dropped_influences(source: str, n_vertices: int, most: int) -> None:
+    """The one warning for vertices with more than 4 influences cut to their 4 largest (glTF
+    files here, assimp's conversions in ``cgaskin.rigs.assimp``)."""
+    warn(f"{_prefix(source)}{n_vertices} vertices have more than {MAX_INFLUENCES} bone influences (up "
+         f"to {most}); kept the {MAX_INFLUENCES} largest weights of each and renormalised")
 
 
 def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, source: str = ""):
@@ -98,12 +142,13 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
     # --- vertices ---------------------------------------------------------------------------
     if vertices.ndim != 2 or vertices.shape[1] != 3:
         raise InvalidInputError(f"{pre}vertices must have shape (n, 3), got {vertices.shape}")
-    if not (np.issubdtype(vertices.dtype, np.floating) or np.issubdtype(vertices.dtype, np.integer)):
+    if vertices.dtype.kind not in _REAL:
         raise InvalidInputError(f"{pre}vertices must be real numbers, got dtype {vertices.dtype}")
-    vertices = vertices.astype(np.float64)
+    vertices = vertices.astype(np.float64, copy=False)   # (a copy already: _as_array)
     n = len(vertices)
-    bad = ~np.isfinite(vertices)
-    if bad.any():
+    # (a finite sum is the cheap proof that every value is; an overflowing one is checked value by value)
+    bad = None if np.isfinite(vertices.sum()) else ~np.isfinite(vertices)
+    if bad is not None and bad.any():
         v = _first_bad_row(bad)
         raise InvalidInputError(
             f"{pre}vertex {v} has a non-finite position {vertices[v].tolist()} "
@@ -114,11 +159,11 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
         faces = faces.reshape(0, 3)
     if faces.ndim != 2 or faces.shape[1] != 3:
         raise InvalidInputError(f"{pre}faces must have shape (m, 3) (triangles), got {faces.shape}")
-    if not np.issubdtype(faces.dtype, np.integer):
+    if faces.dtype.kind not in _INTEGER:
         raise InvalidInputError(f"{pre}faces must hold integer vertex indices, got dtype {faces.dtype}")
-    faces = faces.astype(np.int64)
-    bad = (faces < 0) | (faces >= n)
-    if bad.any():
+    faces = faces.astype(np.int64, copy=False)
+    if faces.size and (faces.min() < 0 or faces.max() >= n):
+        bad = (faces < 0) | (faces >= n)
         f = _first_bad_row(bad)
         raise InvalidInputError(
             f"{pre}face {f} = {faces[f].tolist()} refers to a vertex outside [0, {n}) "
@@ -130,12 +175,15 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
                                 f"got {weights.shape}")
     if joints.shape != weights.shape:
         raise InvalidInputError(f"{pre}joints must have the shape of weights {weights.shape}, got {joints.shape}")
-    if not (np.issubdtype(weights.dtype, np.floating) or np.issubdtype(weights.dtype, np.integer)):
+    if weights.dtype.kind not in _REAL:
         raise InvalidInputError(f"{pre}weights must be real numbers, got dtype {weights.dtype}")
-    if not np.issubdtype(joints.dtype, np.integer):
+    if joints.dtype.kind not in _INTEGER:
         raise InvalidInputError(f"{pre}joints must hold integer bone indices, got dtype {joints.dtype}")
-    weights = weights.astype(np.float64)
-    joints = joints.astype(np.int64)
+    weights = weights.astype(np.float64, copy=False)
+    joints = joints.astype(np.int64, copy=False)
+    clean = _clean_joints(joints, weights, n_bones)
+    if clean is not None:
+        return vertices, faces, clean, np.ascontiguousarray(weights)
 
     bad = ~np.isfinite(weights)
     if bad.any():
@@ -187,8 +235,7 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
         weights[rows[:, None], drop] = 0.0
         joints[rows[:, None], drop] = 0
         used[rows[:, None], drop] = False
-        warn(f"{pre}{len(rows)} vertices have more than {MAX_INFLUENCES} bone influences (up to "
-             f"{int(counts.max())}); kept the {MAX_INFLUENCES} largest weights of each and renormalised")
+        warn_dropped_influences(source, len(rows), int(counts.max()))
 
     # --- compact the used slots to the front, keeping their order, then pad/trim to 4 ----------
     order = np.argsort(~used, axis=1, kind="stable")
@@ -198,12 +245,12 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
         pad = MAX_INFLUENCES - k
         weights = np.concatenate([weights, np.zeros((n, pad))], axis=1)
         joints = np.concatenate([joints, np.zeros((n, pad), dtype=np.int64)], axis=1)
-    else:
+    elif k > MAX_INFLUENCES:
         weights = np.ascontiguousarray(weights[:, :MAX_INFLUENCES])
         joints = np.ascontiguousarray(joints[:, :MAX_INFLUENCES])
 
     # --- rows must sum to 1 ----------------------------------------------------------------------
-    sums = weights.sum(axis=1)
+    sums = _row_sums(weights)
     deviation = np.abs(sums - 1.0)
     # over-4 rows were cut, so they are always renormalised (silently: warned above)
     off = (deviation > EXACT_SUM_TOLERANCE) | over

@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.cache import rig_cached
+from .._shared.frozen import kernel_array
 from .._shared.jit import F2, I1, I2, record
 from ..animation.rig import Rig
 from ..errors import InvalidInputError
@@ -39,7 +40,7 @@ def _build_tear_topology(rig) -> Topology:
     labels = _labels(rig)
     if not labels.any():
         return rig_topology(rig)
-    return topology(rig.vertices, rig.faces, labels)
+    return topology(kernel_array(rig.vertices), kernel_array(rig.faces), labels)
 
 
 def tear_topology(rig) -> Topology:
@@ -109,10 +110,8 @@ class MeshArrays(NamedTuple):
 
 
 def _checked_mesh(rig) -> MeshArrays:
-    vertices = np.asarray(rig.vertices)
-    faces = np.asarray(rig.faces)
-    joints = np.asarray(rig.joints)
-    weights = np.asarray(rig.weights)
+    # (the kernels only read them: the writeable buffers behind the rig's read-only arrays, one type)
+    vertices, faces, joints, weights = (kernel_array(a) for a in (rig.vertices, rig.faces, rig.joints, rig.weights))
     n = len(vertices)
     if vertices.ndim != 2 or vertices.shape[1] != 3 or vertices.dtype.kind not in "fiu":
         raise InvalidInputError(f"rig.vertices must be a real (n, 3) array, got shape {vertices.shape} "

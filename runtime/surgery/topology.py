@@ -32,6 +32,7 @@ import numpy as np
 
 from .._shared import cache
 from .._shared.cache import rig_cached
+from .._shared.frozen import kernel_array
 from .._shared.jit import I1, I2, i8, kernel
 from ..errors import InvalidInputError
 from .weld import _weld
@@ -338,7 +339,8 @@ def checked_topology(vertices, faces, labels=None) -> Topology:
 
 
 def _build_topology(rig) -> Topology:
-    return topology(rig.vertices, rig.faces)
+    # (the writeable buffers behind the rig's read-only arrays: the kernels' one compiled type)
+    return topology(kernel_array(rig.vertices), kernel_array(rig.faces))
 
 
 def rig_topology(rig) -> Topology:

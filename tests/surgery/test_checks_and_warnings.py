@@ -37,8 +37,17 @@ BAD = {
 }
 
 
+#: the only bad input a Rig can hold (a cut's empty half is a rig without faces): the others are
+#: refused where the rig is made (issue 22), by the same check_mesh, so no operation ever sees them
+HELD_BY_A_RIG = {"no faces"}
+
+
 @pytest.mark.parametrize("bad", sorted(BAD))
 def test_cut_and_tear_refuse_the_same_input_with_the_same_error(bad):
+    if bad not in HELD_BY_A_RIG:
+        with pytest.raises(InvalidInputError):
+            BAD[bad](cgaskin.capsule_arm())
+        return
     rig = BAD[bad](cgaskin.capsule_arm())
     messages = set()
     for name, operation in _operations(rig).items():

@@ -89,7 +89,8 @@ def test_caller_rig_is_not_modified():
     a, b = cut(rig, [1, 1, 0], [1.5, 0, 0], pose=pose, cap=True)
     assert np.array_equal(rig.vertices, before["v"]) and np.array_equal(rig.faces, before["f"])
     assert np.array_equal(rig.weights, before["w"])
-    assert a.vertices.flags.writeable and not np.shares_memory(a.vertices, rig.vertices)
+    # a new rig of its own arrays, read-only like every rig's (issue 22)
+    assert not a.vertices.flags.writeable and not np.shares_memory(a.vertices, rig.vertices)
 
 
 def test_posed_cut_places_new_vertices_on_the_posed_plane():

@@ -204,8 +204,8 @@ def test_skinning_counts_bad_input_like_numba(c_libs, models_dir):
     rig, pose = fox_posed(models_dir)
     affines = np.ascontiguousarray(pose.bone_affines())
     rest = np.ascontiguousarray(rig.vertices, np.float64)
-    joints = np.ascontiguousarray(rig.joints, np.int32)
-    weights = np.ascontiguousarray(rig.weights, np.float64)
+    joints = np.array(rig.joints, np.int32)                 # (copies to spoil: a rig's arrays are read-only)
+    weights = np.array(rig.weights, np.float64)
     joints[3, 0], joints[10, 1], joints[11, 3] = -1, len(affines), 2 ** 30
     weights[20, 0], weights[21, 2] = -0.5, np.nan
     out, ref = np.empty_like(rest), np.empty_like(rest)

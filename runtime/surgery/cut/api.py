@@ -53,7 +53,7 @@ from ..._shared.jit import F1, f8, precompiled
 from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
-from ...errors import InvalidInputError, PlacementWarning
+from ...errors import InvalidInputError, PlacementWarning, PlaneMissesMeshWarning
 from ...generated.kernels import plane_from_normal_distance
 from ...tolerances import tol
 from ..new_vertices import blend_weight_rows, interpolate_attribute, on_edges, place_in_rest
@@ -73,10 +73,6 @@ precompiled(plane_from_normal_distance, (F1, f8), cost=0.1)
 ON_PLANE_TOLERANCE, PLACEMENT_TOLERANCE = tol.on_plane, tol.placement
 
 
-class PlaneMissesMeshWarning(UserWarning):
-    """The cutting plane does not cross the mesh: one half is empty."""
-
-
 # ---- argument checks ----------------------------------------------------------------------------------
 def _plane(normal, point) -> np.ndarray:
     n = float_array(normal, "normal", 3, ndim=1)
@@ -91,16 +87,14 @@ def _plane(normal, point) -> np.ndarray:
 def _empty_like(rig, name) -> Rig:
     attributes = {k: np.empty((0,) + np.asarray(v).shape[1:], np.asarray(v).dtype)
                   for k, v in rig.attributes.items()}
-    return Rig(vertices=np.empty((0, 3)), faces=np.empty((0, 3), np.int64),
-               joints=np.empty((0, 4), np.int64), weights=np.empty((0, 4)), skeleton=rig.skeleton,
-               clips=list(rig.clips), attributes=attributes, name=name)
+    return Rig.of_checked(np.empty((0, 3)), np.empty((0, 3), np.int64), np.empty((0, 4), np.int64),
+                          np.empty((0, 4)), rig.skeleton, rig.clips, attributes, name)
 
 
 def _copy(rig, name) -> Rig:
-    return Rig(vertices=np.array(rig.vertices, dtype=np.float64), faces=np.array(rig.faces),
-               joints=np.array(rig.joints), weights=np.array(rig.weights), skeleton=rig.skeleton,
-               clips=list(rig.clips), attributes={k: np.array(v) for k, v in rig.attributes.items()},
-               name=name)
+    return Rig.of_checked(np.array(rig.vertices, dtype=np.float64), np.array(rig.faces), np.array(rig.joints),
+                          np.array(rig.weights), rig.skeleton, rig.clips,
+                          {k: np.array(v) for k, v in rig.attributes.items()}, name)
 
 
 def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutResult:
@@ -132,8 +126,7 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
     arrays = _split_arrays(rig, vertices, joints, weights, split.pos_src, split.neg_src, new, new_rest,
                            new_joints, new_weights)
     names = (f"{rig.name}_positive", f"{rig.name}_negative")
-    halves = [Rig(vertices=v, faces=f, joints=j, weights=w, skeleton=rig.skeleton, clips=list(rig.clips),
-                  attributes=a, name=names[h])
+    halves = [Rig.of_checked(v, f, j, w, rig.skeleton, rig.clips, a, names[h])
               for h, ((v, j, w, a), f) in enumerate(zip(arrays, (split.pos_faces, split.neg_faces)))]
     new_sources = np.full(len(split.new_lo), NEW_VERTEX, np.int64)
     sources = [np.concatenate([split.pos_src, new_sources]), np.concatenate([split.neg_src, new_sources])]

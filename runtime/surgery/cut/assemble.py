@@ -1,6 +1,7 @@
 """Step 6 of a cut: the per-vertex arrays of both halves (originals they keep, then the new vertices)."""
 import numpy as np
 
+from ..._shared.frozen import kernel_array
 from ..._shared.jit import F2, I1, I2, kernel
 from ..new_vertices import interpolate_attribute
 
@@ -33,7 +34,7 @@ def _split_arrays(rig, vertices, joints, weights, pos_src, neg_src, new, new_res
            _assemble(weights, pos_src, neg_src, new_weights)]
     attributes = ({}, {})
     for key, values in rig.attributes.items():
-        values = np.asarray(values)
+        values = kernel_array(np.asarray(values))         # (read-only: its writeable buffer, one kernel type)
         flat = np.ascontiguousarray(values.reshape(len(values), -1))
         if flat.dtype.kind != "f":
             flat = flat.astype(np.float64)

@@ -13,6 +13,7 @@ from functools import cached_property
 import numpy as np
 
 from ..._shared.cache import rig_cached, seed
+from ..._shared.frozen import kernel_array
 from ...animation.skinning import skin
 from ...errors import InvalidInputError
 from ..bvh import TriangleBVH
@@ -31,7 +32,7 @@ def _arrays(rig):
     attributes = {}
     for name, values in rig.attributes.items():
         if name != TEAR_LABEL:
-            values = np.asarray(values, dtype=np.float64)
+            values = kernel_array(np.asarray(values, dtype=np.float64))   # (read-only: its buffer, one kernel type)
             attributes[name] = (np.ascontiguousarray(values.reshape(len(values), -1)), values.shape[1:])
     mesh = mesh_arrays(rig)
     return mesh.vertices, mesh.faces, mesh.joints, mesh.weights, _labels(rig), attributes
@@ -150,7 +151,7 @@ def torn_rig(rig, source: RigSource, splice):
     faces[splice.kept] = splice.kept_corners
     keep = np.ones(len(faces), bool)
     keep[splice.removed] = False
-    torn = rig.with_mesh(vertices, np.concatenate((faces[keep], splice.pieces)), joints, weights, attributes)
+    torn = rig.with_checked_mesh(vertices, np.concatenate((faces[keep], splice.pieces)), joints, weights, attributes)
     boundary = np.concatenate((source.boundary, np.zeros(added, bool)))
     boundary[splice.boundary_rows] = splice.boundary_flags
     seed(torn, "tear.boundary", boundary)
