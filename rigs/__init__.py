@@ -12,6 +12,7 @@ from pathlib import Path
 
 from ..animation.rig import Rig
 from ..errors import InvalidInputError, ModelFormatError
+from ._model_file import check_model_file
 
 GLTF_EXTENSIONS = (".glb", ".gltf")
 SAVE_EXTENSIONS = GLTF_EXTENSIONS
@@ -51,6 +52,8 @@ def load(path, **options):
     """
     path = _path(path, "path")
     suffix = path.suffix.lower()
+    # what the path is when it is no model file: missing, /dev/null, a pipe, ...
+    check_model_file(path, empty_ok=suffix not in GLTF_EXTENSIONS)
     if suffix in GLTF_EXTENSIONS:
         from .gltf import load_gltf
         if options:

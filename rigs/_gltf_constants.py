@@ -57,3 +57,10 @@ LEGACY_WEIGHT_RESIDUALS = ("_CGASKIN_WEIGHTS_{}_LO", "_CGASKIN_WEIGHTS_{}_LO2")
 ATTRIBUTE_WIDTHS = "ATTRIBUTE_WIDTHS"
 #: inverse bind matrices and node matrices must be affine: last row (0, 0, 0, 1) within this
 AFFINE_TOLERANCE = 1e-6
+#: in ``extras["cgaskin"]``: {"_NAME": rig name} of the attributes written under another name
+#: than the rig's because glTF has no place for theirs ("FOO" -> "_FOO"; ``_gltf_attributes``)
+ATTRIBUTE_NAMES = "ATTRIBUTE_NAMES"
+#: in a node's ``extras["cgaskin"]``: the index of the node it duplicates. ``save_gltf`` writes one
+#: such child (no transform, no children) per further bone of a skeleton node that several bones
+#: share with different inverse bind matrices (skins merged on loading); the loader folds it back
+JOINT_OF = "JOINT_OF"

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import struct
+import sys
 from pathlib import Path
 
 import pygltflib
@@ -14,6 +15,7 @@ import pygltflib
 from ..errors import ModelFormatError
 from ._gltf_constants import GLB_BIN_CHUNK, GLB_JSON_CHUNK, GLB_MAGIC, UNSUPPORTED_EXTENSIONS
 from ._gltf_document import _GltfFile
+from ._model_file import check_model_file
 
 
 # --- reading the container --------------------------------------------------------------------
@@ -21,12 +23,9 @@ from ._gltf_document import _GltfFile
 def _read_document(path: Path) -> _GltfFile:
     """Read a .gltf or .glb file (told apart by content, not by extension)."""
     name = path.name
+    check_model_file(path)  # missing, a directory, a device (/dev/null), a pipe, empty
     try:
         data = path.read_bytes()
-    except FileNotFoundError:
-        raise ModelFormatError(f"{name}: no such file ({path})") from None
-    except IsADirectoryError:
-        raise ModelFormatError(f"{name}: is a directory, not a glTF file ({path})") from None
     except OSError as exc:
         raise ModelFormatError(f"{name}: cannot read the file: {exc}") from None
 
@@ -46,6 +45,12 @@ def _read_document(path: Path) -> _GltfFile:
         raw = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ModelFormatError(f"{name}: the glTF JSON is malformed: {exc}") from None
+    except RecursionError:
+        # json's decoder recurses once per nested array/object: a file nested thousands deep is
+        # no glTF (its documents nest a few levels, extras a few more), whatever else it is
+        raise ModelFormatError(f"{name}: the glTF JSON nests arrays/objects deeper than Python's "
+                               f"parser can follow ({sys.getrecursionlimit()} levels); the file is "
+                               f"corrupt or not a glTF file") from None
     if not isinstance(raw, dict):
         raise ModelFormatError(f"{name}: the glTF JSON must be an object, got {type(raw).__name__}")
     version = raw.get("asset", {}).get("version") if isinstance(raw.get("asset"), dict) else None

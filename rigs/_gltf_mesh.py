@@ -1,5 +1,5 @@
 """Mesh primitives of a glTF document (spec 3.7 "Geometry"): one primitive -> positions, triangles,
-joints and weights (residuals of ``save_gltf`` applied), NORMAL / TEXCOORD_0 / "_NAME" attributes;
+joints and weights (residuals of ``save_gltf`` applied), other attributes (``_gltf_attributes``);
 the primitives of all skinned mesh nodes merged into one mesh, joint slots mapped to bones.
 """
 from __future__ import annotations
@@ -8,8 +8,9 @@ import numpy as np
 import pygltflib
 
 from ..errors import NoSkinError
-from ._gltf_constants import (ATTRIBUTE_WIDTHS, COMPONENT_NAMES, EXTRAS_KEY, INTEGER_INDEX_TYPES,
+from ._gltf_constants import (COMPONENT_NAMES, INTEGER_INDEX_TYPES,
                               LEGACY_WEIGHT_RESIDUALS, MODE_NAMES, POSITION_RESIDUALS, WEIGHT_RESIDUALS)
+from ._gltf_attributes import read_attributes
 from ._gltf_document import _GltfFile
 from ._residuals import with_residuals
 
@@ -43,17 +44,6 @@ def _triangles(f: _GltfFile, mode: int, idx: np.ndarray, where: str) -> np.ndarr
     # strips are stitched with degenerate triangles: they carry no surface, drop them
     keep = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
     return faces[keep]
-
-
-def _padded_widths(f, prim, where: str) -> dict:
-    """{"_NAME": width} of the application attributes that ``save_gltf`` wrote zero-padded."""
-    ours = prim.extras.get(EXTRAS_KEY) if isinstance(prim.extras, dict) else None
-    widths = ours.get(ATTRIBUTE_WIDTHS, {}) if isinstance(ours, dict) else {}
-    if not isinstance(widths, dict) or not all(
-            type(w) is int and 1 <= w <= 4 for w in widths.values()):
-        raise f.error(f"{where} extras.{EXTRAS_KEY}.{ATTRIBUTE_WIDTHS} must map attribute names to "
-                      f"widths 1..4, got {widths!r}")
-    return widths
 
 
 def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
@@ -103,27 +93,10 @@ def _read_primitive(f: _GltfFile, m: int, p: int, prim, skinned: bool):
         idx = np.arange(n, dtype=np.int64)  # non-indexed: vertices taken in order
     faces = _triangles(f, mode, idx, where)
 
-    out = {"positions": positions, "faces": faces, "attributes": {}}
-    residuals = {r.format(s) for r in LEGACY_WEIGHT_RESIDUALS for s in range(8)}
-    # NORMAL, TEXCOORD_0 and application-specific attributes ("_NAME", e.g. the tear's "_TEAR"
-    # labels): carried through cut, tear and export
-    custom = [(name, None) for name in attrs if name.startswith("_") and name not in residuals]
-    widths = _padded_widths(f, prim, where)
-    for name, width in (("NORMAL", 3), ("TEXCOORD_0", 2), *custom):
-        if name in attrs:
-            _, ctype, atype, _ = f.accessor_info(attrs[name], f"{where} {name}")
-            values = f.accessor(attrs[name], f"{where} {name}")
-            if values.ndim == 1:
-                values = values[:, None]
-            if values.ndim != 2 or (width is not None and values.shape[1] != width) or values.dtype != np.float64:
-                raise f.error(f"{where} {name} must be VEC{width or 'n'} of floats or normalized "
-                              f"integers, got {atype} {COMPONENT_NAMES[ctype]}")
-            if not np.isfinite(values).all():
-                v = int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])
-                raise f.error(f"{where} {name} holds non-finite values (vertex {v}: {values[v].tolist()})")
-            if name in widths:  # zero-padded by save_gltf to the width of the other "_" attributes
-                values = values[:, :widths[name]]
-            out["attributes"][name] = values
+    # NORMAL, TANGENT, TEXCOORD_n, COLOR_n and application-specific attributes ("_NAME", e.g. the
+    # tear's "_TEAR" labels): carried through cut, tear and export under the rig's names
+    out = {"positions": positions, "faces": faces,
+           "attributes": read_attributes(f, prim, attrs, where)}
 
     sets = sorted({int(k.split("_")[1]) for k in attrs
                    if k.split("_")[0] in ("JOINTS", "WEIGHTS") and k.split("_")[-1].isdigit()})

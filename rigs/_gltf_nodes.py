@@ -12,7 +12,8 @@ import numpy as np
 
 from ..algebra.transforms import matrix_to_trs, trs_matrix
 from ..animation.skeleton import Skeleton
-from ._gltf_constants import AFFINE_TOLERANCE, COMPONENT_NAMES, INVERSE_BIND_RESIDUALS, QUAT_UNIT_TOLERANCE
+from ._gltf_constants import (AFFINE_TOLERANCE, COMPONENT_NAMES, EXTRAS_KEY, INVERSE_BIND_RESIDUALS, JOINT_OF,
+                              QUAT_UNIT_TOLERANCE)
 from ._gltf_document import _GltfFile
 from ._residuals import with_residuals
 
@@ -140,14 +141,32 @@ def _read_skins(f: _GltfFile, skin_indices: list[int]):
                               f"{ibm[k, 3].tolist()})")
         slot_map = np.empty(len(joints), dtype=np.int64)
         for k, (node, matrix) in enumerate(zip(joints, ibm)):
+            # keyed by the file's joint node: a joint save_gltf added for a further bone of a
+            # node stays that bone even where its matrix equals the first bone's
             key = (node, np.asarray(matrix, dtype=np.float64).tobytes())
             if key not in keys:
                 keys[key] = len(bone_nodes)
-                bone_nodes.append(node)
+                bone_nodes.append(_joint_node(f, node))
                 inverse_bind.append(np.array(matrix, dtype=np.float64))
             slot_map[k] = keys[key]
         maps[s] = slot_map
     return bone_nodes, np.array(inverse_bind).reshape(-1, 4, 4), maps
+
+
+def _joint_node(f: _GltfFile, j: int) -> int:
+    """The node whose motion joint ``j`` has: ``j`` itself, or the node it duplicates when it is a
+    joint ``save_gltf`` added for a further bone of a shared node (``JOINT_OF``: a child of that
+    node without transform, children, mesh or skin; anything else is an ordinary node)."""
+    node = f.items("nodes")[j]
+    ours = node.extras.get(EXTRAS_KEY) if isinstance(node.extras, dict) else None
+    of = ours.get(JOINT_OF) if isinstance(ours, dict) else None
+    nodes = f.items("nodes")
+    if isinstance(of, bool) or not isinstance(of, int) or not 0 <= of < len(nodes):
+        return j
+    plain = (node.children in (None, []) and node.mesh is None and node.skin is None
+             and node.camera is None and node.translation is None and node.rotation is None
+             and node.scale is None and node.matrix is None)
+    return of if plain and j in (nodes[of].children or []) else j
 
 
 def _skeleton_order(bone_nodes: list[int], parents: list[int], children) -> list[int]:

@@ -13,7 +13,8 @@ keeps exactly this behaviour inside the one skinning model cgaskin has:
   transform, so ``rig.vertices`` is what a viewer shows at rest and ``skin(rig, rig.rest_pose())``
   returns them again; in a file with skins, a prop below a joint lies where the skinned mesh's
   bind pose puts that joint, so the stored mesh is one consistent body;
-* NORMAL goes to the bind pose with the inverse transpose (``n · B⁻¹``, renormalised);
+* NORMAL goes to the bind pose with the inverse transpose (``n · B⁻¹``, renormalised), TANGENT
+  with ``B`` itself (renormalised, its sign w flipped by a mirror);
 * a node whose global transform mirrors (negative determinant) has its faces' winding reversed:
   glTF says the determinant selects the winding order of a triangle primitive, and cgaskin's faces
   are counter-clockwise in the bind pose, so outward stays outward;
@@ -154,6 +155,13 @@ def _to_bind_pose(part: dict, bind: np.ndarray, inverse_bind: np.ndarray, bone: 
         normals = attributes["NORMAL"] @ inverse_bind[:3, :3]
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         attributes["NORMAL"] = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    if "TANGENT" in attributes:           # a direction in the surface: x' = B x, renormalised; the
+        tangents = attributes["TANGENT"].copy()  # sign w flips with a mirror, as the bitangent does
+        xyz = tangents[:, :3] @ a.T
+        length = np.linalg.norm(xyz, axis=1, keepdims=True)
+        tangents[:, :3] = np.divide(xyz, length, out=np.zeros_like(xyz), where=length > 0)
+        tangents[:, 3] *= np.sign(np.linalg.det(a)) or 1.0
+        attributes["TANGENT"] = tangents
     n = len(part["positions"])
     return {"positions": part["positions"] @ a.T + bind[:3, 3], "faces": faces,
             "joints": np.full((n, 1), bone, dtype=np.int64), "weights": np.ones((n, 1)),

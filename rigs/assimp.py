@@ -22,7 +22,8 @@ What the conversion does (assimp 5.2.5, checked on the shipped models):
   pivot nodes) are kept. The glTF exporter writes only the *first* 4 influences of a vertex, in file
   order, dropping the rest even when they weigh more; ``-lbw`` (LimitBoneWeights, the one
   post-processing step asked for, which leaves the vertex count alone) first keeps the 4 largest
-  and renormalises them, as cgaskin does for glTF files. Weights that still do not sum to 1 are
+  and renormalises them, as cgaskin does for glTF files, and cgaskin warns as it does for glTF
+  files (``_assimp_influences``: -lbw itself is silent). Weights that still do not sum to 1 are
   renormalised by the glTF loader.
 * The ``.glb`` files shipped beside each ``.fbx`` in the models folder are exactly this conversion;
   their accessors are byte-identical to a fresh one (only unused padding between buffer views can
@@ -42,6 +43,10 @@ from dataclasses import replace
 from .._shared.warn import warn
 from ..animation.rig import Rig
 from ..errors import ModelFormatError
+from ._assimp_dump import assxml_dump
+from ._assimp_influences import removed_weights, warn_about_dropped_influences
+from ._assimp_ticks import repair_key_times
+from ._model_file import check_model_file
 
 __all__ = ["load_assimp", "assimp_executable", "assimp_formats", "DEFAULT_TIMEOUT_S"]
 
@@ -102,7 +107,7 @@ def _failure_text(output: str) -> str:
 def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | None = None) -> Rig:
     """Load a model in any format assimp reads (FBX, DAE, OBJ, PLY, STL, ...) as a ``Rig``.
 
-    The file is converted with ``assimp export <path> <tmp>/<stem>.glb -fglb2 -lbw`` (no other
+    The file is converted with ``assimp export <path> <tmp>/<stem>.glb -fglb2 -lbw -l`` (no other
     post-processing; see the module docstring for what assimp does) and read by
     ``cgaskin.rigs.gltf.load_gltf`` (meshes without a skin become rigid bones, see there).
 
@@ -115,19 +120,15 @@ def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | N
     Raises ModelFormatError when the file is missing, assimp cannot read it, the conversion times
     out, or the ``assimp`` tool is not installed; NoSkinError when it holds no mesh.
     """
-    from .gltf import load_gltf   # imported here: gltf.py imports nothing of this module
-
     src = pathlib.Path(os.fspath(path))
-    if src.is_dir():
-        raise ModelFormatError(f"{src}: is a directory, not a model file")
-    if not src.is_file():
-        raise ModelFormatError(f"{src}: no such file")
+    check_model_file(src, empty_ok=True)  # missing, a directory, a device (/dev/null), a pipe
     exe = executable or assimp_executable()
     src = src.resolve()   # absolute: a name starting with '-' must not read as an option
 
     with tempfile.TemporaryDirectory(prefix="cgaskin-assimp-") as tmp:
         out = pathlib.Path(tmp) / f"{src.stem or 'model'}.glb"
-        cmd = [exe, "export", str(src), str(out), "-fglb2", "-lbw"]
+        # -l: assimp's log says how many weights -lbw removed (see _assimp_influences)
+        cmd = [exe, "export", str(src), str(out), "-fglb2", "-lbw", "-l"]
         try:
             # cwd=tmp: whatever else the tool writes (logs, extracted textures) goes away with tmp.
             proc = subprocess.run(cmd, cwd=tmp, stdin=subprocess.DEVNULL, capture_output=True,
@@ -138,19 +139,39 @@ def load_assimp(path, *, timeout: float = DEFAULT_TIMEOUT_S, executable: str | N
             raise ModelFormatError(f"{src}: assimp did not finish converting within {timeout:g} s") from None
         if proc.returncode != 0 or not out.is_file() or out.stat().st_size == 0:
             raise _cannot_read(src, exe, proc.returncode, proc.stdout + "\n" + proc.stderr)
-        try:
-            # The glTF loader warns about repaired weights naming the file it read; re-issue those
-            # warnings naming the user's file instead of our temporary copy.
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                rig = load_gltf(out)
-        except ModelFormatError as exc:
-            # Same error class (NoSkinError stays NoSkinError), naming the user's file, not our tmp one.
-            message = str(exc)
-            where = f"{src} (converted by assimp)"
-            message = message.replace(str(out), where) if str(out) in message else message.replace(out.name, where)
-            raise type(exc)(message) from exc
+        removed = removed_weights(proc.stdout + proc.stderr)
+        if removed:  # the warning glTF files with more than 4 influences get
+            warn_about_dropped_influences(exe, src, pathlib.Path(tmp), timeout, removed)
+        rig, caught = _read_converted(out, src)
+        if any(_UNTIMED in str(w.message) for w in caught) and repair_key_times(
+                out, assxml_dump(exe, src, pathlib.Path(tmp), timeout), src.name):
+            rig, caught = _read_converted(out, src)   # with the times of 0-ticks-per-second clips
         for w in caught:
-            warn(str(w.message).replace(str(out), str(src)).replace(out.name, src.name),
-                 w.category)
+            message = str(w.message).replace(str(out), str(src)).replace(out.name, src.name)
+            if _UNTIMED in message:  # a clip dropped all the same: say where its times came from
+                message += (" (assimp converts the keys of an animation whose ticks per second are 0 "
+                            "or missing to non-finite times; set them in the source)")
+            warn(message, w.category)
     return replace(rig, name=src.stem)
+
+
+#: what the glTF loader's warning about a clip dropped for non-finite key times says
+_UNTIMED = "key times hold non-finite values"
+
+
+def _read_converted(out: pathlib.Path, src: pathlib.Path):
+    """(rig, warnings) of assimp's conversion ``out`` of ``src``: the glTF loader names the file it
+    read, so its warnings are recorded (the caller re-issues them naming the user's file) and its
+    errors re-raised naming ``src``."""
+    from .gltf import load_gltf   # imported here: gltf.py imports nothing of this module
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            rig = load_gltf(out)
+    except ModelFormatError as exc:
+        # Same error class (NoSkinError stays NoSkinError), naming the user's file, not our tmp one.
+        message = str(exc)
+        where = f"{src} (converted by assimp)"
+        message = message.replace(str(out), where) if str(out) in message else message.replace(out.name, where)
+        raise type(exc)(message) from exc
+    return rig, caught

@@ -1,9 +1,13 @@
 """glTF 2.0 exporter: ``Rig`` -> skinned .glb or .gltf.
 
-The file holds one mesh with one triangle primitive (POSITION, NORMAL / TEXCOORD_0 when the rig
-has them, JOINTS_0, WEIGHTS_0, uint32 indices), the skeleton nodes in the rig's order (so node
-``i`` of the file is skeleton node ``i``), one skin whose joints are the bones, a root mesh node
-without transform that carries the skin, one scene, and one animation per clip.
+The file holds one mesh with one triangle primitive (POSITION, the rig's attributes under the
+names of ``_gltf_attributes``: NORMAL, TANGENT, TEXCOORD_n, COLOR_n, "_NAME", anything else as
+"_NAME" mapped back in the extras; JOINTS_0, WEIGHTS_0, uint32 indices), the skeleton nodes in the
+rig's order (so node ``i`` of the file is skeleton node ``i``), one skin whose joints are the bones
+(a skeleton node that several bones share, as skins merged on loading do, is the joint of the
+first; each other one gets a child node without transform, marked ``JOINT_OF`` in its extras,
+which the loader folds back), a root mesh node without transform that carries the skin, one
+scene, and one animation per clip.
 
 Precision. glTF requires float32 for positions, weights, inverse bind matrices and keyframes;
 node transforms are JSON numbers and keep float64. Hence:
@@ -11,8 +15,8 @@ node transforms are JSON numbers and keep float64. Hence:
 * a rig loaded from a glTF file (whose data were float32 to begin with) saves and reloads to
   bit-identical arrays: vertices, faces, joints, weights, every skeleton array, every clip;
 * a rig built in float64 (the capsule arm, a ``clip_from_poses`` clip, an edited skeleton)
-  reloads bit-identical too, except its attributes (NORMAL, TEXCOORD_0, "_NAME"),
-  which reload to float32 rounding (relative 6e-8). So ``skin(loaded, loaded.pose(clip, t))`` is
+  reloads bit-identical too, except its attributes (NORMAL, TEXCOORD_0, "_NAME", ...), which
+  reload under their names to float32 rounding (relative 6e-8). So ``skin(loaded, loaded.pose(clip, t))`` is
   ``skin(rig, rig.pose(clip, t))`` exactly, and a posed tear stroke continues a saved slit.
 
 Each float32 accessor of positions, weights, inverse bind matrices, key times and keyframe values
@@ -52,7 +56,8 @@ from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS
 from ..animation.rig import Rig
 from ..animation.validate import EXACT_SUM_TOLERANCE, check_mesh
 from ..errors import InvalidInputError
-from ._gltf_constants import (ATTRIBUTE_WIDTHS, EXTRAS_KEY, INPUT_RESIDUALS, INVERSE_BIND_RESIDUALS,
+from ._gltf_attributes import gltf_attribute_names
+from ._gltf_constants import (ATTRIBUTE_NAMES, ATTRIBUTE_WIDTHS, EXTRAS_KEY, JOINT_OF, INPUT_RESIDUALS, INVERSE_BIND_RESIDUALS,
                               OUTPUT_RESIDUALS, POSITION_RESIDUALS, WEIGHT_RESIDUALS)
 from ._residuals import split
 from .gltf import trs_to_matrix
@@ -62,9 +67,6 @@ __all__ = ["save_gltf", "save_mesh"]
 FLOAT, UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT = 5126, 5121, 5123, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 TYPES = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4", 16: "MAT4"}
-#: glTF names of per-vertex attributes and their widths; anything else is written with a leading
-#: underscore, the spec's prefix for application-specific attributes
-KNOWN_ATTRIBUTES = {"NORMAL": 3, "TANGENT": 4, "TEXCOORD_0": 2, "TEXCOORD_1": 2, "COLOR_0": 4}
 
 
 class _BinaryBuilder:
@@ -137,10 +139,6 @@ def _check_skeleton(rig: Rig) -> None:
         raise InvalidInputError("the skeleton has no bones: a glTF skin needs at least one joint")
     if ((bones < 0) | (bones >= j)).any():
         raise InvalidInputError(f"skeleton.bone_nodes must index the {j} nodes, got {bones.tolist()}")
-    if len(np.unique(bones)) != b:
-        raise InvalidInputError(
-            "two bones share a skeleton node (they come from several skins with different inverse "
-            "bind matrices); a glTF skin needs unique joints, so this rig cannot be saved as one skin")
 
 
 def save_gltf(rig: Rig, path) -> Path:
@@ -150,7 +148,9 @@ def save_gltf(rig: Rig, path) -> Path:
     ----------
     rig : Rig
         vertices (n, 3), faces (m, 3), joints (n, 4) bone indices, weights (n, 4); attributes
-        (n, c) arrays are written as vertex attributes (NORMAL, TEXCOORD_0, ...).
+        (n, c) arrays are written as vertex attributes and reload under their names
+        (``_gltf_attributes``: NORMAL, TANGENT, TEXCOORD_n, COLOR_n, "_NAME", others renamed
+        "_NAME" in the file and mapped back by the extras).
     path : str or os.PathLike
         Ends in .glb or .gltf.
 
@@ -210,6 +210,7 @@ def save_gltf(rig: Rig, path) -> Path:
 
     animations, animated = _animations(rig, out)
     nodes = _skeleton_nodes(rig, animated)
+    joints = _joint_nodes(rig, nodes)
     mesh_node = len(nodes)
     nodes.append(pygltflib.Node(name=rig.name, mesh=0, skin=0))  # root, no transform: ignored anyway
     roots = [i for i in range(sk.n_nodes) if sk.parents[i] == -1] + [mesh_node]
@@ -222,7 +223,7 @@ def save_gltf(rig: Rig, path) -> Path:
         scenes=[pygltflib.Scene(nodes=roots)],
         nodes=nodes,
         meshes=[pygltflib.Mesh(name=rig.name, primitives=[primitive])],
-        skins=[pygltflib.Skin(joints=[int(b) for b in sk.bone_nodes], inverseBindMatrices=ibm,
+        skins=[pygltflib.Skin(joints=joints, inverseBindMatrices=ibm,
                               extras={EXTRAS_KEY: ibm_residuals} if ibm_residuals else {})],
         animations=animations,
         accessors=out.accessors,
@@ -233,19 +234,15 @@ def save_gltf(rig: Rig, path) -> Path:
 
 
 def _write_attributes(rig_attributes: dict, n: int, out: _BinaryBuilder, attributes: dict, extras: dict) -> None:
-    """Add the rig's (n, c) attributes to the primitive's ``attributes``: glTF's own names at their
-    widths, anything else as "_NAME", all application attributes at one width (zero-padded to the
-    widest, the true widths in ``extras``; see the module docstring)."""
-    written = {}
-    for name, values in rig_attributes.items():
-        values = np.asarray(values)
-        if values.ndim == 1:
-            values = values[:, None]
-        if values.ndim != 2 or len(values) != n or values.shape[1] not in (1, 2, 3, 4):
-            raise InvalidInputError(f"attribute {name!r} has shape {values.shape}; vertex attributes "
-                                    f"are ({n}, 1..4)")
-        gltf_name = name if KNOWN_ATTRIBUTES.get(name) == values.shape[1] else "_" + name.lstrip("_")
-        written[gltf_name] = _float32(values, f"attribute {name}")
+    """Add the rig's (n, c) attributes to the primitive's ``attributes`` under the names of
+    ``_gltf_attributes.gltf_attribute_names`` (renamed ones mapped back in ``extras``), all
+    application attributes at one width (zero-padded to the widest, the true widths in
+    ``extras``; see the module docstring)."""
+    arrays, renamed = gltf_attribute_names(rig_attributes, n)
+    written = {name: _float32(values, f"attribute {renamed.get(name, name)!r}")
+               for name, values in arrays.items()}
+    if renamed:
+        extras.setdefault(EXTRAS_KEY, {})[ATTRIBUTE_NAMES] = renamed
     widths = {name: values.shape[1] for name, values in written.items() if name.startswith("_")}
     common = max(widths.values(), default=0)
     if len(set(widths.values())) > 1:
@@ -326,6 +323,27 @@ def _skeleton_nodes(rig: Rig, animated: set) -> list:
             node.matrix = [float(x) for x in matrix.T.reshape(-1)]  # column-major
         nodes.append(node)
     return nodes
+
+
+def _joint_nodes(rig: Rig, nodes: list) -> list[int]:
+    """The file node of each bone (the skin's joints, which glTF wants unique).
+
+    A skeleton node that several bones share (skins merged on loading, each with its own inverse
+    bind matrix) is the joint of its first bone; each further bone gets a child node without
+    transform, so that it moves with the node in every pose and clip, in every reader, and its
+    extras name the node it duplicates (``JOINT_OF``) so that the loader folds it back.
+    """
+    names = rig.skeleton.names
+    joints, seen = [], set()
+    for b, k in enumerate(int(k) for k in rig.skeleton.bone_nodes):
+        if k not in seen:
+            seen.add(k)
+            joints.append(k)
+            continue
+        nodes[k].children.append(len(nodes))
+        nodes.append(pygltflib.Node(name=f"{names[k]}.bone{b}", extras={EXTRAS_KEY: {JOINT_OF: k}}))
+        joints.append(len(nodes) - 1)
+    return joints
 
 
 def _animations(rig: Rig, out: _BinaryBuilder):

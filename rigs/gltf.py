@@ -35,6 +35,7 @@ This module is the driver; the work is done by private modules, one topic each:
 to the JSON, buffers and accessors), ``_gltf_nodes`` (hierarchy, node transforms, skins,
 skeleton), ``_gltf_mesh`` (primitives, merged mesh), ``_gltf_rigid`` (meshes without a skin,
 and the skeleton and mesh of both kinds), ``_gltf_clips`` (animations) and
+``_gltf_attributes`` (vertex attributes other than positions and skinning, both ways) and
 ``_gltf_constants`` (the tables).
 """
 from __future__ import annotations
@@ -109,7 +110,9 @@ def load_gltf(path) -> Rig:
     Rig
         vertices (n, 3) float64, faces (m, 3) int64, joints (n, 4) int64, weights (n, 4) float64
         (rows sum to 1 in float64), skeleton, clips (one per animation, named ``animation.name`` or
-        ``clip{i}``), attributes NORMAL (n, 3) / TEXCOORD_0 (n, 2) when every primitive has them,
+        ``clip{i}``; an animation with NaN/infinite/unordered keys is dropped with a warning),
+        attributes NORMAL (n, 3), TANGENT (n, 4), TEXCOORD_n (n, 2), COLOR_n (n, 3 or 4) and
+        application-specific "_NAME" (n, c) when every primitive has them (``_gltf_attributes``),
         name = the file's stem.
 
     Raises
