@@ -157,9 +157,12 @@ def build(check: bool = False, directory: Path = GENERATED_DIR, log=print, repor
           targets=None) -> int:
     """Write generated/ (or, with check=True, compare it). Returns the number of stale files. ``report``:
     log the op-count table too. ``targets``: the printers to run (default: numba and every target
-    already in generated/); the others' files are written to ``generated/<target>/``."""
+    already in generated/); the others' files are written to ``generated/<target>/``. A check
+    compares every target already in generated/ as well: ``--check`` covers every stamped file there."""
     start = time.perf_counter()
-    targets = present_targets(directory) if targets is None else tuple(dict.fromkeys(("numba", *targets)))
+    if targets is None or check:        # a check covers every target in generated/, whatever --target says
+        targets = (*present_targets(directory), *(targets or ()))
+    targets = tuple(dict.fromkeys(("numba", *targets)))
     files = render(targets)
     if report:
         log(report_table())

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
+from pathlib import Path
 
 
 def _build(args) -> int:
@@ -22,8 +23,9 @@ def _build(args) -> int:
         if args.catalogue is None:
             stale = build.build(check=args.check, report=args.report, targets=targets)
         else:
+            # (no --target: numba and every target whose stamped files are beside the module already)
             stale = catalogue_build.build_catalogue(args.catalogue, args.out, check=args.check, report=args.report,
-                                                    targets=targets or ("numba",))
+                                                    targets=targets)
     except CodegenError as exc:                       # the user's catalogue or arguments: one line, no traceback
         print(f"cgaskin build: error: {exc}", file=sys.stderr)
         return 2
@@ -50,15 +52,36 @@ def _verify(args) -> int:
     return 0
 
 
+BENCHMARKS = {"skinning": "bench_skinning", "frame": "bench_frame", "animation": "bench_animation",
+              "cut": "bench_cut", "tear": "bench_tear", "fig1": "fig1_compare"}
+
+
+def benchmarks_root() -> Path | None:
+    """The source tree whose ``benchmarks/`` folder ``cgaskin bench`` runs: the one this cgaskin is
+    installed from (an editable install: ``cgaskin`` is its ``runtime/``), else the current folder
+    when it is such a tree; None when neither is (a wheel ships no benchmarks). The console script
+    needs this: unlike ``python -m cgaskin``, it does not have the current folder on ``sys.path``."""
+    for root in (Path(__file__).resolve().parents[2], Path.cwd()):
+        if (root / "pyproject.toml").is_file() and (root / "benchmarks" / "__init__.py").is_file():
+            return root
+    return None
+
+
 def _bench(args) -> int:
     import importlib
-    names = {"skinning": "benchmarks.bench_skinning", "frame": "benchmarks.bench_frame",
-             "animation": "benchmarks.bench_animation", "cut": "benchmarks.bench_cut", "tear": "benchmarks.bench_tear", "fig1": "benchmarks.fig1_compare"}
+    root = benchmarks_root()
+    if root is None:
+        print("cgaskin bench: error: the benchmarks are not installed with cgaskin (they live in the "
+              "benchmarks/ folder of its source tree): clone the repository, `pip install -e '.[bench]'` "
+              "in it, then run `cgaskin bench` (or `python -m cgaskin bench` from that folder)", file=sys.stderr)
+        return 2
+    if str(root) not in sys.path:
+        sys.path.insert(0, str(root))
     try:
-        module = importlib.import_module(names[args.which])
-    except ImportError:
-        print("the benchmarks live in the source tree: run `cgaskin bench` from the repository root",
-              file=sys.stderr)
+        module = importlib.import_module(f"benchmarks.{BENCHMARKS[args.which]}")
+    except ImportError as exc:          # a baseline the benchmark compares against (the [bench] extra)
+        print(f"cgaskin bench: error: the {args.which} benchmark ({root / 'benchmarks'}) needs "
+              f"{exc.name or exc}: pip install 'cgaskin[bench]'", file=sys.stderr)
         return 2
     module.main(args.rest)
     return 0
@@ -110,7 +133,7 @@ def main(argv=None) -> int:
     p.set_defaults(run=_precompile)
 
     p = sub.add_parser("bench", help="run a benchmark (prints tables)")
-    p.add_argument("which", choices=["skinning", "frame", "animation", "cut", "tear", "fig1"], nargs="?", default="skinning")
+    p.add_argument("which", choices=list(BENCHMARKS), nargs="?", default="skinning")
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options passed to the benchmark")
     p.set_defaults(run=_bench)
 
@@ -122,11 +145,20 @@ def main(argv=None) -> int:
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
+            if getattr(args, "check_options", None):     # incomplete or conflicting options, before any work
+                args.check_options(args)
             return args.run(args)
     except (CgaskinError, OSError) as exc:
         # bad input is the user's to fix: say what is wrong, without a traceback
-        print(f"cgaskin {args.command}: error: {exc}", file=sys.stderr)
+        print(f"cgaskin {args.command}: error: {_message(exc)}", file=sys.stderr)
         return 2
+
+
+def _message(exc: Exception) -> str:
+    """One line: a system error as "<file>: <reason>" (not "[Errno 20] ..."), any other as it says."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return f"{exc.filename}: {exc.strerror}" if exc.filename else exc.strerror
+    return str(exc)
 
 
 if __name__ == "__main__":

@@ -1,26 +1,32 @@
 """Model subcommands of the ``cgaskin`` command line (demo, skin, cut, tear)."""
 from __future__ import annotations
 
-import argparse
 import sys
 import time
+from contextlib import closing, nullcontext
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError
+from ..errors import CgaskinError, InvalidInputError
+from .options import add_pose_options, check_output, check_pose_options, clip_of, clip_time, edited, \
+    finite, finite_point, pose_of
 
 
 def progress(iterable, total: int, label: str):
     """Yield from ``iterable`` while drawing a text progress bar on stderr."""
-    start = time.perf_counter()
-    for i, item in enumerate(iterable, 1):
-        yield item
-        done = int(30 * i / total)
-        rate = i / max(time.perf_counter() - start, 1e-9)
-        print(f"\r{label} [{'#' * done}{'.' * (30 - done)}] {i}/{total} ({rate:.0f}/s)", end="",
-              file=sys.stderr, flush=True)
-    print(file=sys.stderr)
+    start, drawn = time.perf_counter(), False
+    try:
+        for i, item in enumerate(iterable, 1):
+            yield item
+            done = int(30 * i / total)
+            rate = i / max(time.perf_counter() - start, 1e-9)
+            print(f"\r{label} [{'#' * done}{'.' * (30 - done)}] {i}/{total} ({rate:.0f}/s)", end="",
+                  file=sys.stderr, flush=True)
+            drawn = True
+    finally:            # (closed early too: an error message then starts on a line of its own)
+        if drawn:
+            print(file=sys.stderr)
 
 
 def _demo(args) -> int:
@@ -29,9 +35,9 @@ def _demo(args) -> int:
     from ..rigs.procedural import capsule_arm
     from .precompile import precompile
     from .render import render_strip
-    precompile(verbose=True)              # on a fresh install: every kernel the demo needs, on every core
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)   # (a folder it cannot make fails before the compile)
+    precompile(verbose=True)              # on a fresh install: every kernel the demo needs, on every core
     rig = capsule_arm()
     elbow = rig.skeleton.names[1]
     rest = rig.rest_pose()
@@ -101,49 +107,24 @@ def _demo_tear(rig, out: Path) -> list:
     return [out / "tear.png", out / "torn.glb"]
 
 
-def _clip_of(rig, args):
-    """--clip as the rig names it: a clip name, else a digit string as an index (None: no clip)."""
-    if args.clip is None or args.clip in [c.name for c in rig.clips] or not args.clip.isdigit():
-        return args.clip
-    return int(args.clip)
-
-
-def _joint_of(rig, name: str):
-    """A joint named on the command line: its name, else a digit string as a node index."""
-    return int(name) if name not in rig.skeleton.names and name.isdigit() else name
-
-
-def _pose_of(rig, args, time=None):
-    """The pose named by --rest or --clip/--time and the --rotate/--translate/--dilate edits applied
-    after it in the order given; None when none of them is given (the mesh as stored)."""
-    clip = _clip_of(rig, args)
-    if clip is None and not args.edits and not args.rest:
-        return None
-    pose = rig.rest_pose() if clip is None else rig.pose(clip, args.time if time is None else time)
-    return _edited(rig, pose, args)
-
-
-def _edited(rig, pose, args):
-    """``pose`` with the --rotate/--translate/--dilate edits applied in the order given."""
-    for kind, joint, values in args.edits:
-        joint = _joint_of(rig, joint)
-        if kind == "rotate":
-            pose = pose.rotate(joint, values[:3], np.radians(values[3]))
-        elif kind == "translate":
-            pose = pose.translate(joint, values)
-        else:
-            pose = pose.dilate(joint, values[0])
-    return pose
+def _check_cut(args) -> None:
+    check_pose_options(args)
+    finite_point(args.normal, "--normal")
+    finite_point(args.point, "--point")
+    if not any(args.normal):
+        raise InvalidInputError("--normal 0 0 0: give the plane's normal, a non-zero direction")
+    for path in args.out:
+        check_output(path)
+    if Path(args.out[0]).resolve() == Path(args.out[1]).resolve():
+        raise InvalidInputError(f"--out names one file twice ({args.out[0]}): the second half would "
+                                f"overwrite the first; give two paths")
 
 
 def _cut(args) -> int:
     from ..rigs import load, save
     from ..surgery.cut import cut
-    if Path(args.out[0]).resolve() == Path(args.out[1]).resolve():
-        raise InvalidInputError(f"--out names one file twice ({args.out[0]}): the second half would "
-                                f"overwrite the first; give two paths")
     rig = load(args.model)
-    halves = cut(rig, args.normal, args.point, pose=_pose_of(rig, args), cap=args.cap)
+    halves = cut(rig, args.normal, args.point, pose=pose_of(rig, args), cap=args.cap)
     for half, path in zip(halves, args.out):
         if half.n_faces:
             save(half, path)
@@ -154,9 +135,10 @@ def _cut(args) -> int:
 
 
 def _blades(args) -> list:
-    """The blade positions in order: --from, every --stroke, the lines of --strokes, --to; each a
-    (2, 3) array (handle, tip)."""
-    rows = ([args.from_] if args.from_ else []) + list(args.stroke or [])
+    """The blade positions in order: --from, every --stroke, the lines of --strokes, --to; each
+    (label, (2, 3) array (handle, tip)), the label naming where the user gave it."""
+    rows = [("--from", args.from_)] if args.from_ else []
+    rows += [(f"--stroke #{k}", row) for k, row in enumerate(args.stroke or [], 1)]
     if args.strokes:
         try:
             text = Path(args.strokes).read_text(encoding="utf-8")
@@ -173,26 +155,48 @@ def _blades(args) -> list:
             if len(values) != 6:
                 raise InvalidInputError(f"--strokes {args.strokes}, line {number}: give 6 numbers (handle "
                                         f"AX AY AZ, tip BX BY BZ), got {' '.join(line)!r}")
-            rows.append(values)
-    rows += [args.to] if args.to else []
+            rows.append((f"--strokes {args.strokes} line {number}", values))
+    rows += [("--to", args.to)] if args.to else []
     if len(rows) < 2:
         raise InvalidInputError("a tear needs the blade at two times at least: --from and --to, or "
                                 "--stroke repeated, or a --strokes file")
-    return [np.array(row, dtype=np.float64).reshape(2, 3) for row in rows]
+    blades = []
+    for label, row in rows:
+        if not all(np.isfinite(row)):
+            raise InvalidInputError(f"{label} {' '.join(f'{v:g}' for v in row)}: give 6 finite numbers")
+        if list(row[:3]) == list(row[3:]):
+            raise InvalidInputError(f"{label}: the handle and the tip coincide at {list(row[:3])}; the "
+                                    f"blade must be a segment of non-zero length")
+        blades.append((label, np.array(row, dtype=np.float64).reshape(2, 3)))
+    return blades
+
+
+def _check_tear(args) -> None:
+    check_pose_options(args)
+    finite(args.opening, f"--opening {args.opening}", "units of length")
+    if args.opening < 0:
+        raise InvalidInputError(f"--opening {args.opening:g}: give a distance >= 0 (0 leaves the slit closed)")
+    check_output(args.out)
 
 
 def _tear(args) -> int:
     from ..rigs import load, save
     from ..surgery.session import Surgery
-    rig = load(args.model)
     blades = _blades(args)
-    pose = _pose_of(rig, args)
+    rig = load(args.model)
+    pose = pose_of(rig, args)
     session = Surgery(rig, pose)                    # one progressive tear: each stroke continues the slit,
     steps = zip(blades[:-1], blades[1:])            # at the cost of what it touches
-    if len(blades) > 2:
-        steps = progress(steps, len(blades) - 1, "tearing")
-    for blade_from, blade_to in steps:
-        session.tear(blade_from, blade_to, opening=args.opening)
+    bar = closing(progress(steps, len(blades) - 1, "tearing")) if len(blades) > 2 else nullcontext(steps)
+    with bar as steps:
+        for (label_from, blade_from), (label_to, blade_to) in steps:
+            try:
+                session.tear(blade_from, blade_to, opening=args.opening)
+            except CgaskinError as exc:
+                # the library names its parameters; the user gave blade positions by option
+                message = str(exc).replace("scalpel scalpel_from", f"blade at {label_from}")
+                message = message.replace("scalpel scalpel_to", f"blade at {label_to}")
+                raise type(exc)(f"the stroke from {label_from} to {label_to}: {message}") from None
     torn = session.rig
     save(torn, args.out)
     print(f"wrote {args.out}: {len(blades) - 1} stroke(s), {torn.n_vertices} vertices "
@@ -200,66 +204,57 @@ def _tear(args) -> int:
     return 0
 
 
-def _skin(args) -> int:
-    from ..animation.skinning import skin, skin_normals
-    from ..rigs import load
-    from ..rigs.export import save_mesh
+def _check_skin(args) -> None:
+    check_pose_options(args)
     if args.frames < 1:
         raise InvalidInputError(f"--frames must be at least 1, got {args.frames}")
     if args.frames > 1 and args.clip is None:
-        raise InvalidInputError("--frames bakes a clip over time: name it with --clip")
+        raise InvalidInputError(f"--frames {args.frames} bakes a clip over time: name it with --clip")
+    if args.end is not None:
+        finite(args.end, f"--end {args.end}", "seconds")
+        if args.frames == 1:
+            raise InvalidInputError(f"--end {args.end:g} is the last time of the frames --frames N bakes: "
+                                    f"give --frames N (N > 1) with it, or leave --end out")
+    check_output(args.out, frames=args.frames)
+
+
+def _write_mesh(vertices, faces, path: Path, normals) -> None:
+    """``save_mesh``, its refusal named by the file the user asked for (e.g. a pose whose skinned
+    positions float32 cannot hold)."""
+    from ..rigs.export import save_mesh
+    try:
+        save_mesh(vertices, faces, path, normals=normals)
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"writing {path}: the skinned mesh cannot be stored: {exc}") from None
+
+
+def _skin(args) -> int:
+    from ..animation.skinning import skin, skin_normals
+    from ..rigs import load
     rig = load(args.model)
-    times = [args.time]
+    times = [clip_time(args)]
     if args.frames > 1:
-        clip = _clip_of(rig, args)
+        clip = clip_of(rig, args)
         end = args.end if args.end is not None else rig.clips[rig.clip_index(clip)].duration
-        times = list(np.linspace(args.time, end, args.frames))
+        times = list(np.linspace(clip_time(args), end, args.frames))
     out = Path(args.out)
     paths = [out] if len(times) == 1 else [out.with_name(f"{out.stem}_{i:04d}{out.suffix}") for i in range(len(times))]
     if len(times) > 1:
         # every frame's pose in one compiled call, then (without edits) every frame's skin in another
-        poses = rig.poses(_clip_of(rig, args), times)
-        edited = [_edited(rig, poses[i], args) for i in range(len(times))] if args.edits else None
-        vertices = skin(rig, poses) if edited is None else None
-        for i, path in progress(enumerate(paths), len(paths), "skinning"):
-            pose = poses[i] if edited is None else edited[i]
-            normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
-            save_mesh(skin(rig, pose) if vertices is None else vertices[i], rig.faces, path, normals=normals)
+        poses = rig.poses(clip_of(rig, args), times)
+        posed = [edited(rig, poses[i], args) for i in range(len(times))] if args.edits else None
+        vertices = skin(rig, poses) if posed is None else None
+        with closing(progress(enumerate(paths), len(paths), "skinning")) as frames:
+            for i, path in frames:
+                pose = poses[i] if posed is None else posed[i]
+                normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
+                _write_mesh(skin(rig, pose) if vertices is None else vertices[i], rig.faces, path, normals)
     else:
-        pose = _pose_of(rig, args)
+        pose = pose_of(rig, args)
         normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
-        save_mesh(skin(rig, pose), rig.faces, paths[0], normals=normals)
+        _write_mesh(skin(rig, pose), rig.faces, paths[0], normals)
     print(f"wrote {len(paths)} file(s): {paths[0]}{' ...' if len(paths) > 1 else ''}")
     return 0
-
-
-class _Edit(argparse.Action):
-    """Collects --rotate/--translate/--dilate into one list, in command-line order (the order in
-    which they compose)."""
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        joint, *numbers = values
-        try:
-            numbers = [float(v) for v in numbers]
-        except ValueError:
-            parser.error(f"{option_string} {' '.join(values)}: after the joint, give numbers")
-        namespace.edits = (namespace.edits or []) + [(self.dest, joint, numbers)]
-
-
-def _add_pose_options(p, default: str) -> None:
-    g = p.add_argument_group(f"pose (default: {default}); edits apply after the clip, in order")
-    g.add_argument("--rest", action="store_true",
-                   help="the rest pose of the nodes (what a viewer shows; differs from the stored mesh "
-                        "when the bind matrices are not the rest pose's, e.g. a mesh node with an offset)")
-    g.add_argument("--clip", default=None, help="clip name or index")
-    g.add_argument("--time", type=float, default=0.0, help="seconds into the clip")
-    g.add_argument("--rotate", action=_Edit, nargs=5, metavar=("JOINT", "AX", "AY", "AZ", "DEGREES"),
-                   help="rotate JOINT about the axis (in its parent's frame); repeatable")
-    g.add_argument("--translate", action=_Edit, nargs=4, metavar=("JOINT", "X", "Y", "Z"),
-                   help="translate JOINT (in its parent's frame); repeatable")
-    g.add_argument("--dilate", action=_Edit, nargs=2, metavar=("JOINT", "SCALE"),
-                   help="scale JOINT and its subtree uniformly about the joint; repeatable")
-    p.set_defaults(edits=[])
 
 
 def register(sub) -> None:
@@ -270,21 +265,21 @@ def register(sub) -> None:
 
     p = sub.add_parser("skin", help="skin a model at a clip time and write the posed mesh (.glb/.gltf)")
     p.add_argument("model")
-    _add_pose_options(p, "the rest pose of the nodes")
+    add_pose_options(p, "the rest pose of the nodes")
     p.add_argument("--frames", type=int, default=1, help="bake this many frames from --time to --end")
     p.add_argument("--end", type=float, default=None, help="last time when baking (default: clip end)")
     p.add_argument("--out", required=True)
-    p.set_defaults(run=_skin)
+    p.set_defaults(run=_skin, check_options=_check_skin)
 
     p = sub.add_parser("cut", help="cut a model by a plane into two rigs (.glb)")
     p.add_argument("model")
     p.add_argument("--normal", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--point", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--cap", action="store_true", help="close each half with a cap on the plane")
-    _add_pose_options(p, "the mesh as stored")
+    add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", nargs=2, required=True, metavar=("POSITIVE.glb", "NEGATIVE.glb"),
                    help="the half the normal points to, then the other")
-    p.set_defaults(run=_cut)
+    p.set_defaults(run=_cut, check_options=_check_cut)
 
     p = sub.add_parser("tear", help="tear a model along the path of a moving scalpel (.glb); the blade "
                                     "positions in order: --from, each --stroke, the --strokes file, --to")
@@ -299,6 +294,6 @@ def register(sub) -> None:
                    help="a text file of blade positions, one per line (6 numbers; '#' comments)")
     p.add_argument("--to", type=float, nargs=6, metavar=blade, help="the scalpel at the end of the stroke")
     p.add_argument("--opening", type=float, default=0.0, help="push the two sides apart by this distance")
-    _add_pose_options(p, "the mesh as stored")
+    add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", required=True)
-    p.set_defaults(run=_tear)
+    p.set_defaults(run=_tear, check_options=_check_tear)

@@ -78,7 +78,7 @@ import numpy as np
 
 from ..._shared.checks import float_array, real_number
 from ...animation.rig import Rig
-from ...errors import CgaskinError, InvalidInputError, MissesMeshError, PlacementWarning
+from ...errors import InvalidInputError, MissesMeshError, PlacementWarning, TearPathError
 from ...tolerances import tol
 from ..bvh import TriangleBVH
 from ..surface import TEAR_LABEL, tear_topology
@@ -96,11 +96,6 @@ SNAP_TOLERANCE, PLACEMENT_TOLERANCE = tol.snap, tol.placement
 
 #: a posed tear's new vertex could not be placed exactly on the posed path (its former name)
 TearPlacementWarning = PlacementWarning
-
-
-class TearPathError(CgaskinError, ValueError):
-    """The tear plane's section of the surface does not lead from S_i to S_{i+1} (they lie on
-    different pieces of it, or a boundary of the mesh is in the way)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,12 +135,9 @@ class TearResult(StrokeResult):
 
 def _scalpel(value, name):
     """(a, b) handle and tip, (3,) float64 each, from a (2, 3) pair."""
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        arr = float_array(value, name)          # raises with the reason
-    if arr.shape == (2, 3) and not math.isfinite(arr.sum()):
-        float_array(arr, name)                  # raises, naming the bad entry (not if only the sum overflowed)
+    # the shared check, as the cut's: it refuses strings and complex values (numpy would drop the
+    # imaginary part with a mere ComplexWarning) and names a non-finite entry
+    arr = float_array(value, name)
     if arr.shape != (2, 3):
         raise InvalidInputError(f"{name} must be a pair of points (handle a, tip b), shape (2, 3), "
                                 f"got shape {arr.shape}")
@@ -218,8 +210,11 @@ def check_blades(scalpel_from, scalpel_to) -> np.ndarray:
                 blades = np.empty((4, 3))        # (C-contiguous, whatever the inputs' strides: the kernels')
                 blades[:2], blades[2:] = scalpel_from, scalpel_to
         else:
-            blades = np.array((scalpel_from, scalpel_to), dtype=np.float64)
-            blades = blades.reshape(4, 3) if blades.shape == (2, 2, 3) else None
+            blades = np.array((scalpel_from, scalpel_to))     # (no dtype: a cast would take strings and
+            if blades.shape == (2, 2, 3) and blades.dtype.kind in "fiu":     # drop imaginary parts)
+                blades = blades.reshape(4, 3).astype(np.float64, copy=False)
+            else:
+                blades = None
     except (TypeError, ValueError):
         pass
     if blades is not None:
