@@ -102,17 +102,18 @@ def _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cl
 
 
 @helper
-def _jumps(node, ni, nf, target, n, cap, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id, vertex_used,
-           region, margin, snap):
+def _jumps(node, ni, nf, target, n, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id, vertex_used, region,
+           margin, snap):
     """Push the jumps from boundary node ``node`` to the ``openings`` (``_openings``) not yet jumped
-    to that ``_jump`` allows; returns the new node count."""
+    to that ``_jump`` allows (at most one node per opening: the walk makes room for them first);
+    returns the new node count."""
     wpos, edges = mesh[0], mesh[3]
     kind, ident = ni[node, 0], ni[node, 1]
     came_from = nf[max(ni[node, 2], 0), 1:4]
     to = np.empty(3)
     for c in range(openings.shape[0]):
         ok, oid = openings[c, 0], openings[c, 1]
-        if jumped[c] or (ok == kind and oid == ident) or n + 8 > cap:
+        if jumped[c] or (ok == kind and oid == ident):
             continue
         _, to[0], to[1], to[2] = _element_point(ok, oid, plane, wpos, edges)
         if _jump(bvh, mesh, cls, plane, kind, ident, nf[node, 1:4], came_from, ok, oid, to, snap):

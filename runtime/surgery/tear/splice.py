@@ -26,7 +26,7 @@ import numpy as np
 
 from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8, helper, i8, kernel
 from ..._shared.warn import warn
-from ...errors import MissesMeshError, PlacementWarning
+from ...errors import InternalError, MissesMeshError, PlacementWarning
 from ...tolerances import tol
 from ..bvh import BVH_ARRAYS
 from ..surface import WELDED_MESH
@@ -99,7 +99,9 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     ends = Ends(*ends)
     check_ends(ends)
     if not settled:
-        raise AssertionError("the stroke's patch did not settle")      # the plane of a patch is its own
+        # (the plane located on a patch is its own, so the patch settles in the second round)
+        raise InternalError(f"the stroke's patch did not settle: this is a bug in cgaskin, not bad input; please "
+                            f"report it with the model and the scalpel positions {blades.tolist()}")
     no_path(ends, Path(nodes, points) if found else None)
     rows, ((new_src, new_coef, twin_of, read), arrays, (points, kinds, side_a, side_b, split, jumps), residual) = spliced
     if not residual <= tol.placement * source.diagonal:

@@ -15,6 +15,16 @@ from .region import _margin
 
 @callee((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=12.0)
 def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap):
+    """``_walk_within`` with a node table first sized for a node per face and per edge of the patch,
+    which the walks seen fill a small part of (it grows if one ever needs more)."""
+    capacity = mesh[1].shape[0] + mesh[3].shape[0] + 4
+    return _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap,
+                        capacity)
+
+
+@helper
+def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap,
+                 capacity):
     """Follow the plane's section of the surface from the start node to the target node.
 
     Nodes are (kind, id): VERTEX (welded vertex on the plane), EDGE (edge crossed by the plane, at
@@ -32,7 +42,8 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     mesh : WeldedMesh (as a tuple) ; cls : (w,) int8 sides of the welded vertices ; plane : (4,)
     bvh : BVHArrays (as a tuple) of the surface ; region : the blade at both times, (a0, b0, a1, b1)
     (3,) each ; hit_faces : (2,) the faces it hit
-    snap : absolute distance
+    snap : absolute distance ; capacity : the node table's first size (>= 1): before each node is
+    expanded it grows to hold every node that expansion may push (``_room``), so no walk stops short
     returns found (bool), and the fields of ``Path`` from start to target
     """
     (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
@@ -47,11 +58,11 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
         return _with_midpoint(path_int, path_float, wpos, edges)
     margin = _margin(wpos, wfaces, hit_faces, s_pos, t_pos)
     m = wfaces.shape[0]
-    cap = m + edges.shape[0] + 4
+    cap = max(capacity, 1)
     ni = np.empty((cap, 5), np.int64)         # kind, id, parent, carrier kind, carrier
     nf = np.empty((cap, 5))                   # t, x, y, z, length from the start
     target = np.zeros(cap, np.bool_)
-    open_ = np.empty(cap, np.int64)
+    open_ = np.empty(cap, np.int64)           # the open fronts (at most one per node)
     face_used = np.zeros(m, np.bool_)
     edge_used = np.zeros(edges.shape[0], np.bool_)
     vertex_used = np.full(wpos.shape[0], np.inf)     # shortest length a node of each vertex was pushed with
@@ -87,9 +98,8 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
             break
         if ni[node, 0] == VERTEX and nf[node, 4] > vertex_used[ni[node, 1]]:
             continue             # superseded: a shorter way reached this vertex (elements._push_element)
-        if n + 8 > cap:
-            break
         kind, ident, ck, cid = ni[node, 0], ni[node, 1], ni[node, 3], ni[node, 4]
+        ni, nf, target, open_ = _room(ni, nf, target, open_, n, _most_pushed(kind, ident, ef_offsets, vf_offsets))
         before = n
         if kind == FACE and _flat(ident, wfaces, cls):
             # the start inside a face lying in the plane: straight on towards S_(i+1) (flat.py)
@@ -197,7 +207,8 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
                 looked = True
                 openings = _openings(cls, edges, ef_offsets, plane, wpos, region, margin)
                 jumped = np.zeros(openings.shape[0], np.bool_)
-            n = _jumps(node, ni, nf, target, n, cap, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id,
+            ni, nf, target, open_ = _room(ni, nf, target, open_, n, openings.shape[0])   # a jump per opening
+            n = _jumps(node, ni, nf, target, n, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id,
                        vertex_used, region, margin, snap)
         for q in range(before, n):
             open_[n_open] = q
@@ -236,6 +247,36 @@ def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, regio
     if path_int.shape[0] == 2:
         return _with_midpoint(path_int, path_float, wpos, edges)
     return True, path_int, path_float
+
+
+@helper
+def _most_pushed(kind, ident, ef_offsets, vf_offsets):
+    """The most nodes that expanding a node of ``kind``, ``ident`` pushes (its jumps aside): a face (the
+    start) at most 3 (where the section or Q leaves it); a point of an edge 3 per face on the edge
+    (``_across_flat``) and 2 along it; a vertex 5 per face of its fan (3 across a flat face, then one
+    per edge from the vertex in the plane; or 1 where the plane crosses the face or it holds the
+    target)."""
+    if kind == FACE:
+        return np.int64(3)
+    if kind == EDGE:
+        return 3 * (ef_offsets[ident + 1] - ef_offsets[ident]) + 2
+    return 5 * (vf_offsets[ident + 1] - vf_offsets[ident])
+
+
+@helper
+def _room(ni, nf, target, open_, n, need):
+    """The walk's node table (``ni``, ``nf``, ``target``, and ``open_`` of the same length) with room
+    for ``need`` nodes after its first n: the same arrays, or copies at least twice as long (so a walk
+    that outgrows its first size copies its nodes a few times in all)."""
+    cap = ni.shape[0]
+    if n + need <= cap:
+        return ni, nf, target, open_
+    size = max(2 * cap, n + need)
+    grown_ni, grown_nf = np.empty((size, 5), np.int64), np.empty((size, 5))
+    grown_target, grown_open = np.zeros(size, np.bool_), np.empty(size, np.int64)
+    grown_ni[:n], grown_nf[:n], grown_target[:n] = ni[:n], nf[:n], target[:n]
+    grown_open[:cap] = open_
+    return grown_ni, grown_nf, grown_target, grown_open
 
 
 @helper
