@@ -2,8 +2,8 @@
 
 Rigs are frozen and compared by identity (``eq=False``), so they are weak dictionary keys: an entry
 goes with its rig. An entry also remembers the rig's ``vertices`` and ``faces`` objects and is
-rebuilt when either is another object; it cannot see in-place edits of the arrays (a rig's arrays
-are treated as immutable throughout cgaskin: call ``clear`` after editing one in place).
+rebuilt when either is another object. A rig's arrays are read-only (``frozen.py``), so no edit in
+place can leave an entry stale.
 """
 from __future__ import annotations
 
