@@ -15,6 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.frozen import frozen
 from ..errors import InvalidInputError
 
 INTERPOLATIONS = ("STEP", "LINEAR", "CUBICSPLINE")
@@ -48,6 +49,12 @@ class Channel:
     times: np.ndarray
     values: np.ndarray
 
+    def __post_init__(self):
+        # read-only copies, as a rig's arrays: a clip's packed arrays are kept (``Clip.packed``), so
+        # an edit in place would be silently ignored
+        for name in ("times", "values"):
+            object.__setattr__(self, name, frozen(np.array(getattr(self, name))))
+
 
 class ClipArrays(NamedTuple):
     """Every channel of a clip in flat arrays (what the compiled sampler reads).
@@ -72,11 +79,14 @@ class ClipArrays(NamedTuple):
 class Clip:
     """A named animation: a set of channels. ``duration`` is the last key time.
 
-    Channels are values: their arrays must not change after the clip is first sampled (``packed``
-    copies them once and keeps the copy for the clip's lifetime)."""
+    Channels are values: their arrays are read-only copies (``packed`` flattens them once and keeps
+    the result for the clip's lifetime)."""
 
     name: str
     channels: tuple[Channel, ...]
+
+    def __post_init__(self):
+        object.__setattr__(self, "channels", tuple(self.channels))
 
     @property
     def duration(self) -> float:

@@ -309,3 +309,16 @@ def test_rigs_made_by_operations_keep_the_rule():
         for name in ("vertices", "faces", "joints", "weights"):
             assert np.array_equal(getattr(again, name), getattr(result, name)), name
             assert not getattr(result, name).flags.writeable
+
+
+def test_a_clips_arrays_are_read_only_copies():
+    """A clip's key arrays are read-only copies (its packed arrays are kept): an edit in place raises
+    instead of being silently ignored by later samples; the maker's arrays stay writeable."""
+    times, values = np.array([0.0, 1.0]), np.array([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.6, 0.8]])
+    channel = cgaskin.Channel(node=1, path="rotation", interpolation="LINEAR", times=times, values=values)
+    clip = cgaskin.Clip("turn", [channel])
+    assert isinstance(clip.channels, tuple) and times.flags.writeable and values.flags.writeable
+    values[1] = [0.0, 0.0, 0.0, 1.0]
+    assert clip.channels[0].values[1, 2] == 0.6
+    with pytest.raises(ValueError, match="read-only"):
+        clip.channels[0].times[1] = 2.0
