@@ -55,6 +55,9 @@ class Channel:
         for name in ("times", "values"):
             object.__setattr__(self, name, frozen(np.array(getattr(self, name))))
 
+    def __reduce__(self):                    # (unpickled: read-only again)
+        return Channel, (self.node, self.path, self.interpolation, self.times, self.values)
+
 
 class ClipArrays(NamedTuple):
     """Every channel of a clip in flat arrays (what the compiled sampler reads).
@@ -87,6 +90,9 @@ class Clip:
 
     def __post_init__(self):
         object.__setattr__(self, "channels", tuple(self.channels))
+
+    def __reduce__(self):                    # (its packed arrays are made again when sampled)
+        return Clip, (self.name, self.channels)
 
     @property
     def duration(self) -> float:

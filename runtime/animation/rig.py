@@ -133,6 +133,11 @@ class Rig:
             names.append(clip.name)
         return replace(self, clips=list(self.clips) + list(clips))
 
+    def __reduce__(self):
+        # unpickled (a Dask worker, a saved session) with read-only arrays again; they were checked
+        return Rig.of_checked, (self.vertices, self.faces, self.joints, self.weights, self.skeleton, self.clips,
+                                dict(self.attributes), self.name)
+
     @classmethod
     def of_checked(cls, vertices, faces, joints, weights, skeleton, clips=(), attributes=None,
                    name: str = "rig") -> "Rig":

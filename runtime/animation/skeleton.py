@@ -2,7 +2,7 @@
 the conventions)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import cached_property
 
 import numpy as np
@@ -42,6 +42,10 @@ class Skeleton:
         for name in ("parents", "rest_translations", "rest_rotations", "rest_scales", "rest_matrices",
                      "bone_nodes", "inverse_bind"):
             object.__setattr__(self, name, frozen(np.array(getattr(self, name), order="C")))
+
+    def __reduce__(self):
+        # made again through the constructor, so that an unpickled skeleton's arrays are read-only too
+        return Skeleton, tuple(getattr(self, f.name) for f in fields(self))
 
     @property
     def n_nodes(self) -> int:

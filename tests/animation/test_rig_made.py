@@ -322,3 +322,16 @@ def test_a_clips_arrays_are_read_only_copies():
     assert clip.channels[0].values[1, 2] == 0.6
     with pytest.raises(ValueError, match="read-only"):
         clip.channels[0].times[1] = 2.0
+
+
+def test_a_pickled_rig_comes_back_read_only(fox):
+    """Pickling (a Dask worker, a saved notebook) keeps the rule: the rig, its skeleton and clips come
+    back equal and read-only."""
+    import pickle
+    again = pickle.loads(pickle.dumps(fox))
+    arrays = [again.vertices, again.faces, again.joints, again.weights, *again.attributes.values(),
+              again.skeleton.inverse_bind, again.skeleton.parents, again.clips[0].channels[0].times]
+    assert all(not a.flags.writeable for a in arrays)
+    with pytest.raises(TypeError):
+        again.attributes["_X"] = again.vertices
+    np.testing.assert_array_equal(cgaskin.skin(again, again.pose(0, 0.3)), cgaskin.skin(fox, fox.pose(0, 0.3)))
