@@ -135,11 +135,11 @@ class Rig:
 
     def __reduce__(self):
         # unpickled (a Dask worker, a saved session) with read-only arrays again; they were checked
-        return Rig.of_checked, (self.vertices, self.faces, self.joints, self.weights, self.skeleton, self.clips,
+        return Rig._of_checked, (self.vertices, self.faces, self.joints, self.weights, self.skeleton, self.clips,
                                 dict(self.attributes), self.name)
 
     @classmethod
-    def of_checked(cls, vertices, faces, joints, weights, skeleton, clips=(), attributes=None,
+    def _of_checked(cls, vertices, faces, joints, weights, skeleton, clips=(), attributes=None,
                    name: str = "rig") -> "Rig":
         """A rig of arrays that cgaskin's own operations made from checked rigs (a cut's halves, a torn
         mesh, a session's snapshot), frozen but not checked again: those operations keep every rule of
@@ -154,9 +154,9 @@ class Rig:
             object.__setattr__(rig, name_, value)
         return rig
 
-    def with_checked_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
-        """``with_mesh`` for cgaskin's own operations (``of_checked``)."""
-        return Rig.of_checked(vertices, faces, joints, weights, self.skeleton, self.clips, attributes, self.name)
+    def _with_checked_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
+        """``with_mesh`` for cgaskin's own operations (``_of_checked``)."""
+        return Rig._of_checked(vertices, faces, joints, weights, self.skeleton, self.clips, attributes, self.name)
 
     def with_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
         """A new rig with the same skeleton and clips and another mesh (checked and copied as the

@@ -211,7 +211,7 @@ class Surgery:
                           self._attributes.items()}
             if self._labelled:
                 attributes[TEAR_LABEL] = self.labels[:, None].astype(np.float64)
-            rig = self._template.with_checked_mesh(self.vertices.copy(), self.faces[self._alive.view],
+            rig = self._template._with_checked_mesh(self.vertices.copy(), self.faces[self._alive.view],
                                            self.joints.copy(), self.weights.copy(), attributes)
             seed(rig, "tear.boundary", self.boundary.copy())
             seed(rig, "tear.top_label", self.top_label)
@@ -339,7 +339,7 @@ def _joined(positive, negative):
     attributes = {name: np.concatenate((np.asarray(values), np.asarray(negative.attributes[name])))
                   for name, values in positive.attributes.items() if name != TEAR_LABEL}
     attributes[TEAR_LABEL] = np.concatenate(labels)
-    return positive.with_checked_mesh(np.concatenate((positive.vertices, negative.vertices)),
+    return positive._with_checked_mesh(np.concatenate((positive.vertices, negative.vertices)),
                               np.concatenate((positive.faces, np.asarray(negative.faces) + n)),
                               np.concatenate((positive.joints, negative.joints)),
                               np.concatenate((positive.weights, negative.weights)), attributes)

@@ -293,7 +293,7 @@ def test_kernels_see_a_rigs_arrays_as_the_writeable_type_they_were_compiled_for(
 
 
 def test_rigs_made_by_operations_keep_the_rule():
-    """The rigs cgaskin's own operations make without checking them again (``Rig.of_checked``: a cut's
+    """The rigs cgaskin's own operations make without checking them again (``Rig._of_checked``: a cut's
     halves, capped or not, a torn rig, a session's snapshot after a cut) pass the check unchanged."""
     rig = cgaskin.capsule_arm()
     made = list(cgaskin.cut(rig, [1, 0.3, 0], [1.5, 0, 0])) + list(cgaskin.cut(rig, [1, 0.3, 0], [1.5, 0, 0], cap=True))

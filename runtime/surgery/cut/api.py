@@ -87,12 +87,12 @@ def _plane(normal, point) -> np.ndarray:
 def _empty_like(rig, name) -> Rig:
     attributes = {k: np.empty((0,) + np.asarray(v).shape[1:], np.asarray(v).dtype)
                   for k, v in rig.attributes.items()}
-    return Rig.of_checked(np.empty((0, 3)), np.empty((0, 3), np.int64), np.empty((0, 4), np.int64),
+    return Rig._of_checked(np.empty((0, 3)), np.empty((0, 3), np.int64), np.empty((0, 4), np.int64),
                           np.empty((0, 4)), rig.skeleton, rig.clips, attributes, name)
 
 
 def _copy(rig, name) -> Rig:
-    return Rig.of_checked(np.array(rig.vertices, dtype=np.float64), np.array(rig.faces), np.array(rig.joints),
+    return Rig._of_checked(np.array(rig.vertices, dtype=np.float64), np.array(rig.faces), np.array(rig.joints),
                           np.array(rig.weights), rig.skeleton, rig.clips,
                           {k: np.array(v) for k, v in rig.attributes.items()}, name)
 
@@ -126,7 +126,7 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
     arrays = _split_arrays(rig, vertices, joints, weights, split.pos_src, split.neg_src, new, new_rest,
                            new_joints, new_weights)
     names = (f"{rig.name}_positive", f"{rig.name}_negative")
-    halves = [Rig.of_checked(v, f, j, w, rig.skeleton, rig.clips, a, names[h])
+    halves = [Rig._of_checked(v, f, j, w, rig.skeleton, rig.clips, a, names[h])
               for h, ((v, j, w, a), f) in enumerate(zip(arrays, (split.pos_faces, split.neg_faces)))]
     new_sources = np.full(len(split.new_lo), NEW_VERTEX, np.int64)
     sources = [np.concatenate([split.pos_src, new_sources]), np.concatenate([split.neg_src, new_sources])]

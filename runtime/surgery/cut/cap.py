@@ -291,7 +291,7 @@ def _cap(half: Rig, sources, cut_positions, plane, on_plane_input, original: Top
             extent = max(float(np.ptp(xy[:, 0])), float(np.ptp(xy[:, 1])), 1e-300)
             extra = (xy - xy.min(axis=0)) / extent        # planar projection, aspect kept
         attributes[key] = np.concatenate([values, extra.astype(values.dtype, copy=False)])
-    capped = half.with_checked_mesh(np.concatenate([half.vertices, half.vertices[row]]),
+    capped = half._with_checked_mesh(np.concatenate([half.vertices, half.vertices[row]]),
                                     np.concatenate([half.faces, triangles + half.n_vertices]),
                                     np.concatenate([half.joints, half.joints[row]]),
                                     np.concatenate([half.weights, half.weights[row]]), attributes)

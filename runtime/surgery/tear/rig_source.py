@@ -151,7 +151,7 @@ def torn_rig(rig, source: RigSource, splice):
     faces[splice.kept] = splice.kept_corners
     keep = np.ones(len(faces), bool)
     keep[splice.removed] = False
-    torn = rig.with_checked_mesh(vertices, np.concatenate((faces[keep], splice.pieces)), joints, weights, attributes)
+    torn = rig._with_checked_mesh(vertices, np.concatenate((faces[keep], splice.pieces)), joints, weights, attributes)
     boundary = np.concatenate((source.boundary, np.zeros(added, bool)))
     boundary[splice.boundary_rows] = splice.boundary_flags
     seed(torn, "tear.boundary", boundary)
