@@ -5,7 +5,7 @@ their pieces: a ``TriangleBVH`` rebuild costs a second per stroke, an edit here 
 
 Layout: the tree of ``bvh_build._build`` in node arrays that grow by doubling (int32 indices). The
 BVH owns no geometry: it reads face f's corners as positions[faces[f]] from the caller's arrays (the
-session's own mesh buffers), so that its memory is the tree's (~62 bytes a face; the spare rows are
+session's own mesh buffers), so that its memory is the tree's (~40 bytes a face; the spare rows are
 allocated, not written, so not resident until used). A leaf owns a block of slots (start, capacity)
 holding face ids, the live ones first (count): remove moves the leaf's last face into the hole, so
 queries never meet a dead slot. Insert descends into the child whose box grows least (ties: the
@@ -18,19 +18,19 @@ The edits are compiled in ``dynamic_bvh_edits.py``, as one kernel.
 
 Degradation: the SAH cost (inner nodes weigh 1, leaves their count; over the root's area), kept at
 every change, over its value after the last build; an edit rebuilds past ``REBUILD_AT`` (or when dead
-slots outnumber live faces). Measured (``python -m benchmarks.bench_dynamic_bvh``, 2 cores,
-capsule_arm 850 x 294 = 1.58M faces): build 0.42 s (static 0.72 s), memory 98 MB, 62 bytes a face
-(the static tree's 76 MB, besides its copies of positions and faces; with the corner copy and int64
-indices they were 271 and 226 MB); first_hit on 20k random segments 4.2 us (static 4.3 us; 3.6 and
-4.1 us reading a corner copy); faces_near_plane over 2352 faces 0.21 ms; a stroke (remove 30, insert
-90 pieces, move 40, through the checked calls) 0.31 ms median; 300 strokes of an incision leave the
-degradation at 1.000 (first_hit 4.13 us, 4.24 us rebuilt). Strokes at random places that also throw
-40 faces' corners ~0.02 (a few face widths): degradation 1.41 / 1.97 / 2.46 / 2.94 / 4.32 / 7.67
-after 150 / 300 / 450 / 600 / 1000 / 2000 strokes, first_hit 1.09 / 1.04 / 1.34 / 1.09 / 1.16 /
-1.37x that of a rebuilt tree (+-10 % between runs; the SAH ratio also counts the faces' own growth,
-which no rebuild undoes): at 3 (``REBUILD_AT``) queries are ~10-15 % slower than rebuilt; a rebuild
-costs ~100k queries. An editing session on that mesh (``python -m benchmarks.bench_progressive``)
-peaks at 1.76x the mesh's own arrays (3.3x with the corner copy): its mesh buffers and this tree.
+slots outnumber live faces). Measured (``python -m benchmarks.bench_dynamic_bvh``, 2 cores, noisy,
+capsule_arm 850 x 294 = 1.58M faces), leaves of 8 faces at build against 4 in the same conditions:
+memory 64 MB, 40 bytes a face (98 MB and 62 with leaves of 4; the static tree's 76 MB); first_hit on
+20k random segments 6.5 us (6.4 us static; 8.0 with leaves of 4); faces_near_plane over 2352 faces
+0.22 ms (0.31); a stroke's edits (remove 30, insert 90 pieces, move 40, through the checked calls)
+0.31 ms median (0.32); 300 strokes of an incision leave the degradation at 1.001, first_hit as a
+rebuilt tree's. Strokes at random places that also throw 40 faces' corners ~0.02 (a few face widths):
+degradation 1.45 / 2.06 / 2.59 / 3.12 / 4.63 / 8.29 after 150 / 300 / 450 / 600 / 1000 / 2000
+strokes, first_hit 0.98 / 1.18 / 1.20 / 1.32 / 1.34 / 1.66x that of a rebuilt tree (+-15 % between
+runs; the SAH ratio also counts the faces' own growth, which no rebuild undoes): at 3 (``REBUILD_AT``)
+queries are ~10-30 % slower than rebuilt; a rebuild costs ~100k queries. An editing session on that
+mesh (``python -m benchmarks.bench_progressive``) peaks at 1.75-1.9x the mesh's own arrays (as with
+leaves of 4: the build's temporaries set the peak): its mesh buffers and this tree.
 """
 from __future__ import annotations
 
@@ -38,11 +38,17 @@ import numpy as np
 
 from .._shared.checks import float_array, index_array, real_number
 from ..errors import InvalidInputError
-from .bvh import BOX_PADDING, LEAF_SIZE, TriangleBVH, _all_hits, _faces_near_plane, _first_hit
+from .bvh import BOX_PADDING, TriangleBVH, _all_hits, _faces_near_plane, _first_hit
 from .bvh_build import _build
 from .dynamic_bvh_edits import LEAF_MAX, _adopt, _change
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
+
+#: faces per leaf at build (half of ``LEAF_MAX``: room to grow before a split). Larger than a static
+#: tree's 4 (``bvh.LEAF_SIZE``): half the nodes, so half the tree's memory and of the bone influences a
+#: posed stroke keeps per node, and fewer posed boxes a stroke in a new pose computes; queries and
+#: edits measured the same (module docstring)
+LEAF_SIZE = 8
 
 #: ``degradation`` (SAH relative to the last build) past which an edit rebuilds (measured above)
 REBUILD_AT = 3.0

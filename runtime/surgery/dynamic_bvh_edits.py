@@ -10,7 +10,7 @@ from .._shared.jit import F1, F2, I1, I2, helper, i8, kernel, record
 from .bvh_build import N1
 
 #: a leaf that would hold more live faces than this is split
-LEAF_MAX = 8
+LEAF_MAX = 16
 #: the numba type of ``DynamicBVH._st`` (for precompile signatures)
 STATE = record(F2, F2, N1, N1, N1, N1, N1, N1, N1, N1, F2, I2, N1, I1, F1)
 
