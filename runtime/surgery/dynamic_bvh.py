@@ -44,11 +44,11 @@ from .dynamic_bvh_edits import LEAF_MAX, _adopt, _change
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
 
-#: faces per leaf at build (half of ``LEAF_MAX``: room to grow before a split). Larger than a static
-#: tree's 4 (``bvh.LEAF_SIZE``): half the nodes, so half the tree's memory and of the bone influences a
+#: faces per leaf at build: half of ``LEAF_MAX``, room to grow before a split. 8, twice a static
+#: tree's (``bvh.LEAF_SIZE``): half the nodes, so half the tree's memory and of the bone influences a
 #: posed stroke keeps per node, and fewer posed boxes a stroke in a new pose computes; queries and
 #: edits measured the same (module docstring)
-LEAF_SIZE = 8
+LEAF_SIZE = LEAF_MAX // 2
 
 #: ``degradation`` (SAH relative to the last build) past which an edit rebuilds (measured above)
 REBUILD_AT = 3.0
