@@ -87,10 +87,12 @@ class Rig:
 
     def clip_index(self, clip) -> int:
         """Index of a clip given by name or index; a clear error lists the valid names."""
-        names = [c.name for c in self.clips]
+        if type(clip) is int and 0 <= clip < len(self.clips):       # the common case, per frame
+            return clip
         index = item_index(clip, len(self.clips), "clip", f"the rig has {len(self.clips)} clips")
         if index is not None:
             return index
+        names = [c.name for c in self.clips]
         if clip in names:
             return names.index(clip)
         raise InvalidInputError(f"unknown clip {clip!r}; valid clips: {', '.join(map(repr, names)) or 'none'}")

@@ -1,0 +1,101 @@
+"""What a fresh install waits for: the first tear, skin and cut in one process, and ``cgaskin demo``,
+each with an empty numba cache, with the compile seconds of every compiled function.
+
+    python -m benchmarks.bench_cold_start [first_tear|first_skin|first_cut|demo ...] [--top N] [--variants]
+
+Each case runs in a child process whose ``NUMBA_CACHE_DIR`` is a new empty folder (a fresh install:
+nothing compiled, nothing cached). numba's event API (``numba:compile`` events) gives each function's
+compile time; a function's *own* seconds leave out the functions compiled while it was (its callees),
+so that the own column adds up to the compile total. Goals (issue 23, 2-core machine): first tear
+<= 15 s, cold demo <= 20 s.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+CASES = {
+    "first_skin": "import cgaskin; rig = cgaskin.capsule_arm(); cgaskin.skin(rig, rig.pose('wave', 1.0))",
+    "first_cut": "import cgaskin; rig = cgaskin.capsule_arm(); cgaskin.cut(rig, [1, 0, 0], [1.2, 0, 0])",
+    "first_tear": ("import cgaskin; rig = cgaskin.capsule_arm(); "
+                   "cgaskin.tear(rig, ([0.6, 0.05, 1.0], [0.6, 0.05, 0.0]), ([1.2, 0.05, 1.0], [1.2, 0.05, 0.0]))"),
+    "demo": "from cgaskin.app.cli import main; import sys, tempfile; main(['demo', '--out', tempfile.mkdtemp()])",
+}
+
+# run in the child: the case, with numba's compile events recorded
+_CHILD = """
+import json, sys, time
+from numba.core import event
+start = time.perf_counter()
+with event.install_recorder("numba:compile") as recorder:
+    exec(sys.argv[1])
+wall = time.perf_counter() - start
+events = [(t, e.is_start, str(e.data["dispatcher"].py_func.__qualname__) + " " + e.data["dispatcher"].py_func.__module__,
+           str(e.data.get("args"))) for t, e in recorder.buffer]
+print("@@" + json.dumps({"wall": wall, "events": events}))
+"""
+
+
+def _own_seconds(events: list) -> dict:
+    """{(function, args): [own seconds, compiles]} from nested start/end events (one thread)."""
+    own, stack = {}, []
+    for t, is_start, name, args in events:
+        if is_start:
+            stack.append([name, args, t, 0.0])
+            continue
+        name, args, started, children = stack.pop()
+        inclusive = t - started
+        entry = own.setdefault((name, args), [0.0, 0])
+        entry[0] += inclusive - children
+        entry[1] += 1
+        if stack:
+            stack[-1][3] += inclusive
+    return own
+
+
+def run_case(case: str) -> tuple[float, dict]:
+    """Wall seconds of ``case`` in a fresh process with an empty cache, and its compile table."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        done = subprocess.run([sys.executable, "-c", _CHILD, CASES[case]], env=env, capture_output=True,
+                              text=True, check=True)
+    line = next(line for line in done.stdout.splitlines() if line.startswith("@@"))
+    result = json.loads(line[2:])
+    return result["wall"], _own_seconds(result["events"])
+
+
+def main(argv: list[str]) -> None:
+    top, variants = 15, "--variants" in argv
+    if variants:
+        argv.remove("--variants")
+    if "--top" in argv:
+        i = argv.index("--top")
+        top = int(argv[i + 1])
+        del argv[i:i + 2]
+    cases = argv or ["first_tear", "demo"]
+    for case in cases:
+        started = time.perf_counter()
+        wall, table = run_case(case)
+        compile_total = sum(seconds for seconds, _ in table.values())
+        print(f"\n{case}: {wall:.1f} s in the process ({time.perf_counter() - started:.1f} s with its start), "
+              f"{compile_total:.1f} s compiling {len(table)} variants")
+        by_function = {}
+        for (name, _args), (seconds, count) in table.items():
+            entry = by_function.setdefault(name, [0.0, 0])
+            entry[0] += seconds
+            entry[1] += count
+        print(f"  {'own s':>6} {'variants':>8}  function")
+        for name, (seconds, count) in sorted(by_function.items(), key=lambda kv: -kv[1][0])[:top]:
+            print(f"  {seconds:6.2f} {count:8d}  {name}")
+        if variants:        # every compiled signature: what compiles more than once, and with what
+            print(f"\n  {'own s':>6}  function and argument types")
+            for (name, args), (seconds, _) in sorted(table.items()):
+                print(f"  {seconds:6.2f}  {name} {args}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
