@@ -72,7 +72,9 @@ def _tree(positions, faces, one_leaf_up_to):
     if faces.shape[0] <= one_leaf_up_to:
         return _one_leaf(positions, faces, BOX_PADDING)
     order = np.arange(faces.shape[0]).astype(np.int32)
-    lo, hi, left, right, start, count, n, _ = _build(positions, faces, order, LEAF_SIZE, BOX_PADDING, 0)
+    # int64 arguments, not the literals numba would see: the build Python calls is then the one compiled
+    lo, hi, left, right, start, count, n, _ = _build(positions, faces, order, np.int64(LEAF_SIZE), BOX_PADDING,
+                                                     np.int64(0))
     return lo[:n].copy(), hi[:n].copy(), left[:n].copy(), right[:n].copy(), start[:n].copy(), count[:n].copy(), order
 
 

@@ -78,6 +78,11 @@ def no_posing() -> tuple:
 
 
 # ---- posed boxes and positions, where a query reaches ----------------------------------------------
+#: ``_carried``'s ref for "no reference bone" (an int64 like the bone ids it is passed, so that numba
+#: compiles one variant rather than one per argument type and literal)
+NO_BONE = np.int64(-1)
+
+
 @helper
 def _carried(affines, b, ref, rest_lo, rest_hi, node, r):
     """(centre, half extent) along axis r of node's rest box carried by bone b's map less bone ref's
@@ -110,7 +115,7 @@ def _posed_box(bvh, posing, node):
         while bits != np.uint64(0):
             if bits & np.uint64(1):
                 for r in range(3):
-                    c, h = _carried(affines, b, -1, rest_lo, rest_hi, node, r)
+                    c, h = _carried(affines, b, NO_BONE, rest_lo, rest_hi, node, r)
                     lo[node, r], hi[node, r] = min(lo[node, r], c - h), max(hi[node, r], c + h)
             bits = bits >> np.uint64(1)
             b += 1
@@ -122,11 +127,12 @@ def _posed_box(bvh, posing, node):
             if bones[node, j] >= 0 and lows[node, j] > lows[node, ref]:
                 ref = j
         for r in range(3):
-            c, h = _carried(affines, bones[node, ref], -1, rest_lo, rest_hi, node, r)
+            c, h = _carried(affines, np.int64(bones[node, ref]), NO_BONE, rest_lo, rest_hi, node, r)
             low, high = c - h, c + h
             for j in range(TABLE):
                 if j != ref and bones[node, j] >= 0:
-                    c, h = _carried(affines, bones[node, j], bones[node, ref], rest_lo, rest_hi, node, r)
+                    c, h = _carried(affines, np.int64(bones[node, j]), np.int64(bones[node, ref]), rest_lo, rest_hi,
+                                    node, r)
                     w0, w1 = lows[node, j] / WEIGHT_STEPS, highs[node, j] / WEIGHT_STEPS
                     low += min(w0 * (c - h), w1 * (c - h))
                     high += max(w0 * (c + h), w1 * (c + h))
