@@ -1,10 +1,11 @@
-"""Write (or check) ``generated/``: the catalogue printed as numba modules with stamped headers
-(``codegen.headers``), and for ``--target`` the other targets' files in ``generated/<target>/``.
+"""Write (or check) ``generated/``: the built-in catalogue (``codegen.catalogue``) through the build
+pipeline (``codegen.pipeline``), and the two modules only it has.
 
 Modules:
-    layout.py     blade orders and sizes shared by codegen and runtime (plain constants)
+    layout.py     blade orders and sizes shared by codegen and runtime (``codegen.layouts``, as constants)
     kernels.py    every catalogue kernel (scalar form) and its ``_batch`` row loop
     skinning.py   the hoisted skinning blend loops (serial and prange), built on kernels.py
+and for each other target present (``--target``) its files in ``generated/<target>/``.
 
 Each header records the generator version, the sympy version, the algebra, a hash of the kernel
 specs, and the hashes of the generated modules it imports: numba's on-disk cache keys on a file's own
@@ -19,44 +20,44 @@ from pathlib import Path
 
 import sympy
 
-from . import catalogue, printer
-from .headers import digest as _digest, python_header as _header, target_header
-from .headers import without_sympy_version as _without_sympy_version
+from . import catalogue, layouts, pipeline
+from .headers import digest, python_header, stamp, without_sympy_version
 from .ir import CodegenError
+from .trace import Compiled
 
 GENERATED_DIR = Path(__file__).resolve().parent.parent / "generated"
+COMMAND = "cgaskin build"
+SOURCE = "codegen/"
+
+
+def builtin() -> pipeline.Catalogue:
+    """The built-in catalogue as the pipeline builds it."""
+    return pipeline.Catalogue(
+        compiled=tuple(Compiled.of(make()) for make in catalogue.KERNELS), label=SOURCE, command=COMMAND,
+        title="CGA kernels (scalar form and row loops).", prefix="cgaskin", source=SOURCE, skinning=True)
+
+
+def _header(title: str, spec_hash: str, imports: dict[str, str]) -> str:
+    return python_header(title, stamp(COMMAND, spec_hash, imports=imports, source=SOURCE))
 
 
 def layout_module() -> str:
-    from .catalogue import AFFINE_LABELS, LOG, MOTOR, PLANE, VERSOR
     from . import algebra
     disp = lambda blades: tuple(algebra.blade_display(algebra.mask_of(b)) for b in blades)  # noqa: E731
     body = [
-        f"VERSOR_BLADES = {disp(VERSOR)!r}",
-        f"MOTOR_BLADES = {disp(MOTOR)!r}",
-        f"PLANE_BLADES = {disp(PLANE)!r}",
-        f"LOG_BLADES = {disp(LOG)!r}",
-        f"AFFINE_LABELS = {AFFINE_LABELS!r}",
-        "VERSOR_SIZE = 12",
-        "MOTOR_SIZE = 8",
-        "PLANE_SIZE = 4",
-        "LOG_SIZE = 7",
-        "IDENTITY_VERSOR = (1.0,) + (0.0,) * 11",
+        f"VERSOR_BLADES = {disp(layouts.VERSOR)!r}",
+        f"MOTOR_BLADES = {disp(layouts.MOTOR)!r}",
+        f"PLANE_BLADES = {disp(layouts.PLANE)!r}",
+        f"LOG_BLADES = {disp(layouts.LOG)!r}",
+        f"AFFINE_LABELS = {layouts.AFFINE_LABELS!r}",
+        f"VERSOR_SIZE = {len(layouts.VERSOR)}",
+        f"MOTOR_SIZE = {len(layouts.MOTOR)}",
+        f"PLANE_SIZE = {len(layouts.PLANE)}",
+        f"LOG_SIZE = {len(layouts.LOG)}",
+        f"IDENTITY_VERSOR = (1.0,) + (0.0,) * {len(layouts.VERSOR) - 1}",
     ]
     text = "\n".join(body) + "\n"
-    return _header("Blade orders of the generated kernels' array layouts.", _digest(text), {}) + "\n" + text
-
-
-def kernels_module(kernels) -> tuple[str, str]:
-    spec_hash = _digest("\n".join(k.spec_text for k in kernels))
-    parts = ["import math\n\nimport numpy as np\nfrom numba import njit\n"]
-    for k in kernels:
-        parts.append(printer.print_kernel(k))
-        parts.append(printer.print_batch(k))
-    names = ", ".join(repr(k.name) for k in kernels)
-    parts.append(f"KERNEL_NAMES = ({names},)\n")
-    body = "\n\n".join(parts)
-    return _header("CGA kernels (scalar form and row loops).", spec_hash, {}) + "\n" + body, spec_hash
+    return _header("Blade orders of the generated kernels' array layouts.", digest(text), {}) + "\n" + text
 
 
 def skinning_module(kernels_hash: str, affine) -> str:
@@ -117,28 +118,30 @@ def skinning_module(kernels_hash: str, affine) -> str:
               "@njit(cache=True, error_model='numpy', nogil=True, parallel=True, fastmath={'contract'})", "prange"),
     ])
     return _header("Hoisted skinning: blend per-bone affine coefficients, apply once per vertex.",
-                   _digest(body), {"kernels": kernels_hash}) + "\n" + body
+                   digest(body), {"kernels": kernels_hash}) + "\n" + body
 
 
-def render(targets=("numba",)) -> dict[str, str]:
-    """{path under generated/: text}: the numba modules, and ``<target>/...`` for each other target."""
-    from . import targets as printers
-    kernels = [make() for make in catalogue.KERNELS]
-    kernels_text, spec_hash = kernels_module(kernels)
-    affine = next(k for k in kernels if k.name == "affine_point")
+def _render(targets=("numba",)) -> tuple[dict[str, str], dict[str, str]]:
+    """({path under generated/: text}, {kernel name: its block of kernels.py})."""
+    cat = builtin()
+    kernels_text, chunks = pipeline.numba_module(cat)
+    affine = next(c.kernel for c in cat.compiled if c.name == "affine_point")
     files = {
         "__init__.py": '"""Generated CGA kernels (see codegen/). Do not edit by hand."""\n',
         "layout.py": layout_module(),
         "kernels.py": kernels_text,
         # hashed without the sympy version: a callee whose code is unchanged must not change the caller
-        "skinning.py": skinning_module(_digest(_without_sympy_version(kernels_text)), affine),
+        "skinning.py": skinning_module(digest(without_sympy_version(kernels_text)), affine),
     }
     for target in targets:
         if target != "numba":
-            header = target_header(f"cgaskin build --target {target}", spec_hash)
-            for name, text in printers.render(target, kernels, prefix="cgaskin", header=header, skinning=True).items():
-                files[f"{target}/{name}"] = text
-    return files
+            files.update((f"{target}/{name}", text) for name, text in pipeline.target_files(cat, target).items())
+    return files, chunks
+
+
+def render(targets=("numba",)) -> dict[str, str]:
+    """{path under generated/: text}: the numba modules, and ``<target>/...`` for each other target."""
+    return _render(targets)[0]
 
 
 def present_targets(directory: Path = GENERATED_DIR) -> tuple[str, ...]:
@@ -149,42 +152,31 @@ def present_targets(directory: Path = GENERATED_DIR) -> tuple[str, ...]:
 
 def report_table() -> str:
     """The op-count table of the built-in kernels (``cgaskin build --report``)."""
-    from . import opcount
-    return opcount.table([(k.name, opcount.op_counts(k), "") for k in (make() for make in catalogue.KERNELS)])
+    return pipeline.report_table(builtin())
 
 
 def build(check: bool = False, directory: Path = GENERATED_DIR, log=print, report: bool = False,
           targets=None) -> int:
-    """Write generated/ (or, with check=True, compare it). Returns the number of stale files. ``report``:
-    log the op-count table too. ``targets``: the printers to run (default: numba and every target
-    already in generated/); the others' files are written to ``generated/<target>/``. A check
-    compares every target already in generated/ as well: ``--check`` covers every stamped file there."""
+    """Write generated/ (or, with check=True, compare it). Returns the number of stale kernels and files
+    (a stale kernels.py counts its stale kernels; 0 after a build). ``report``: log the op-count table
+    too. ``targets``: the printers to run (default: numba and every target already in generated/); the
+    others' files are written to ``generated/<target>/``. A check compares every target already in
+    generated/ as well: ``--check`` covers every stamped file there."""
     start = time.perf_counter()
     if targets is None or check:        # a check covers every target in generated/, whatever --target says
         targets = (*present_targets(directory), *(targets or ()))
     targets = tuple(dict.fromkeys(("numba", *targets)))
-    files = render(targets)
+    files, chunks = _render(targets)
     if report:
         log(report_table())
-    stale = []
-    for name, text in files.items():
-        path = directory / name
-        current = path.read_text(encoding="utf-8") if path.exists() else None
-        if check:
-            differs = current is None or _without_sympy_version(current) != _without_sympy_version(text)
-        else:
-            differs = current != text
-        if differs:
-            stale.append(name)
-            if not check:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_text(text, encoding="utf-8")
+    done = pipeline.sync({directory / name: text for name, text in files.items()}, check, SOURCE,
+                         f"run `{COMMAND}`", chunks={directory / "kernels.py": chunks},
+                         shown=lambda path: f"generated/{path.relative_to(directory).as_posix()}")
+    for message in done.messages:
+        log(message)
     elapsed = time.perf_counter() - start
-    if check:
-        for name in stale:
-            log(f"stale: generated/{name} differs from what codegen/ emits; run `cgaskin build`")
-        if not stale:
-            log(f"generated/ is up to date ({len(files)} files, {elapsed:.1f} s)")
-    else:
-        log(f"wrote {len(stale)} of {len(files)} files in generated/ ({elapsed:.1f} s)")
-    return len(stale)
+    if check and not done.stale:
+        log(f"generated/ is up to date ({len(files)} files, {elapsed:.1f} s)")
+    elif not check:
+        log(f"wrote {len(done.written)} of {len(files)} files in generated/ ({elapsed:.1f} s)")
+    return done.stale

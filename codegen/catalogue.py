@@ -11,25 +11,22 @@ e0 coefficient, which for the 12-blade type never depends on the point — the h
 """
 from __future__ import annotations
 
-from .kernel_parts import AFFINE_LABELS, LOG, MOTOR, PLANE, VERSOR
-from .kernels_exp_log import versor_exp, versor_log
 from . import kernels_language as language
+from .kernels_exp_log import versor_exp, versor_log
 from .kernels_geometry import barycentric, plane_from_points, plane_transform, segment_plane
 from .kernels_skinning import affine_point, sandwich_versor_point, versor_to_affine
 from .kernels_versor import (versor_dilator, versor_from_matrix, versor_normalise, versor_residual, versor_rotor,
                              versor_rotor_quaternion)
 
+# the kernels written in the kernel language, as catalogue entries like the builder ones
 versor_translator, gp_motor_motor, gp_versor_versor, reverse_versor, inverse_versor, plane_from_normal_distance, \
     point_plane_distance = map(language.built, (
         language.versor_translator, language.gp_motor_motor, language.gp_versor_versor, language.reverse_versor,
         language.inverse_versor, language.plane_from_normal_distance, language.point_plane_distance))
 
-# the order of the kernels in generated/kernels.py
+#: every built-in kernel, as a function returning its Kernel IR, in the order of generated/kernels.py
 KERNELS = (versor_translator, versor_rotor, versor_rotor_quaternion, versor_dilator, versor_from_matrix,
            gp_motor_motor, gp_versor_versor, reverse_versor, inverse_versor, versor_residual,
            versor_normalise, sandwich_versor_point, versor_to_affine, affine_point,
            plane_from_normal_distance, plane_from_points, plane_transform, point_plane_distance,
            segment_plane, barycentric, versor_log, versor_exp)
-
-# the layouts are re-exported for build.py, which prints them into generated/layout.py
-__all__ = ["AFFINE_LABELS", "KERNELS", "LOG", "MOTOR", "PLANE", "VERSOR"]

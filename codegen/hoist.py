@@ -1,4 +1,4 @@
-"""Staging passes of the kernel language's builds (``codegen.catalogue_build``): versor pruning and hoisting.
+"""Staging passes of the kernel language's builds (``codegen.trace``): versor pruning and hoisting.
 
 ``versor_pruned`` drops result blades that vanish for every versor input (decided exactly with a Gröbner
 basis of the versor conditions); ``stage`` splits a kernel with uniform inputs into the part computed

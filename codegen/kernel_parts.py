@@ -1,4 +1,4 @@
-"""Blade layouts of the kernels' arrays and the multivector pieces several kernel families build from.
+"""The multivector pieces several builder kernel families build from (the array layouts are in ``layouts``).
 
 The conventions these follow are in catalogue.py's docstring (design.md §2).
 """
@@ -7,14 +7,9 @@ from __future__ import annotations
 import sympy
 from sympy import Rational
 
+from .layouts import ROTOR, VERSOR
 from .symbolic import MV
 
-VERSOR = ("s", "e12", "e13", "e23", "e1i", "e2i", "e3i", "e123i", "eio", "e12io", "e13io", "e23io")
-MOTOR = VERSOR[:8]
-ROTOR = ("s", "e12", "e13", "e23")
-PLANE = ("e1", "e2", "e3", "ei")                 # dual plane n + d e∞ stored as (n1, n2, n3, d)
-LOG = ("e12", "e13", "e23", "e1i", "e2i", "e3i", "eio")
-AFFINE_LABELS = tuple(f"A[{r},{c}]" for r in range(3) for c in range(4))
 HALF = Rational(1, 2)
 
 

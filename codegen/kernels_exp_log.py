@@ -6,7 +6,8 @@ from sympy import Piecewise, Rational, cos, sin, sqrt, atan2, log
 
 from . import algebra
 from .ir import KernelBuilder
-from .kernel_parts import HALF, LOG, ROTOR, VERSOR, dilator, translator
+from .kernel_parts import HALF, dilator, translator
+from .layouts import LOG, ROTOR, VERSOR
 
 # Below these, closed forms divide 0 by 0: use Taylor series accurate to far below 1e-16.
 SMALL_ANGLE = 1e-4

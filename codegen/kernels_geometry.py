@@ -1,23 +1,15 @@
-"""Geometry kernels: planes, point-plane distances, segment-plane meets, barycentric coordinates."""
+"""Geometry kernels that need named intermediates (coordinates relative to a vertex, the idempotent
+split): planes through points or moved by a versor, segment-plane meets, barycentric coordinates. The
+plane from a normal and the point-plane distance are written in the language (``kernels_language``)."""
 from __future__ import annotations
 
 from sympy import sqrt
 
 from . import algebra
 from .ir import CodegenError, KernelBuilder
-from .kernel_parts import PLANE, VERSOR, euclid, idempotent_versor
+from .kernel_parts import euclid, idempotent_versor
+from .layouts import PLANE, VERSOR
 from .symbolic import MV, up
-
-
-def plane_from_normal_distance():
-    k = KernelBuilder("plane_from_normal_distance",
-                      "Dual plane n̂ + d e∞ (n normalised, d scaled to match) of {x : n·x = d}.")
-    n, d = k.array("n", 3), k.scalar("d")
-    inv = k.intermediate("inv_len")[0]
-    k.let(inv, 1 / sqrt(sum(c ** 2 for c in n)))
-    P = k.mv(PLANE, [n[0], n[1], n[2], d])
-    k.output_multivector("plane", P, PLANE, scale=inv)
-    return k.build()
 
 
 def plane_from_points():
@@ -58,15 +50,6 @@ def plane_transform():
     n = euclid(k, moved)
     k.let(inv, 1 / sqrt(sum(c.as_expr() ** 2 for c in n)))
     k.output_multivector("plane", moved.grade(1), PLANE, scale=inv)
-    return k.build()
-
-
-def point_plane_distance():
-    k = KernelBuilder("point_plane_distance",
-                      "Signed distance up(x)·π = n·x − d of a point from a unit dual plane π = n + d e∞.")
-    p, x = k.multivector("plane", PLANE), k.array("x", 3)
-    X = up(k.ring, [k.poly(c) for c in x])
-    k.output(["distance"], [X.lc(k.mv(PLANE, p))["s"]])
     return k.build()
 
 

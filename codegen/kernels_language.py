@@ -4,8 +4,8 @@ language cannot say yet: named intermediates that stop the expansion (the idempo
 sandwiches, coordinates relative to a vertex), named stages with a fixed layout (``versor_to_affine``),
 or branches chosen by hand (exp, log, Shepperd).
 
-Each ``@kernel`` here keeps the argument names, layouts and output order of the builder kernel it
-replaced, so generated/kernels.py's signatures did not change.
+Each ``@kernel`` here keeps the argument names, layouts and output order that generated/kernels.py's
+callers rely on; the builder versions these replaced are gone (one definition per kernel).
 """
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ def point_plane_distance(plane: cga.Plane, x: cga.Point) -> cga.Scalar:
 def built(spec):
     """A catalogue entry (a function returning the Kernel IR) for a language kernel."""
     def make():
-        from .catalogue_build import compile_kernel          # sympy, and build.py imports the catalogue
+        from .trace import compile_kernel                    # sympy: only when the catalogue is built
         return compile_kernel(spec).kernel
     make.__name__ = spec.name
     return make

@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 from .ir import CodegenError, KernelBuilder
-from .kernel_parts import AFFINE_LABELS, VERSOR, down, euclid, idempotent_versor
+from .kernel_parts import down, euclid, idempotent_versor
+from .layouts import AFFINE_LABELS, VERSOR
 from .symbolic import up
 
 

@@ -1,21 +1,17 @@
-"""Versor kernels: constructors (translator, rotor, dilator, from a matrix) and products."""
+"""Versor kernels the kernel language cannot say yet: constructors with named intermediates (rotor,
+dilator, from a matrix by Shepperd's branches), the residual and normalise. The translator and the
+products (gp, reverse, inverse) are written in the language (``kernels_language``)."""
 from __future__ import annotations
 
 import sympy
 from sympy import Piecewise, cos, sin, sqrt
 
 from .ir import KernelBuilder
-from .kernel_parts import HALF, MOTOR, ROTOR, VERSOR, dilator, rotor_from_quaternion, translator
+from .kernel_parts import HALF, dilator, rotor_from_quaternion, translator
+from .layouts import ROTOR, VERSOR
 
 
 # ---- construction -------------------------------------------------------------------------------
-def versor_translator():
-    k = KernelBuilder("versor_translator", "Translator T(t) = 1 − ½ t e∞ as a versor; t : (3,).")
-    t = k.array("t", 3)
-    k.output_multivector("T", translator(k, t), VERSOR)
-    return k.build()
-
-
 def versor_rotor():
     k = KernelBuilder("versor_rotor",
                       "Rotor about ``axis`` (3,), any nonzero length, by ``angle`` radians (right-handed).")
@@ -91,37 +87,7 @@ def versor_from_matrix():
     return k.build()
 
 
-# ---- products ------------------------------------------------------------------------------------
-def gp_motor_motor():
-    k = KernelBuilder("gp_motor_motor", "Geometric product a b of two motors (b applies first).")
-    a, b = k.multivector("a", MOTOR), k.multivector("b", MOTOR)
-    k.output_multivector("ab", k.mv(MOTOR, a) * k.mv(MOTOR, b), MOTOR)
-    return k.build()
-
-
-def gp_versor_versor():
-    k = KernelBuilder("gp_versor_versor", "Geometric product a b of two versors (b applies first).")
-    a, b = k.multivector("a", VERSOR), k.multivector("b", VERSOR)
-    k.output_multivector("ab", k.mv(VERSOR, a) * k.mv(VERSOR, b), VERSOR)
-    return k.build()
-
-
-def reverse_versor():
-    k = KernelBuilder("reverse_versor", "Reverse Ṽ (grades 2 and 3 change sign).")
-    v = k.multivector("v", VERSOR)
-    k.output_multivector("rev", k.mv(VERSOR, v).reverse(), VERSOR)
-    return k.build()
-
-
-def inverse_versor():
-    k = KernelBuilder("inverse_versor", "Inverse Ṽ / ⟨V Ṽ⟩₀ (exact for versors, whose V Ṽ is a scalar).")
-    v = k.multivector("v", VERSOR)
-    V = k.mv(VERSOR, v)
-    norm = (V * V.reverse())["s"].as_expr()
-    k.output_multivector("inv", V.reverse(), VERSOR, scale=1 / norm)
-    return k.build()
-
-
+# ---- how far from a versor, and back to one ---------------------------------------------------
 def versor_residual():
     k = KernelBuilder("versor_residual",
                       "How far V is from a similarity versor: (largest |non-scalar coefficient of V Ṽ|,"

@@ -52,6 +52,7 @@ import inspect
 import typing
 
 from . import algebras
+from .layouts import MOTOR, PLANE, ROTOR, VERSOR
 from .values import Constant, Value, _apply, _error, _functions, _ring
 
 
@@ -170,9 +171,6 @@ class _MultivectorFactory:
         return f"{self.space}.Multivector"
 
 
-_VERSOR = ("s", "e12", "e13", "e23", "e1i", "e2i", "e3i", "e123i", "eio", "e12io", "e13io", "e23io")
-
-
 class KernelAlgebra(algebras.Algebra):
     """An ``Algebra`` with the language's types, constants and scalar functions as attributes; equal to
     the plain algebra ``base`` and sharing its tables. Subclasses declare the types."""
@@ -193,12 +191,12 @@ class ConformalAlgebra(KernelAlgebra):
     Scalar = ScalarType("Scalar", ("s",))
     Vector = Type("Vector", ("e1", "e2", "e3"))
     Point = PointType({"e1": (1, 0), "e2": (1, 1), "e3": (1, 2), "ei": (1, "norm"), "eo": (1, None)})
-    Plane = Type("Plane", ("e1", "e2", "e3", "ei"))
+    Plane = Type("Plane", PLANE)
     Sphere = Type("Sphere", ("e1", "e2", "e3", "ei", "eo"))
     Line = Type("Line", ("e12", "e13", "e23", "e1i", "e2i", "e3i"))
-    Rotor = Type("Rotor", _VERSOR[:4], versor=True)
-    Motor = Type("Motor", _VERSOR[:8], versor=True)
-    Versor = Type("Versor", _VERSOR, versor=True)
+    Rotor = Type("Rotor", ROTOR, versor=True)
+    Motor = Type("Motor", MOTOR, versor=True)
+    Versor = Type("Versor", VERSOR, versor=True)
     e1, e2, e3, einf, eo = (Constant(n) for n in ("e1", "e2", "e3", "ei", "eo"))
 
     def __init__(self):

@@ -39,9 +39,10 @@ except ImportError as exc:                                   # pragma: no cover 
     raise ImportError(f"cgaskin verify needs sympy and clifford: pip install 'cgaskin[test]' ({exc})") from exc
 
 from . import algebras
-from .catalogue_build import build_catalogue, compile_kernel, load_catalogue, output_path
+from .catalogue_build import build_catalogue, output_path
 from .functions import magnitude
-from .language import _VERSOR
+from .layouts import VERSOR
+from .trace import compile_kernel, load_catalogue
 from .values import as_value, building
 from .verify_clifford import CliffordMV, backend
 
@@ -94,7 +95,7 @@ def draw(typ, rng, cap: float, index: int = 0):
         v = versor.motor(_unit(rng), angle, t)
         if typ.name == "Versor":
             v = versor.compose(v, versor.dilator(float(np.exp(rng.uniform(np.log(0.01), np.log(100.0))))))
-        names = [_CGA.blade_name(_CGA.mask_of(n)) for n in _VERSOR]
+        names = [_CGA.blade_name(_CGA.mask_of(n)) for n in VERSOR]
         return np.array([v[names.index(n)] for n in typ.blades])
     return rng.normal(size=typ.size) * 10.0 ** rng.uniform(-1, 1, typ.size)
 

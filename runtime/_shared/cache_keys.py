@@ -1,23 +1,32 @@
-"""numba's on-disk cache, keyed by every cgaskin source a kernel is built from.
+"""numba's on-disk cache for cgaskin's kernels, keyed by every cgaskin source a kernel is built from.
 
-numba keys a cached kernel by the source of its own file only. A kernel compiles the helpers and
+numba keys a cached function by the source of its own file only. A kernel compiles the helpers and
 constants it imports from other modules into its machine code, so a changed helper in another file
 would leave every kernel that uses it stale (an upgraded install, a developer's edit) with no error.
-``install()`` makes the key of a kernel defined in cgaskin the digest of its own file and of every
-cgaskin module it imports, transitively (read from the import statements, so constants count too);
-functions outside cgaskin keep numba's key.
+``keyed(dispatcher)``, which ``_shared.jit`` calls on each dispatcher it makes, gives that dispatcher a
+cache whose key is numba's key plus the digest of the kernel's module and of every module of its
+package that it imports, transitively (read from the import statements, so constants count too).
+Nothing global changes: numba's classes, other libraries' functions and generated/'s kernels (whose
+stamped headers carry the hashes of what they import) keep numba's key.
+
+The numba internals this relies on (``missing()`` checks them; tests/app/test_cache_keys.py fails
+naming the one that is gone):
+  * a dispatcher loads from and saves to ``dispatcher._cache``, which ``enable_caching()`` sets to a
+    ``numba.core.caching.FunctionCache`` (numba's CUDA target installs its own cache class the same way);
+  * a ``Cache`` builds its implementation from the class attribute ``_impl_class`` (the extension point
+    its docstring names) and keys its index by ``self._impl.locator.get_source_stamp()``.
+Both hold from numba 0.59 to 0.68 at least. Where they do not, kernels compile without the on-disk
+cache, with a warning: slower, never stale.
 """
 from __future__ import annotations
 
 import functools
 import hashlib
 import importlib.util
-import os
 import re
 import sys
+import warnings
 from pathlib import Path
-
-_PACKAGES = ("cgaskin",)
 
 
 #: ``from .x import a, b`` (names in parentheses may span lines) and ``import x.y``, at any depth: a
@@ -28,10 +37,11 @@ _IMPORT = re.compile(r"^[ \t]*(?:from[ \t]+([.\w]+)[ \t]+import[ \t]+(\([^)]*\)|
 
 @functools.lru_cache(maxsize=None)
 def _imports(module: str) -> tuple[str, ...]:
-    """The cgaskin modules that ``module`` (a loaded module's name) imports, directly."""
+    """The modules of ``module``'s own package (its top-level name) that it imports, directly."""
     loaded = sys.modules[module]
     path, name = Path(loaded.__file__), loaded.__name__     # (its own name: ``cgaskin.versor`` is an alias)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    top = name.split(".")[0]
     found = set()
     for source, imported, modules in _IMPORT.findall(path.read_text(encoding="utf-8")):
         if source:
@@ -44,7 +54,8 @@ def _imports(module: str) -> tuple[str, ...]:
                               if item.split()]
         else:
             names = [item.split()[0] for item in modules.split(",") if item.split()]
-        found.update(name for name in names if name.split(".")[0] in _PACKAGES and _is_module(name))
+        # (this module keys kernels but compiles into none: editing it must not recompile them all)
+        found.update(name for name in names if name.split(".")[0] == top and name != __name__ and _is_module(name))
     return tuple(sorted(found))
 
 
@@ -56,19 +67,8 @@ def _is_module(name: str) -> bool:
 
 
 @functools.lru_cache(maxsize=None)
-def _module_of(py_file: str) -> str | None:
-    """The name of the loaded cgaskin module whose source is ``py_file``, or None."""
-    path = os.path.realpath(py_file)
-    for name, module in list(sys.modules.items()):
-        if name.split(".")[0] in _PACKAGES and getattr(module, "__file__", None) \
-                and os.path.realpath(module.__file__) == path:
-            return module.__name__          # (not an alias's: the key must not depend on import order)
-    return None
-
-
-@functools.lru_cache(maxsize=None)
 def _closure_digest(module: str) -> bytes:
-    """sha256 over the sources of ``module`` and every cgaskin module it imports, transitively."""
+    """sha256 over the sources of ``module`` and every module of its package it imports, transitively."""
     seen, stack = set(), [module]
     while stack:
         name = sys.modules[stack.pop()].__name__        # (aliases as the module's own name)
@@ -88,20 +88,76 @@ def _source_digest(module: str) -> bytes:
     return hashlib.sha256(Path(sys.modules[module].__file__).read_bytes()).digest()
 
 
-def install() -> None:
-    """Key cgaskin's cached kernels by their import closure (idempotent)."""
-    from numba.core import caching
-    mixin = caching._SourceFileBackedLocatorMixin
-    if getattr(mixin.get_source_stamp, "_cgaskin", False):
-        return
-    numba_stamp = mixin.get_source_stamp
+def source_stamp(numba_stamp, module: str):
+    """The key of a kernel of ``module``: numba's stamp of its file and the digest of its closure."""
+    if getattr(sys.modules.get(module), "__file__", None) is None:
+        return numba_stamp                               # (not a module read from a file: numba's key)
+    return hashlib.sha256(repr(numba_stamp).encode() + _closure_digest(module)).digest()
+
+
+class _KeyedLocator:
+    """A numba cache locator whose source stamp is ``source_stamp``; the rest is the locator's."""
+
+    def __init__(self, locator, module: str):
+        self._locator, self._module = locator, module
+
+    def __getattr__(self, name):
+        return getattr(self._locator, name)
 
     def get_source_stamp(self):
-        stamp = numba_stamp(self)
-        module = _module_of(self._py_file)
-        if module is None:
-            return stamp
-        return hashlib.sha256(repr(stamp).encode() + _closure_digest(module)).digest()
+        return source_stamp(self._locator.get_source_stamp(), self._module)
 
-    get_source_stamp._cgaskin = True
-    mixin.get_source_stamp = get_source_stamp
+
+def missing() -> str | None:
+    """The numba internal (see the module docstring) this numba lacks, or None when all are there."""
+    try:
+        from numba.core import caching
+        from numba.core.dispatcher import Dispatcher
+    except ImportError as exc:
+        return f"numba.core.caching / numba.core.dispatcher ({exc})"
+    impl = getattr(getattr(caching, "FunctionCache", None), "_impl_class", None)
+    if not isinstance(impl, type):
+        return "numba.core.caching.FunctionCache._impl_class"
+    if not isinstance(getattr(impl, "locator", None), property):
+        return f"the property {impl.__name__}.locator"
+    if not callable(getattr(Dispatcher, "enable_caching", None)):
+        return "numba.core.dispatcher.Dispatcher.enable_caching (which sets dispatcher._cache)"
+    return None
+
+
+@functools.lru_cache(maxsize=None)
+def _cache_class():
+    """A ``FunctionCache`` whose locator is keyed by the function's closure, or None (see ``missing``)."""
+    what = missing()
+    if what is not None:
+        import numba
+        warnings.warn(f"cgaskin: numba {numba.__version__} lacks {what}, which cgaskin keys its kernels' on-disk "
+                      "cache with; its kernels compile without that cache (every process compiles them again)",
+                      RuntimeWarning, stacklevel=3)
+        return None
+    from numba.core import caching
+
+    class ClosureKeyedImpl(caching.FunctionCache._impl_class):
+        def __init__(self, py_func):
+            self._module = py_func.__module__      # (first: the base's __init__ reads the locator)
+            super().__init__(py_func)
+
+        @property
+        def locator(self):
+            return _KeyedLocator(super().locator, self._module)
+
+    class ClosureKeyedCache(caching.FunctionCache):
+        _impl_class = ClosureKeyedImpl
+
+    return ClosureKeyedCache
+
+
+def keyed(dispatcher):
+    """Give ``dispatcher`` (a numba dispatcher made without ``cache=True``) the on-disk cache keyed by its
+    closure; returns it. A plain function (``NUMBA_DISABLE_JIT=1``) is returned as it is."""
+    from numba.core.dispatcher import Dispatcher
+    if isinstance(dispatcher, Dispatcher):
+        cache = _cache_class()
+        if cache is not None:
+            dispatcher._cache = cache(dispatcher.py_func)      # what enable_caching() does, with our class
+    return dispatcher

@@ -4,7 +4,9 @@ Every compiled function is either a ``kernel`` (called from Python) or a ``helpe
 other compiled functions; a ``callee`` is a helper that precompile compiles ahead), each with one
 fixed set of options:
 
-* ``cache=True``: machine code is cached beside the source, so only a fresh install compiles;
+* cached: machine code is cached beside the source, so only a fresh install compiles; the cache is
+  keyed by every cgaskin module the kernel imports (``cache_keys.keyed``), so a changed helper
+  recompiles the kernels that use it;
 * ``nogil=True``: callers may run kernels in threads;
 * ``error_model="numpy"``: division by zero gives inf/NaN like numpy (the kernels check for it)
   instead of raising from compiled code;
@@ -26,13 +28,11 @@ from typing import NamedTuple
 
 from numba import njit, types
 
-from . import cache_keys
-
-cache_keys.install()            # a kernel's cache is keyed by every cgaskin source it imports
+from .cache_keys import keyed
 
 __all__ = ["kernel", "helper", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
 
-_OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
+_OPTIONS = {"nogil": True, "error_model": "numpy"}       # and cached, by ``keyed`` (not numba's cache=True)
 
 # argument types: C-contiguous arrays by dtype and rank ("r": read-only), and scalars
 F1, F2, F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
@@ -82,13 +82,13 @@ def kernel(*signatures: tuple, cost: float = 0.3, fused: bool = False):
     own calls (precompiled), ``cost`` the cold compile seconds of each (for a ``fused`` one, its own
     seconds once its callees are compiled)."""
     def wrap(function):
-        return precompiled(njit(**_OPTIONS)(function), *signatures, cost=cost, fused=fused)
+        return precompiled(keyed(njit(**_OPTIONS)(function)), *signatures, cost=cost, fused=fused)
     return wrap
 
 
 def helper(function):
     """Compile a function that only other compiled functions call (no Python entry point)."""
-    return njit(**_OPTIONS, no_cpython_wrapper=True)(function)
+    return keyed(njit(**_OPTIONS, no_cpython_wrapper=True)(function))
 
 
 def callee(*signatures: tuple, cost: float):

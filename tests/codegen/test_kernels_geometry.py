@@ -1,6 +1,7 @@
 """Geometry kernels against clifford and numpy: planes (from a normal and distance, from points,
 moved by a versor), point-plane distance, segment-plane meet, barycentric coordinates
-(codegen/kernels_geometry.py).
+(codegen/kernels_geometry.py; the plane from a normal and the distance are written in the kernel
+language, codegen/kernels_language.py).
 """
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
 """Versor kernels against clifford and float64 matrices: constructors (translator, rotor, dilator,
-from_matrix), products (gp, reverse, inverse, residual) and normalise (codegen/kernels_versor.py).
+from_matrix), products (gp, reverse, inverse, residual) and normalise (codegen/kernels_versor.py; the
+translator and the products are written in the kernel language, codegen/kernels_language.py).
 """
 from __future__ import annotations
 
