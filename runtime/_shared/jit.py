@@ -71,8 +71,9 @@ SIGNATURES: list = []
 
 def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3, fused: bool = False):
     """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it."""
+    function = getattr(dispatcher, "py_func", dispatcher)       # (a plain function under NUMBA_DISABLE_JIT=1)
     for argtypes in signatures:
-        SIGNATURES.append(Signature(dispatcher.py_func.__module__, dispatcher.__name__, tuple(argtypes),
+        SIGNATURES.append(Signature(function.__module__, function.__name__, tuple(argtypes),
                                     cost, fused))
     return dispatcher
 
