@@ -14,10 +14,12 @@ Columns: the median milliseconds per stroke over the first and the last tenth of
 cost shows that a stroke costs what it touches, a growing one that it costs the whole mesh), the median
 over all, and the memory the strokes took at their peak (the process's peak resident memory from the
 moment the model was built, less its resident memory then; Linux ``clear_refs``) against the bytes of
-the mesh's own arrays (positions, faces, joints, weights, attributes). Two ways per model, each run in
-its own process after a warm-up that compiles every kernel: the functional API (``cgaskin.tear`` on the
-rig the previous stroke returned: a new rig per stroke, whose BVH is built again) and the editing
-session (``cgaskin.Surgery(rig).tear``: arrays with spare capacity, a BVH updated in place).
+the mesh's own arrays (positions, faces, joints, weights, attributes), and the median minor page
+faults per stroke (``resource.getrusage``: fresh pages the operating system mapped and zeroed for the
+stroke, time that goes to memory rather than to the work). Two ways per model, each run in its own
+process after a warm-up that compiles every kernel: the functional API (``cgaskin.tear`` on the rig
+the previous stroke returned: a new rig per stroke, whose BVH is built again) and the editing session
+(``cgaskin.Surgery(rig).tear``: arrays with spare capacity, a BVH updated in place).
 """
 from __future__ import annotations
 
@@ -31,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._timing import print_table
+from ._timing import minor_faults, print_table
 
 
 def _model(name: str, faces: int):
@@ -137,13 +139,15 @@ def run_one(name: str, strokes: int, faces: int, api_name: str) -> dict:
     Path("/proc/self/clear_refs").write_text("5")         # VmHWM := VmRSS from here on
     resident = _rss("VmRSS")
     session = cgaskin.Surgery(rig) if api_name == "session" else None
-    seconds = []
+    seconds, faults = [], []
     for i in range(strokes):
+        faults.append(-minor_faults())
         start = time.perf_counter()
         rig = api(rig, session, blades[i], blades[i + 1])
         seconds.append(time.perf_counter() - start)
+        faults[-1] += minor_faults()
     n_faces = session.n_faces if session is not None else rig.n_faces
-    return {"label": label, "faces": int(n_faces), "seconds": seconds, "mesh_bytes": base,
+    return {"label": label, "faces": int(n_faces), "seconds": seconds, "faults": faults, "mesh_bytes": base,
             "peak": _rss("VmHWM") - resident}
 
 
@@ -173,10 +177,11 @@ def main(argv=None) -> None:
             medians[api] = float(np.median(ms))
             rows.append([r["label"], api, r["faces"], len(ms), float(np.median(ms[:tenth])),
                          float(np.median(ms[-tenth:])), medians[api], medians["functional"] / medians[api],
+                         float(np.median(r["faults"])),
                          r["peak"] / 2**20, r["mesh_bytes"] / 2**20, r["peak"] / r["mesh_bytes"]])
     print_table("progressive incision: each stroke continues the last",
                 ["model", "API", "faces after", "strokes", "first 10% ms", "last 10% ms", "median ms",
-                 "speed-up", "strokes' peak MiB", "mesh MiB", "peak / mesh"], rows)
+                 "speed-up", "faults / stroke", "strokes' peak MiB", "mesh MiB", "peak / mesh"], rows)
 
 
 if __name__ == "__main__":

@@ -48,8 +48,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._shared.cache import rig_cached
 from ..._shared.checks import float_array
 from ..._shared.jit import F1, f8, precompiled
+from ..._shared.memory import Reusable
 from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
@@ -62,7 +64,7 @@ from ..topology import rig_topology
 from .assemble import _split_arrays
 from .cap import _cap
 from .result import NEW_VERTEX, CutResult
-from .split import Split, _classify, _split
+from .split import _classify, scratch, split_halves
 
 __all__ = ["cut", "cut_details", "CutResult", "PlaneMissesMeshWarning", "ON_PLANE_TOLERANCE",
            "PLACEMENT_TOLERANCE"]
@@ -100,6 +102,12 @@ def _copy(rig, name) -> Rig:
 def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutResult:
     """``cut`` with the bookkeeping (``CutResult``): which input vertex each output vertex comes from,
     the new vertices' edges and parameters, the plane and tolerances. Same arguments as ``cut``."""
+    return _cut(rig, normal, point, pose, cap, with_sources=True)
+
+
+def _cut(rig: Rig, normal, point, pose, cap, with_sources: bool) -> CutResult:
+    """``cut_details``; ``CutResult.sources`` is None unless ``with_sources`` (``cut`` does not return
+    them: two arrays of the halves' vertex counts less to make)."""
     vertices, faces, joints, weights = mesh_arrays(rig)
     plane = _plane(normal, point)
     if not isinstance(cap, (bool, np.bool_)):
@@ -112,11 +120,17 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
         positions = skin_affine(vertices, joints, weights, affines)
     topo = rig_topology(rig)
 
-    sign, on_plane, diag = _classify(plane, positions, topo.representative, tol.on_plane)
-    split = Split(*_split(plane, positions, faces, topo.faces, topo.welded, topo.representative, sign,
-                          topo.face_vertex_edges, topo.vertex_edges))
+    # The working arrays are kept per rig: a cut repeated on the same rig finds their pages mapped.
+    # ``split.pos_src`` and ``neg_src`` are rows of them, so they go back once the halves are made.
+    reusable = rig_cached(rig, "cut.scratch", lambda _rig: Reusable(lambda: scratch(faces, topo)))
+    work = reusable.take()
+    on_plane, diag = _classify(plane, positions, topo.representative, topo.welded, tol.on_plane,
+                               work.distance, work.welded_sign, work.sign)
+    split = split_halves(plane, positions, faces, topo, work)
     if len(split.pos_faces) == 0 or len(split.neg_faces) == 0:
-        return _missed(rig, len(split.pos_faces) > 0, not sign.any(), plane, on_plane)
+        in_plane = not work.welded_sign.any()
+        reusable.give_back(work)
+        return _missed(rig, len(split.pos_faces) > 0, in_plane, plane, on_plane)
 
     new = on_edges(split.new_lo, split.new_hi, split.new_t)
     new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
@@ -128,17 +142,20 @@ def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutRes
     names = (f"{rig.name}_positive", f"{rig.name}_negative")
     halves = [Rig._of_checked(v, f, j, w, rig.skeleton, rig.clips, a, names[h])
               for h, ((v, j, w, a), f) in enumerate(zip(arrays, (split.pos_faces, split.neg_faces)))]
-    new_sources = np.full(len(split.new_lo), NEW_VERTEX, np.int64)
-    sources = [np.concatenate([split.pos_src, new_sources]), np.concatenate([split.neg_src, new_sources])]
+    sources = None
+    if with_sources or cap:
+        new_sources = np.full(len(split.new_lo), NEW_VERTEX, np.int64)
+        sources = [np.concatenate([split.pos_src, new_sources]), np.concatenate([split.neg_src, new_sources])]
+    first_new = (len(split.pos_src), len(split.neg_src))
     if cap:
-        on_plane_input = (sign == 0)[topo.welded]
+        on_plane_input = work.sign == 0
         for h, kept in enumerate((split.pos_src, split.neg_src)):
             cut_positions = np.concatenate([positions[kept], split.new_point])
             halves[h], sources[h] = _cap(halves[h], sources[h], cut_positions, plane, on_plane_input, topo,
                                          outward=-1.0 if h == 0 else 1.0, affines=affines)
-    return CutResult(halves[0], halves[1], tuple(sources), new.src,
-                     split.new_t, split.new_point, (len(split.pos_src), len(split.neg_src)), plane, on_plane,
-                     residual)
+    reusable.give_back(work)
+    return CutResult(halves[0], halves[1], None if sources is None else tuple(sources), new.src, split.new_t,
+                     split.new_point, first_new, plane, on_plane, residual)
 
 
 def _placed(vertices, new, targets, new_joints, new_weights, affines, diag):
@@ -207,7 +224,7 @@ def cut(rig: Rig, normal, point, pose=None, cap: bool = False):
         Zero or non-finite normal or point, wrong shapes, a rig without faces or with inconsistent
         arrays, a pose of another skeleton.
     """
-    result = cut_details(rig, normal, point, pose=pose, cap=cap)
+    result = _cut(rig, normal, point, pose, cap, with_sources=False)
     return result.positive, result.negative
 
 
