@@ -18,9 +18,11 @@ into the node's TRS, and then composes each animated node's TRS into the pose's 
   same TRS (equal to rounding; tests/animation/test_sampling.py checks 1e-12).
 
 Measured on Fox (25 nodes, 21 channels; 2-core machine): about 4 µs per frame inside the kernel
-(half the channels, with slerp's atan2 and sines; half the nodes' products), about 10 µs for
-``rig.pose`` end to end (argument checks, three output arrays, the Pose, numba's dispatch of 13
-arguments); ``benchmarks/bench_animation.py`` prints the table.
+(the channels' key search and blends, then the animated nodes' products), about 8-10 µs for ``rig.pose``
+end to end (argument checks, three output arrays, the Pose, numba's dispatch of 13 arguments);
+``benchmarks/bench_animation.py`` prints the table. The channels and the nodes are each one helper call
+a frame, not a call each: a compiled call that takes arrays pays their reference counts (atomic
+operations), which was a fifth of a frame as a call per channel and per node.
 
 The rest of the skeleton (TRS rows, and the rest pose's fields that unanimated nodes keep) is
 prepared once per skeleton, by the same kernel with no channels.
@@ -114,81 +116,91 @@ def _blend_rotation(values, a, b, u, blend, out, node, at):
 
 
 @helper
-def _sample_channel(channels, c, times, values, t, blend, hints, trs):
-    """Write channel ``c`` (row c of ``ClipArrays.channels``) at time t into its node's TRS row.
-    (Rows are indexed, never taken as views: a view costs a reference count, atomically, each time.)"""
-    node, path, interpolation = channels[c, NODE], channels[c, PATH], channels[c, INTERPOLATION]
-    width = 4 if path == ROTATION else 3
-    at = TRS_Q if path == ROTATION else (TRS_S if path == SCALE else TRS_T)
-    k, u, dt = _key(times, channels[c, FIRST_KEY], channels[c, KEYS], t, hints[c])
-    hints[c] = k
-    stride = 3 * width if interpolation == CUBICSPLINE else width
-    middle = width if interpolation == CUBICSPLINE else 0    # a cubic key is (in-tangent, value, out)
-    here = channels[c, FIRST_VALUE] + k * stride + middle
-    if u == 0.0 or interpolation == STEP:
-        for i in range(width):
-            trs[node, at + i] = values[here + i]
-    elif interpolation == CUBICSPLINE:
-        # Hermite basis; the out-tangent of key k follows its value, the in-tangent of k+1 precedes it
-        u2, u3 = u * u, u * u * u
-        there = here + stride
-        for i in range(width):
-            trs[node, at + i] = ((2 * u3 - 3 * u2 + 1) * values[here + i]
-                                 + (u3 - 2 * u2 + u) * dt * values[here + width + i]
-                                 + (-2 * u3 + 3 * u2) * values[there + i]
-                                 + (u3 - u2) * dt * values[there - width + i])
-    elif path == ROTATION:
-        _blend_rotation(values, here, here + stride, u, blend, trs, node, at)
-        return
-    else:
-        for i in range(width):
-            trs[node, at + i] = (1 - u) * values[here + i] + u * values[here + stride + i]
-    if path == ROTATION:
-        norm = 0.0
-        for i in range(4):
-            norm += trs[node, at + i] * trs[node, at + i]
-        inv_norm = 1.0 / math.sqrt(norm)
-        for i in range(4):
-            trs[node, at + i] *= inv_norm
+def _sample_channels(channels, times, values, t, blend, hints, trs):
+    """Write every channel (the rows of ``ClipArrays.channels``) at time t into its node's TRS row.
+    One call for all of them: a compiled call that takes arrays pays their reference counts
+    (atomically) each time, which cost a third of a frame as a call per channel. (Rows are indexed,
+    never taken as views, for the same reason.)"""
+    for c in range(channels.shape[0]):
+        node, path, interpolation = channels[c, NODE], channels[c, PATH], channels[c, INTERPOLATION]
+        width = 4 if path == ROTATION else 3
+        at = TRS_Q if path == ROTATION else (TRS_S if path == SCALE else TRS_T)
+        k, u, dt = _key(times, channels[c, FIRST_KEY], channels[c, KEYS], t, hints[c])
+        hints[c] = k
+        stride = 3 * width if interpolation == CUBICSPLINE else width
+        middle = width if interpolation == CUBICSPLINE else 0    # a cubic key is (in-tangent, value, out)
+        here = channels[c, FIRST_VALUE] + k * stride + middle
+        if u == 0.0 or interpolation == STEP:
+            for i in range(width):
+                trs[node, at + i] = values[here + i]
+        elif interpolation == CUBICSPLINE:
+            # Hermite basis; the out-tangent of key k follows its value, the in-tangent of k+1 precedes it
+            u2, u3 = u * u, u * u * u
+            there = here + stride
+            for i in range(width):
+                trs[node, at + i] = ((2 * u3 - 3 * u2 + 1) * values[here + i]
+                                     + (u3 - 2 * u2 + u) * dt * values[here + width + i]
+                                     + (-2 * u3 + 3 * u2) * values[there + i]
+                                     + (u3 - u2) * dt * values[there - width + i])
+        elif path == ROTATION:
+            _blend_rotation(values, here, here + stride, u, blend, trs, node, at)
+            continue
+        else:
+            for i in range(width):
+                trs[node, at + i] = (1 - u) * values[here + i] + u * values[here + stride + i]
+        if path == ROTATION:
+            norm = 0.0
+            for i in range(4):
+                norm += trs[node, at + i] * trs[node, at + i]
+            inv_norm = 1.0 / math.sqrt(norm)
+            for i in range(4):
+                trs[node, at + i] *= inv_norm
 
 
 @helper
-def _compose_node(trs, node, versors, matrices):
-    """The fields of one node from its TRS row: versor T R D (identity unless the scale is uniform and
-    positive) and matrix T @ R @ S (as ``trs_matrix``); returns (similar, status)."""
-    x, y, z, w = trs[node, TRS_Q], trs[node, TRS_Q + 1], trs[node, TRS_Q + 2], trs[node, TRS_Q + 3]
-    sx, sy, sz = trs[node, TRS_S], trs[node, TRS_S + 1], trs[node, TRS_S + 2]
-    tx, ty, tz = trs[node, TRS_T], trs[node, TRS_T + 1], trs[node, TRS_T + 2]
-    similar = sx == sy and sx == sz and sx > 0.0
-    if similar and not _SCALE_LOW <= sx <= _SCALE_HIGH:
-        return similar, SCALE_OUT_OF_RANGE      # a dilation float64 cannot hold (versor.dilator refuses it)
-    finite = 0.0
-    if similar:
-        # T R as motors (the product of 8 blades; T and R have no e∞0 part), then the dilator
-        m = gp_motor_motor(versor_translator((tx, ty, tz)), versor_rotor_quaternion((x, y, z, w)))
-        v = (m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], 0.0, 0.0, 0.0, 0.0)
-        if sx != 1.0:       # the dilator of 1 is the identity (the product would only add zeros)
-            v = gp_versor_versor(v, versor_dilator(sx))
-        for c in range(12):
-            versors[node, c] = v[c]
-            finite += v[c] * 0.0
-    else:
-        for c in range(12):
-            versors[node, c] = 0.0
-        versors[node, 0] = 1.0
-    inv_n = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x * inv_n, y * inv_n, z * inv_n, w * inv_n
-    # the rotation matrix of the unit quaternion (as quat_to_matrix), its columns scaled (R @ S)
-    m00, m01, m02 = (1 - 2 * (y * y + z * z)) * sx, 2 * (x * y - z * w) * sy, 2 * (x * z + y * w) * sz
-    m10, m11, m12 = 2 * (x * y + z * w) * sx, (1 - 2 * (x * x + z * z)) * sy, 2 * (y * z - x * w) * sz
-    m20, m21, m22 = 2 * (x * z - y * w) * sx, 2 * (y * z + x * w) * sy, (1 - 2 * (x * x + y * y)) * sz
-    matrices[node, 0, 0], matrices[node, 0, 1], matrices[node, 0, 2], matrices[node, 0, 3] = m00, m01, m02, tx
-    matrices[node, 1, 0], matrices[node, 1, 1], matrices[node, 1, 2], matrices[node, 1, 3] = m10, m11, m12, ty
-    matrices[node, 2, 0], matrices[node, 2, 1], matrices[node, 2, 2], matrices[node, 2, 3] = m20, m21, m22, tz
-    matrices[node, 3, 0], matrices[node, 3, 1], matrices[node, 3, 2], matrices[node, 3, 3] = 0.0, 0.0, 0.0, 1.0
-    finite += (m00 * 0.0 + m01 * 0.0 + m02 * 0.0 + tx * 0.0 + m10 * 0.0 + m11 * 0.0 + m12 * 0.0 + ty * 0.0
-               + m20 * 0.0 + m21 * 0.0 + m22 * 0.0 + tz * 0.0)
-    return similar, OK if finite == 0.0 else NOT_FINITE          # NaN * 0 and inf * 0 are NaN
+def _compose_nodes(trs, nodes, versors, matrices, similar):
+    """The fields of each node of ``nodes`` from its TRS row: versor T R D (identity unless the scale is
+    uniform and positive), matrix T @ R @ S (as ``trs_matrix``) and whether it is a similarity. Returns
+    (status, the first node that failed). One call for all of them, as ``_sample_channels``."""
+    for a in range(nodes.shape[0]):
+        node = nodes[a]
+        x, y, z, w = trs[node, TRS_Q], trs[node, TRS_Q + 1], trs[node, TRS_Q + 2], trs[node, TRS_Q + 3]
+        sx, sy, sz = trs[node, TRS_S], trs[node, TRS_S + 1], trs[node, TRS_S + 2]
+        tx, ty, tz = trs[node, TRS_T], trs[node, TRS_T + 1], trs[node, TRS_T + 2]
+        is_similar = sx == sy and sx == sz and sx > 0.0
+        if is_similar and not _SCALE_LOW <= sx <= _SCALE_HIGH:
+            similar[node] = is_similar
+            return SCALE_OUT_OF_RANGE, node     # a dilation float64 cannot hold (versor.dilator refuses it)
+        finite = 0.0
+        if is_similar:
+            # T R as motors (the product of 8 blades; T and R have no e∞0 part), then the dilator
+            m = gp_motor_motor(versor_translator((tx, ty, tz)), versor_rotor_quaternion((x, y, z, w)))
+            v = (m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], 0.0, 0.0, 0.0, 0.0)
+            if sx != 1.0:       # the dilator of 1 is the identity (the product would only add zeros)
+                v = gp_versor_versor(v, versor_dilator(sx))
+            for c in range(12):
+                versors[node, c] = v[c]
+                finite += v[c] * 0.0
+        else:
+            for c in range(12):
+                versors[node, c] = 0.0
+            versors[node, 0] = 1.0
+        inv_n = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
+        x, y, z, w = x * inv_n, y * inv_n, z * inv_n, w * inv_n
+        # the rotation matrix of the unit quaternion (as quat_to_matrix), its columns scaled (R @ S)
+        m00, m01, m02 = (1 - 2 * (y * y + z * z)) * sx, 2 * (x * y - z * w) * sy, 2 * (x * z + y * w) * sz
+        m10, m11, m12 = 2 * (x * y + z * w) * sx, (1 - 2 * (x * x + z * z)) * sy, 2 * (y * z - x * w) * sz
+        m20, m21, m22 = 2 * (x * z - y * w) * sx, 2 * (y * z + x * w) * sy, (1 - 2 * (x * x + y * y)) * sz
+        matrices[node, 0, 0], matrices[node, 0, 1], matrices[node, 0, 2], matrices[node, 0, 3] = m00, m01, m02, tx
+        matrices[node, 1, 0], matrices[node, 1, 1], matrices[node, 1, 2], matrices[node, 1, 3] = m10, m11, m12, ty
+        matrices[node, 2, 0], matrices[node, 2, 1], matrices[node, 2, 2], matrices[node, 2, 3] = m20, m21, m22, tz
+        matrices[node, 3, 0], matrices[node, 3, 1], matrices[node, 3, 2], matrices[node, 3, 3] = 0.0, 0.0, 0.0, 1.0
+        finite += (m00 * 0.0 + m01 * 0.0 + m02 * 0.0 + tx * 0.0 + m10 * 0.0 + m11 * 0.0 + m12 * 0.0 + ty * 0.0
+                   + m20 * 0.0 + m21 * 0.0 + m22 * 0.0 + tz * 0.0)
+        similar[node] = is_similar
+        if finite != 0.0:                   # NaN * 0 and inf * 0 are NaN
+            return NOT_FINITE, node
+    return OK, -1
 
 
 # compiled ahead on its own (it holds all the arithmetic), then loaded by the two kernels that call it
@@ -210,15 +222,8 @@ def _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_ma
     for a in range(nodes.shape[0]):
         for c in range(TRS_SIZE):
             trs[nodes[a], c] = rest_trs[nodes[a], c]
-    for c in range(channels.shape[0]):
-        _sample_channel(channels, c, times, values, t, blend, hints, trs)
-    for a in range(nodes.shape[0]):
-        node = nodes[a]
-        is_similar, status = _compose_node(trs, node, versors, matrices)
-        similar[node] = is_similar
-        if status != OK:
-            return status, node
-    return OK, -1
+    _sample_channels(channels, times, values, t, blend, hints, trs)
+    return _compose_nodes(trs, nodes, versors, matrices, similar)
 
 
 @helper
