@@ -16,7 +16,7 @@ from .surgery.bvh import TriangleBVH
 from .surgery.cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
 from .surgery.tear import StrokeResult, TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
 from .surgery.topology import Topology, rig_topology
-from .surgery.session import Surgery
+from .surgery.session import OperationCost, Surgery
 from .app.precompile import precompile
 
 _sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move

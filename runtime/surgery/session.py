@@ -26,6 +26,8 @@ mesh (a global operation: its cost is the mesh's) and keeps both halves in the s
 """
 from __future__ import annotations
 
+import time
+from contextlib import contextmanager
 from dataclasses import replace
 from typing import NamedTuple
 
@@ -33,7 +35,7 @@ import numpy as np
 
 from .._shared.cache import seed
 from .._shared.jit import F2, I1, i8, kernel
-from .._shared.memory import release_free_memory
+from .._shared.memory import minor_page_faults, release_free_memory
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
 from .dynamic_bvh import DynamicBVH
@@ -47,7 +49,7 @@ from .tear.rig_source import RigSource
 from .tear.splice import stroke_splice
 from .tear.stroke import StrokeResult, check_blades, check_ends, check_opening, check_path
 
-__all__ = ["Surgery"]
+__all__ = ["Surgery", "OperationCost"]
 
 #: the per-vertex buffers a stroke writes, in ``session_write._write_splice``'s order
 _VERTEX_ARRAYS = ("vertices", "labels", "joints", "weights", "boundary")
@@ -70,13 +72,23 @@ class _Undo(NamedTuple):
     scalars: tuple
 
 
+class OperationCost(NamedTuple):
+    """What a session's operation cost: ``operation`` ("tear", "cut" or "undo"), its wall-clock
+    ``seconds``, and the minor ``page_faults`` of the process while it ran (the fresh memory pages it
+    wrote, each a trip to the operating system; 0 where the system does not count them)."""
+
+    operation: str
+    seconds: float
+    page_faults: int
+
+
 class Surgery:
     """An editing session on ``rig``; ``pose`` the pose its operations happen in unless they name one
     (default: the stored vertices).
 
     Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``cut(normal, point, pose=None,
     cap=False)``, ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``, ``n_faces``,
-    ``n_operations``, ``pose``. The caller's rig is never modified.
+    ``n_operations``, ``pose``, ``last_cost`` (an ``OperationCost``). The caller's rig is never modified.
 
     What a stroke reads of the session (``vertices``, ``faces``, ``positions``, ``labels``,
     ``boundary``, ... : the source interface of ``tear/splice.py``) are views of its own buffers,
@@ -91,8 +103,21 @@ class Surgery:
 
     def __init__(self, rig, pose=None):
         self._history: list = []
+        self._last_cost = None
         self._reset(rig)
         self._pose, self._affines = pose, None if pose is None else bone_affines_of(rig, pose)
+
+    @property
+    def last_cost(self):
+        """The ``OperationCost`` of the last operation that succeeded (None before the first)."""
+        return self._last_cost
+
+    @contextmanager
+    def _costed(self, operation: str):
+        """Time ``operation`` and count its page faults into ``last_cost`` when it succeeds."""
+        faults, start = minor_page_faults(), time.perf_counter()
+        yield
+        self._last_cost = OperationCost(operation, time.perf_counter() - start, minor_page_faults() - faults)
 
     @property
     def pose(self):
@@ -156,13 +181,14 @@ class Surgery:
         """One scalpel stroke (as ``cgaskin.tear_stroke``: the same arguments but the rig, the same
         errors) in ``pose`` (None: the session's pose); the session keeps the torn mesh. A stroke in a
         pose skins only the vertices its blade reaches. A stroke that raises changes nothing."""
-        blades = check_blades(scalpel_from, scalpel_to)
-        opening = check_opening(opening)
-        source = self if pose is None and self._pose is None else self._posed(pose)
-        splice = stroke_splice(source, blades, opening, check_ends, check_path)
-        self._history.append(self._apply(splice))
-        self._labelled = self._labelled or bool(splice.stroke["split"].any())
-        self._snapshot = None
+        with self._costed("tear"):
+            blades = check_blades(scalpel_from, scalpel_to)
+            opening = check_opening(opening)
+            source = self if pose is None and self._pose is None else self._posed(pose)
+            splice = stroke_splice(source, blades, opening, check_ends, check_path)
+            self._history.append(self._apply(splice))
+            self._labelled = self._labelled or bool(splice.stroke["split"].any())
+            self._snapshot = None
         return StrokeResult(**splice.stroke)
 
     def cut(self, normal, point, pose=None, cap: bool = False) -> None:
@@ -170,24 +196,27 @@ class Surgery:
         in ``pose``, None: the session's pose); both halves stay in the session, apart (the negative
         half's tear labels are moved past the positive half's, so that the halves do not weld along the
         cut)."""
-        positive, negative = cut_rig(self.rig, normal, point, pose=self._pose if pose is None else pose, cap=cap)
-        previous = self._state()
-        self._reset(replace(_joined(positive, negative), name=self._template.name))
-        self._history.append(previous)
+        with self._costed("cut"):
+            positive, negative = cut_rig(self.rig, normal, point, pose=self._pose if pose is None else pose,
+                                         cap=cap)
+            previous = self._state()
+            self._reset(replace(_joined(positive, negative), name=self._template.name))
+            self._history.append(previous)
 
     def undo(self) -> None:
         """Take back the last operation (raises InvalidInputError when there is none)."""
         if not self._history:
             raise InvalidInputError("nothing to undo: the session has no operation left to take back")
-        record = self._history.pop()
-        if isinstance(record, _Undo):
-            self._revert(record)
-        else:
-            (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._influences,
-             self._used, self._pad, self.top_label, self._labelled, bounds) = record
-            self._set_bounds(bounds)
-            self._scratch.reset()                   # (what it posed was of the tree the cut made)
-        self._snapshot = None
+        with self._costed("undo"):
+            record = self._history.pop()
+            if isinstance(record, _Undo):
+                self._revert(record)
+            else:
+                (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
+                 self._influences, self._used, self._pad, self.top_label, self._labelled, bounds) = record
+                self._set_bounds(bounds)
+                self._scratch.reset()                   # (what it posed was of the tree the cut made)
+            self._snapshot = None
 
     @property
     def n_operations(self) -> int:

@@ -211,3 +211,24 @@ def test_bad_input_and_failed_strokes_change_nothing():
         Surgery("not a rig")
     session.tear(blades[1], blades[2])                    # and it goes on
     assert session.n_operations == 2
+
+
+def test_each_operation_reports_its_cost():
+    rig = cgaskin.capsule_arm()
+    session = Surgery(rig)
+    assert session.last_cost is None
+    blades = capsule_incision(3)
+    session.tear(blades[0], blades[1])
+    cost = session.last_cost
+    assert isinstance(cost, cgaskin.OperationCost) and cost.operation == "tear"
+    assert 0.0 < cost.seconds < 60.0 and cost.page_faults >= 0
+    with pytest.raises(MissesMeshError):                 # a failed stroke is no operation: nothing reported
+        session.tear(blades[1], [[5.0, 5.0, 5.0], [6.0, 6.0, 6.0]])
+    assert session.last_cost is cost
+    session.cut([1.0, 0.0, 0.0], [1.5, 0.0, 0.0])
+    assert session.last_cost.operation == "cut"
+    # the cut makes the session's arrays and tree anew: fresh pages that the process counts (Linux)
+    if cgaskin._shared.memory.minor_page_faults() > 0:
+        assert session.last_cost.page_faults > 0
+    session.undo()
+    assert session.last_cost.operation == "undo"
