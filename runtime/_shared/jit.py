@@ -30,7 +30,7 @@ from numba import njit, types
 
 from .cache_keys import keyed
 
-__all__ = ["kernel", "helper", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
+__all__ = ["kernel", "helper", "inlined", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
 
 _OPTIONS = {"nogil": True, "error_model": "numpy"}       # and cached, by ``keyed`` (not numba's cache=True)
 
@@ -90,6 +90,13 @@ def kernel(*signatures: tuple, cost: float = 0.3, fused: bool = False):
 def helper(function):
     """Compile a function that only other compiled functions call (no Python entry point)."""
     return keyed(njit(**_OPTIONS, no_cpython_wrapper=True)(function))
+
+
+def inlined(function):
+    """A ``helper`` whose body numba types into each caller instead of calling it: for a short body
+    called in a hot loop, where a call's reference counting of its array arguments (atomic operations)
+    costs as much as the body. Keep it to helpers with one or two callers (each caller types it again)."""
+    return njit(**_OPTIONS, inline="always")(function)
 
 
 def callee(*signatures: tuple, cost: float):

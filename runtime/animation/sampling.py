@@ -20,9 +20,10 @@ into the node's TRS, and then composes each animated node's TRS into the pose's 
 Measured on Fox (25 nodes, 21 channels; 2-core machine): about 4 µs per frame inside the kernel
 (the channels' key search and blends, then the animated nodes' products), about 8-10 µs for ``rig.pose``
 end to end (argument checks, three output arrays, the Pose, numba's dispatch of 13 arguments);
-``benchmarks/bench_animation.py`` prints the table. The channels and the nodes are each one helper call
-a frame, not a call each: a compiled call that takes arrays pays their reference counts (atomic
-operations), which was a fifth of a frame as a call per channel and per node.
+``benchmarks/bench_animation.py`` prints the table. The channels and the nodes are each one loop typed
+into the frame's kernel (``inlined``), not a call each: a compiled call that takes arrays pays their
+reference counts (atomic operations), which was a fifth of a frame as a call per channel and per node,
+and a tenth as one call for each loop.
 
 The rest of the skeleton (TRS rows, and the rest pose's fields that unanimated nodes keep) is
 prepared once per skeleton, by the same kernel with no channels.
@@ -35,7 +36,7 @@ import weakref
 import numpy as np
 
 from .._shared.checks import float_array, real_number
-from .._shared.jit import B1, B2, F1, F2, F3, F4, I1, I2, callee, f8, helper, i8, kernel
+from .._shared.jit import B1, B2, F1, F2, F3, F4, I1, I2, callee, f8, helper, i8, inlined, kernel
 from ..algebra.transforms import trs_matrix
 from ..algebra.versor import SCALE_RANGE
 from ..errors import InvalidInputError
@@ -115,12 +116,10 @@ def _blend_rotation(values, a, b, u, blend, out, node, at):
     out[node, at + 3] = q3 * inv_norm
 
 
-@helper
+@inlined
 def _sample_channels(channels, times, values, t, blend, hints, trs):
     """Write every channel (the rows of ``ClipArrays.channels``) at time t into its node's TRS row.
-    One call for all of them: a compiled call that takes arrays pays their reference counts
-    (atomically) each time, which cost a third of a frame as a call per channel. (Rows are indexed,
-    never taken as views, for the same reason.)"""
+    (Rows are indexed, never taken as views: a view is an array whose reference count costs.)"""
     for c in range(channels.shape[0]):
         node, path, interpolation = channels[c, NODE], channels[c, PATH], channels[c, INTERPOLATION]
         width = 4 if path == ROTATION else 3
@@ -157,11 +156,11 @@ def _sample_channels(channels, times, values, t, blend, hints, trs):
                 trs[node, at + i] *= inv_norm
 
 
-@helper
+@inlined
 def _compose_nodes(trs, nodes, versors, matrices, similar):
     """The fields of each node of ``nodes`` from its TRS row: versor T R D (identity unless the scale is
     uniform and positive), matrix T @ R @ S (as ``trs_matrix``) and whether it is a similarity. Returns
-    (status, the first node that failed). One call for all of them, as ``_sample_channels``."""
+    (status, the first node that failed)."""
     for a in range(nodes.shape[0]):
         node = nodes[a]
         x, y, z, w = trs[node, TRS_Q], trs[node, TRS_Q + 1], trs[node, TRS_Q + 2], trs[node, TRS_Q + 3]
