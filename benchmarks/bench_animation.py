@@ -1,12 +1,14 @@
 """Frames from clips: sampling a clip into a pose against skinning it, per frame and in batches, in one
 process.
 
-    python -m benchmarks.bench_animation [--frames 1000] [--repeat 21] [--strokes 60] [--large-strokes 300]
+    python -m benchmarks.bench_animation [--frames 1000] [--repeat 21] [--joints 551] [--strokes 60]
+        [--large-strokes 300]
 
-Models: Fox (its "Walk" clip) and the largest other shared glTF rig by node count; a rig without
-clips gets a synthetic one (``clip_from_poses``: 30 keys, every node turned, so every node has
-translation, rotation and scale channels). Rows (µs per frame, medians of rounds that time each row
-beside ``skin`` alone):
+Models: Fox (its "Walk" clip), the largest other shared glTF rig by node count, and a capsule arm with
+as many joints as ACL's rig playing its ``wave`` clip (``--joints``, 551: where one call's fixed cost
+no longer hides the rate per joint); a rig without clips gets a synthetic one (``clip_from_poses``: 30
+keys, every node turned, so every node has translation, rotation and scale channels).
+Rows (µs per frame, medians of rounds that time each row beside ``skin`` alone):
 
 * ``skin`` alone (the pose made once): the baseline of the "x skin" column;
 * ``rig.pose(clip, t)`` per frame, with joints (skeleton nodes) sampled per second and that rate over
@@ -151,25 +153,30 @@ def _with_clip(rig):
     return rig.with_clips(cgaskin.clip_from_poses("synthetic", np.linspace(0.0, 2.0, 30), keys)), "synthetic"
 
 
-def cases(frames: int, repeat: int) -> list:
-    """Fox with its Walk clip, and the largest other shared glTF rig by node count (then vertices)."""
+def cases(frames: int, repeat: int, joints: int) -> list:
+    """Fox with its Walk clip, the largest other shared glTF rig by node count (then vertices), and a
+    capsule arm of ``joints`` joints (0: none) playing its first clip."""
     fox = _load(MODELS / "Fox.glb")
     others = [(path.name, _load(path)) for path in sorted(MODELS.glob("*.gl*")) if path.name != "Fox.glb"]
     name, largest = max(others, key=lambda item: (item[1].skeleton.n_nodes, item[1].n_vertices))
     largest, clip = _with_clip(largest)
     return [Case("Fox.glb", fox, "Walk", frames, repeat),
-            Case(f"{name} ({clip!r})", largest, clip, frames, repeat)]
+            Case(f"{name} ({clip!r})", largest, clip, frames, repeat)] + (
+        [Case(f"capsule_arm({joints}) ({clip!r})", arm, clip, frames, repeat)
+         for arm, clip in [_with_clip(cgaskin.capsule_arm(n_joints=joints, rings_per_segment=2))]]
+        if joints > 0 else [])
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=1000)
     ap.add_argument("--repeat", type=int, default=21)
+    ap.add_argument("--joints", type=int, default=551, help="joints of the synthetic capsule arm (0: none)")
     ap.add_argument("--strokes", type=int, default=60, help="strokes on Arm5 (0: no stroke rows)")
     ap.add_argument("--large-strokes", type=int, default=300, help="strokes on the 1.52M-face capsule (0: none)")
     args = ap.parse_args(argv)
     rows = []
-    for case in cases(args.frames, args.repeat):
+    for case in cases(args.frames, args.repeat, args.joints):
         rig = case.rig
         channels = len(rig.clips[rig.clip_index(case.clip)].channels)
         print(f"{case.label}: {case.joints} nodes, {rig.skeleton.n_bones} bones, {rig.n_vertices} vertices, "
