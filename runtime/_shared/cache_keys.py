@@ -23,6 +23,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import importlib.util
+import pickle
 import re
 import sys
 import warnings
@@ -149,7 +150,25 @@ def _cache_class():
     class ClosureKeyedCache(caching.FunctionCache):
         _impl_class = ClosureKeyedImpl
 
+        def load_overload(self, sig, target_context):
+            try:
+                return super().load_overload(sig, target_context)
+            except (ImportError, AttributeError, pickle.UnpicklingError) as exc:
+                # numba unpickles an index before it compares its key: an index that another version
+                # wrote with a type of a module or class since removed cannot load, and is stale anyway
+                _forget(self, exc)
+                return None
+
     return ClosureKeyedCache
+
+
+def _forget(cache, why: Exception) -> None:
+    """Remove ``cache``'s index (its functions compile again and save a new one), with a warning."""
+    path = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    warnings.warn(f"cgaskin: the on-disk cache of {cache._name} could not be read ({type(why).__name__}: {why}); "
+                  "compiling it again", RuntimeWarning, stacklevel=2)
+    if path is not None:
+        Path(path).unlink(missing_ok=True)
 
 
 def keyed(dispatcher):

@@ -163,3 +163,34 @@ def test_editing_a_helper_recompiles_the_kernels_that_use_it(tmp_path, python, j
     (package / "helper.py").write_text(HELPER.replace("x + 1.0", "x + 2.0"))
     assert run() == (6.0, 0, 1)                         # recompiled with the edited helper
     assert run() == (6.0, 1, 0)
+
+
+PROBE_RECORD = PROBE.replace("value = doubled(1.0)", "from probe_pkg.records import Pair\nvalue = doubled(Pair(1.0, 0.0))")
+RECORD = "from typing import NamedTuple\n\n\nclass Pair(NamedTuple):\n    x: float\n    y: float\n"
+USER_ANY = USER.replace("shift(x)", "shift(x[0])")
+PROBE_TUPLE = PROBE.replace("value = doubled(1.0)", "value = doubled((1.0, 0.0))")
+
+
+@NO_JIT
+def test_a_cache_written_with_a_type_since_removed_is_compiled_again(tmp_path):
+    """numba reads a whole index before it compares its key: an index holding a signature whose record
+    type lived in a module since removed (an upgrade) recompiles with a warning, instead of failing."""
+    package = tmp_path / "src" / "probe_pkg"
+    package.mkdir(parents=True)
+    for name, text in (("__init__", ""), ("jit", JIT["cgaskin"]), ("helper", HELPER), ("user", USER_ANY),
+                       ("records", RECORD)):
+        (package / f"{name}.py").write_text(text)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def run(probe):
+        done = subprocess.run([sys.executable, "-c", probe, str(tmp_path / "src")], env=env, capture_output=True,
+                              text=True)
+        assert done.returncode == 0, done.stdout + done.stderr
+        version, value, hits, misses = done.stdout.split()
+        return float(value), int(hits), int(misses), done.stderr
+
+    assert run(PROBE_RECORD)[:3] == (4.0, 0, 1)          # compiled for Pair, saved
+    (package / "records.py").unlink()
+    value, hits, misses, stderr = run(PROBE_TUPLE)
+    assert (value, hits, misses) == (4.0, 0, 1) and "could not be read" in stderr
+    assert run(PROBE_TUPLE)[:3] == (4.0, 1, 0)           # the new index loads
