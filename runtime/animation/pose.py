@@ -96,7 +96,17 @@ class Pose:
         (``sampling.py``): a time before the first key clamps to the first key, after the last key to
         the last; unanimated properties keep their rest values. InvalidInputError for a time that is
         not a finite real number (NaN, inf, a string) and an unknown ``rotation_blend``."""
-        return cls(skeleton, *sample_pose(skeleton, clip, time, rotation_blend))
+        return cls._of_fields(skeleton, *sample_pose(skeleton, clip, time, rotation_blend))
+
+    @classmethod
+    def _of_fields(cls, skeleton: Skeleton, versors, matrices, similar) -> "Pose":
+        """A pose of fields a kernel has just made for it (owned by nobody else): the constructor,
+        without the frozen dataclass's four ``object.__setattr__`` (a tenth of a sampled frame)."""
+        pose = object.__new__(cls)
+        fields = pose.__dict__
+        fields["skeleton"], fields["versors"], fields["matrices"], fields["similar"] = \
+            skeleton, versors, matrices, similar
+        return pose
 
     # -- edits (each returns a new Pose) --------------------------------------------------------
     def _edit(self, joint, what: str, left=None, right=None) -> "Pose":

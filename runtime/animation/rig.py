@@ -21,6 +21,7 @@ mesh, make a new rig: ``rig.with_mesh(edited copies...)``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -89,6 +90,10 @@ class Rig:
         """Index of a clip given by name or index; a clear error lists the valid names."""
         if type(clip) is int and 0 <= clip < len(self.clips):       # the common case, per frame
             return clip
+        if type(clip) is str:                # by name, per frame: a dict, checked (``clips`` is a list)
+            index = self._clip_indices.get(clip, -1)
+            if 0 <= index < len(self.clips) and self.clips[index].name == clip:
+                return index
         index = item_index(clip, len(self.clips), "clip", f"the rig has {len(self.clips)} clips")
         if index is not None:
             return index
@@ -96,6 +101,14 @@ class Rig:
         if clip in names:
             return names.index(clip)
         raise InvalidInputError(f"unknown clip {clip!r}; valid clips: {', '.join(map(repr, names)) or 'none'}")
+
+    @cached_property
+    def _clip_indices(self) -> dict:
+        """Clip name -> index of the first clip of that name, made on first use."""
+        indices = {}
+        for i, c in enumerate(self.clips):
+            indices.setdefault(c.name, i)
+        return indices
 
     def rest_pose(self):
         """The rest (node) pose of the skeleton, as a ``Pose``."""

@@ -262,6 +262,7 @@ def _sample_poses(channels, times, values, nodes, rest_trs, rest_versors, rest_m
 
 # ---- the Python side ----------------------------------------------------------------------------------
 _REST = weakref.WeakKeyDictionary()            # skeleton -> its rest arrays, while it lives
+_ARGUMENTS = weakref.WeakKeyDictionary()       # clip -> (skeleton, kernel arguments), while the clip lives
 
 
 def shear_nodes(skeleton) -> list:
@@ -306,16 +307,23 @@ def _check(status, node, what: str, skeleton) -> None:
                                 f"(a zero-length rotation, or values that overflow float64)")
 
 
-def _prepare(skeleton, clip, rotation_blend: str):
-    """(packed clip, rest arrays, blend code) after the checks that do not depend on the time."""
+def _arguments(skeleton, clip, rotation_blend: str) -> tuple:
+    """The sampling kernels' arguments before the time (the packed clip's arrays, the skeleton's rest
+    arrays) and the blend code, after the checks that do not depend on the time. Kept with the clip
+    for the last skeleton it was sampled on: a frame's call then pays one lookup."""
+    blend = _BLEND_CODES.get(rotation_blend) if type(rotation_blend) is str else None
+    if blend is None:
+        raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
+    kept = _ARGUMENTS.get(clip)
+    if kept is not None and kept[0] is skeleton:
+        return kept[1], blend
     packed = clip.packed
     if packed.last_node >= skeleton.n_nodes:
         raise InvalidInputError(f"clip {clip.name!r} animates node {packed.last_node}, but the skeleton "
                                 f"has {skeleton.n_nodes} nodes")
-    blend = _BLEND_CODES.get(rotation_blend) if isinstance(rotation_blend, str) else None
-    if blend is None:
-        raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
-    return packed, _rest(skeleton), blend
+    arguments = (packed.channels, packed.times, packed.values, packed.nodes, *_rest(skeleton))
+    _ARGUMENTS[clip] = (skeleton, arguments)
+    return arguments, blend
 
 
 def sample_pose(skeleton, clip, time, rotation_blend: str = "slerp") -> tuple:
@@ -326,11 +334,10 @@ def sample_pose(skeleton, clip, time, rotation_blend: str = "slerp") -> tuple:
     ``rotation_blend``, or a clip that does not fit the skeleton.
     """
     t = real_number(time, "time")
-    packed, rest, blend = _prepare(skeleton, clip, rotation_blend)
+    arguments, blend = _arguments(skeleton, clip, rotation_blend)
     j = skeleton.n_nodes
     versors, matrices, similar = np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=np.bool_)
-    status, node = _sample_pose(packed.channels, packed.times, packed.values, packed.nodes, *rest, t, blend,
-                                versors, matrices, similar)
+    status, node = _sample_pose(*arguments, t, blend, versors, matrices, similar)
     if status != OK:
         _check(status, node, f"clip {clip.name!r} at t={t}", skeleton)
     return versors, matrices, similar
@@ -340,11 +347,10 @@ def sample_poses(skeleton, clip, times, rotation_blend: str = "slerp") -> tuple:
     """``sample_pose`` at each of ``times`` ((T,) finite seconds, any order): versors (T, j, 12),
     matrices (T, j, 4, 4), similar (T, j), in one compiled call."""
     times = np.array(float_array(times, "times", ndim=1), order="C")      # the caller's array stays theirs
-    packed, rest, blend = _prepare(skeleton, clip, rotation_blend)
+    arguments, blend = _arguments(skeleton, clip, rotation_blend)
     n, j = len(times), skeleton.n_nodes
     versors, matrices, similar = np.empty((n, j, 12)), np.empty((n, j, 4, 4)), np.empty((n, j), dtype=np.bool_)
-    status, node, frame = _sample_poses(packed.channels, packed.times, packed.values, packed.nodes, *rest,
-                                        times, blend, versors, matrices, similar)
+    status, node, frame = _sample_poses(*arguments, times, blend, versors, matrices, similar)
     if status != OK:
         _check(status, node, f"clip {clip.name!r} at t={times[frame]} (times[{frame}])", skeleton)
     return times, versors, matrices, similar

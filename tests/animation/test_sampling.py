@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 import cgaskin
 from cgaskin import Channel, Clip, Pose, Poses
+from cgaskin.algebra.transforms import trs_matrix
 from cgaskin.animation.sampling import shear_nodes
 from cgaskin.errors import InvalidInputError
 
@@ -305,3 +306,29 @@ def test_bad_channels_are_named():
         Pose.from_clip(arm.skeleton, huge, 1.5)
     with pytest.raises(InvalidInputError, match=r"times\[1\]"):
         Poses.from_clip(arm.skeleton, huge, [0.5, 1.5])
+
+
+def test_a_clip_sampled_on_two_skeletons_is_checked_and_sampled_on_each():
+    """A clip's prepared kernel arguments are kept for the skeleton it was last sampled on: another
+    skeleton (with too few nodes, or other rest transforms) gets its own, never the kept ones."""
+    small, large = cgaskin.capsule_arm(n_joints=2), cgaskin.capsule_arm(n_joints=5)
+    t = np.array([0.0, 1.0])
+    clip = Clip("bend", (Channel(3, "rotation", "LINEAR", t, np.array([[0, 0, 0, 1.0], [0, 0, 0.6, 0.8]])),))
+    on_large = Pose.from_clip(large.skeleton, clip, 0.5)
+    with pytest.raises(InvalidInputError, match="animates node 3"):
+        Pose.from_clip(small.skeleton, clip, 0.5)
+    sk = large.skeleton
+    shifted = dataclasses.replace(sk, rest_translations=sk.rest_translations + 1.0,
+                                  rest_matrices=trs_matrix(sk.rest_translations + 1.0, sk.rest_rotations,
+                                                           sk.rest_scales))
+    on_shifted = Pose.from_clip(shifted, clip, 0.5)
+    assert not np.array_equal(on_shifted.matrices[0], on_large.matrices[0])
+    assert np.array_equal(Pose.from_clip(large.skeleton, clip, 0.5).versors, on_large.versors)
+
+
+def test_clips_are_found_by_name_after_the_list_changes():
+    rig = cgaskin.capsule_arm()
+    first = rig.clips[0]
+    assert rig.clip_index(first.name) == 0
+    rig.clips.insert(0, Clip("other", ()))      # a list a user can edit: names are looked up again
+    assert rig.clip_index(first.name) == 1 and rig.clip_index("other") == 0
