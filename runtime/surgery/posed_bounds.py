@@ -33,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.jit import F1, F2, I1, I2, helper, kernel, record
+from .._shared.memory import sparse_zeros
 from ..generated.skinning import skin_blend
 from .bone_influences import INFLUENCES, TABLE, WEIGHT_STEPS
 from .bvh import _near_box, _push_children
@@ -243,7 +244,7 @@ class PosedScratch:
     grown as the tree and the mesh grow. A ``view`` in another pose than the last one is a new stamp;
     in the same pose it keeps what earlier strokes posed, less what ``forget`` was told changed since
     (a session in one pose poses each part once). Rows are allocated, not written: only what strokes
-    reach becomes resident."""
+    reach becomes resident (``sparse_zeros``)."""
 
     def __init__(self):
         self._stamp, self._affines = 0, None
@@ -267,12 +268,14 @@ class PosedScratch:
         arrays: lo, hi, left, right, start, count, order, positions, faces; ``n_nodes`` of its rows in
         use) with its ``Influences`` (a tuple), the rest mesh (n rows) and bone maps ``affines`` (B, 12)."""
         n = len(vertices)
+        # (written where strokes reach, a few thousand scattered rows: 4 kB pages, not huge ones)
         if len(self._lo) < n_nodes:
             size = max(n_nodes, len(self._lo) * 3 // 2)
-            self._lo, self._hi, self._node_stamp = np.empty((size, 3)), np.empty((size, 3)), np.zeros(size, np.int64)
+            self._lo, self._hi, self._node_stamp = (sparse_zeros((size, 3)), sparse_zeros((size, 3)),
+                                                    sparse_zeros(size, np.int64))
         if len(self._positions) < n:
             size = max(n, len(self._positions) * 3 // 2)
-            self._positions, self._vertex_stamp = np.empty((size, 3)), np.zeros(size, np.int64)
+            self._positions, self._vertex_stamp = sparse_zeros((size, 3)), sparse_zeros(size, np.int64)
         if self._affines is None or not np.array_equal(affines, self._affines):
             self._stamp, self._affines = self._stamp + 1, affines.copy()
         positions = self._positions[:n]
