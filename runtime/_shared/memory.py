@@ -15,9 +15,9 @@ operation repeats on the same data can be kept (``Reusable``) and cost no fault 
 Huge pages are the wrong choice for an array written *sparsely* (scratch indexed by node or vertex,
 where a stroke writes a few thousand scattered rows): each write there makes a whole 2 MB page resident,
 zeroed first (``np.empty`` of 64 MB, written every 512 kB: 62 MB resident; numpy's ``np.zeros`` takes
-calloc's pages and does not ask for huge ones). ``sparse_zeros`` gives such arrays 4 kB pages: a session on a 1.52M-face capsule, its
-posed-stroke scratch made so, held 1.82x its mesh's bytes instead of 2.14x (``benchmarks/_playing_surgery
-large 300``).
+calloc's pages and does not ask for huge ones). ``sparse_zeros`` gives such arrays 4 kB pages: a
+session on a 1.52M-face capsule whose posed-stroke scratch is made so peaks at 1.85-1.91x its mesh's
+bytes over 300 strokes in new poses, 2.13x before (``python -m benchmarks._playing_surgery large 300``).
 """
 from __future__ import annotations
 
