@@ -311,7 +311,7 @@ def _arguments(skeleton, clip, rotation_blend: str) -> tuple:
     """The sampling kernels' arguments before the time (the packed clip's arrays, the skeleton's rest
     arrays) and the blend code, after the checks that do not depend on the time. Kept with the clip
     for the last skeleton it was sampled on: a frame's call then pays one lookup."""
-    blend = _BLEND_CODES.get(rotation_blend) if type(rotation_blend) is str else None
+    blend = _BLEND_CODES.get(rotation_blend) if isinstance(rotation_blend, str) else None
     if blend is None:
         raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
     kept = _ARGUMENTS.get(clip)
