@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from . import kernels_language as language
 from .kernels_exp_log import versor_exp, versor_log
-from .kernels_geometry import barycentric, plane_from_points, plane_transform, segment_plane
+from .kernels_geometry import (barycentric, plane_from_points, plane_transform, point_line_distance,
+                               segment_plane)
 from .kernels_skinning import affine_point, sandwich_versor_point, versor_to_affine
 from .kernels_versor import (versor_dilator, versor_from_matrix, versor_normalise, versor_residual, versor_rotor,
                              versor_rotor_quaternion)
@@ -29,4 +30,4 @@ KERNELS = (versor_translator, versor_rotor, versor_rotor_quaternion, versor_dila
            gp_motor_motor, gp_versor_versor, reverse_versor, inverse_versor, versor_residual,
            versor_normalise, sandwich_versor_point, versor_to_affine, affine_point,
            plane_from_normal_distance, plane_from_points, plane_transform, point_plane_distance,
-           segment_plane, barycentric, versor_log, versor_exp)
+           segment_plane, point_line_distance, barycentric, versor_log, versor_exp)

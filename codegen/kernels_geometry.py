@@ -1,6 +1,7 @@
 """Geometry kernels that need named intermediates (coordinates relative to a vertex, the idempotent
-split): planes through points or moved by a versor, segment-plane meets, barycentric coordinates. The
-plane from a normal and the point-plane distance are written in the language (``kernels_language``)."""
+split): planes through points or moved by a versor, segment-plane meets, point-line distances,
+barycentric coordinates. The plane from a normal and the point-plane distance are written in the
+language (``kernels_language``)."""
 from __future__ import annotations
 
 from sympy import sqrt
@@ -64,6 +65,30 @@ def segment_plane():
     k.let(db, up(k.ring, [k.poly(c) for c in b]).lc(P)["s"])
     k.let(t, da / (da - db))
     k.output(["t", "x[0]", "x[1]", "x[2]"], [t] + [ai + t * (bi - ai) for ai, bi in zip(a, b)])
+    return k.build()
+
+
+def point_line_distance():
+    # Not in the kernel language: it expands x − a into the products (x_i u_j − a_i u_j ...), so the
+    # square of the bivector would cancel terms ~|a|²|u|² (error ~ε|a|²/d where d is the distance).
+    # Here x − a and the bivector's three coefficients are intermediates: each coefficient carries
+    # ~ε|x − a||u| as np.cross does, whatever the distance from the origin.
+    k = KernelBuilder("point_line_distance",
+                      "Distance |(x − a) ∧ u| / |u| of the point x from the line through a with direction u "
+                      "(u need not be unit), relative to a: with q = x − a and B = q ∧ u, "
+                      "d = sqrt(⟨B B̃⟩₀ / u·u). NaN for u = 0.")
+    a, u, x = k.array("a", 3), k.array("u", 3), k.array("x", 3)
+    q = k.intermediate("q0", "q1", "q2")
+    b = k.intermediate("b12", "b13", "b23")
+    for s_, xi, ai in zip(q, x, a):
+        k.let(s_, xi - ai)
+    vec = lambda syms: k.mv(("e1", "e2", "e3"), syms)  # noqa: E731
+    U = vec(u)
+    B = vec(q) ^ U
+    for s_, blade in zip(b, ("e12", "e13", "e23")):
+        k.let(s_, B[blade].as_expr())
+    Bn = k.mv(("e12", "e13", "e23"), b)
+    k.output(["d"], [sqrt((Bn * Bn.reverse())["s"].as_expr() / (U * U)["s"].as_expr())])
     return k.build()
 
 

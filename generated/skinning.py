@@ -5,7 +5,7 @@ generator: 1
 sympy: 1.14.0
 algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
 spec hash: f41034471edf5e57
-imports kernels (hash 973671f49d00bb32)
+imports kernels (hash 4a0f3c3f46b55e36)
 """
 
 from numba import njit, prange

@@ -3,7 +3,7 @@
  * generator: 1
  * sympy: 1.14.0
  * algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
- * spec hash: 9f62dd74548ca875
+ * spec hash: bd87a506fc9b504d
  *
  * C99 kernels in float: cgaskin_f32_<kernel>(inputs..., out) and cgaskin_f32_<kernel>_batch(n_rows, ...).
  * Flat float arrays in the blade order of cgaskin's generated/layout.py; 3x4 matrices row-major.
@@ -914,6 +914,43 @@ CGASKIN_API void cgaskin_f32_segment_plane_batch(size_t n_rows, const float *pla
     size_t row;
     for (row = 0; row < n_rows; ++row)
         cgaskin_f32_segment_plane(plane + 4 * row, a + 3 * row, b + 3 * row, out + 4 * row);
+}
+
+/*
+ * Distance |(x − a) ∧ u| / |u| of the point x from the line through a with direction u (u need not be unit), relative to a: with q = x − a and B = q ∧ u, d = sqrt(⟨B B̃⟩₀ / u·u). NaN for u = 0.
+ * a[3]: 0, 1, 2
+ * u[3]: 0, 1, 2
+ * x[3]: 0, 1, 2
+ * out[1]: d
+ */
+CGASKIN_API void cgaskin_f32_point_line_distance(const float a[3], const float u[3], const float x[3], float out[1])
+{
+    const float a0 = a[0];
+    const float a1 = a[1];
+    const float a2 = a[2];
+    const float u0 = u[0];
+    const float u1 = u[1];
+    const float u2 = u[2];
+    const float x0 = x[0];
+    const float x1 = x[1];
+    const float x2 = x[2];
+    const float q0 = (x0 - a0);
+    const float q1 = (x1 - a1);
+    const float q2 = (x2 - a2);
+    const float b12 = ((q0 * u1) - (q1 * u0));
+    const float b13 = ((q0 * u2) - (q2 * u0));
+    const float b23 = ((q1 * u2) - (q2 * u1));
+    out[0] = (sqrtf(((b12 * b12) + ((b13 * b13) + (b23 * b23)))) / sqrtf(((u0 * u0) + ((u1 * u1) + (u2 * u2)))));
+}
+
+/*
+ * cgaskin_f32_point_line_distance on every row: inputs row-major (n_rows x size), out n_rows x 1
+ */
+CGASKIN_API void cgaskin_f32_point_line_distance_batch(size_t n_rows, const float *a, const float *u, const float *x, float *out)
+{
+    size_t row;
+    for (row = 0; row < n_rows; ++row)
+        cgaskin_f32_point_line_distance(a + 3 * row, u + 3 * row, x + 3 * row, out + 1 * row);
 }
 
 /*

@@ -3,7 +3,7 @@
  * generator: 1
  * sympy: 1.14.0
  * algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
- * spec hash: 9f62dd74548ca875
+ * spec hash: bd87a506fc9b504d
  *
  * CUDA C kernels (float64): __device__ <prefix>_<kernel>(inputs..., out) and
  * __global__ <prefix>_<kernel>_batch(n_rows, ...) (grid-stride loop, any launch shape).
@@ -885,6 +885,42 @@ __global__ void cgaskin_segment_plane_batch(size_t n_rows, const double *plane, 
 {
     for (size_t row = blockIdx.x * (size_t)blockDim.x + threadIdx.x; row < n_rows; row += (size_t)blockDim.x * gridDim.x)
         cgaskin_segment_plane(plane + 4 * row, a + 3 * row, b + 3 * row, out + 4 * row);
+}
+
+/*
+ * Distance |(x − a) ∧ u| / |u| of the point x from the line through a with direction u (u need not be unit), relative to a: with q = x − a and B = q ∧ u, d = sqrt(⟨B B̃⟩₀ / u·u). NaN for u = 0.
+ * a[3]: 0, 1, 2
+ * u[3]: 0, 1, 2
+ * x[3]: 0, 1, 2
+ * out[1]: d
+ */
+__device__ __forceinline__ void cgaskin_point_line_distance(const double a[3], const double u[3], const double x[3], double out[1])
+{
+    const double a0 = a[0];
+    const double a1 = a[1];
+    const double a2 = a[2];
+    const double u0 = u[0];
+    const double u1 = u[1];
+    const double u2 = u[2];
+    const double x0 = x[0];
+    const double x1 = x[1];
+    const double x2 = x[2];
+    const double q0 = (x0 - a0);
+    const double q1 = (x1 - a1);
+    const double q2 = (x2 - a2);
+    const double b12 = ((q0 * u1) - (q1 * u0));
+    const double b13 = ((q0 * u2) - (q2 * u0));
+    const double b23 = ((q1 * u2) - (q2 * u1));
+    out[0] = (sqrt(((b12 * b12) + ((b13 * b13) + (b23 * b23)))) / sqrt(((u0 * u0) + ((u1 * u1) + (u2 * u2)))));
+}
+
+/*
+ * cgaskin_point_line_distance on every row: inputs row-major (n_rows x size), out n_rows x 1
+ */
+__global__ void cgaskin_point_line_distance_batch(size_t n_rows, const double *a, const double *u, const double *x, double *out)
+{
+    for (size_t row = blockIdx.x * (size_t)blockDim.x + threadIdx.x; row < n_rows; row += (size_t)blockDim.x * gridDim.x)
+        cgaskin_point_line_distance(a + 3 * row, u + 3 * row, x + 3 * row, out + 1 * row);
 }
 
 /*

@@ -3,7 +3,7 @@
  * generator: 1
  * sympy: 1.14.0
  * algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
- * spec hash: 9f62dd74548ca875
+ * spec hash: bd87a506fc9b504d
  *
  * CUDA C skinning: per bone <prefix>_bone_affines_kernel, per vertex
  * <prefix>_skin_blend_kernel (one thread per vertex, grid-stride).

@@ -3,7 +3,7 @@
 // generator: 1
 // sympy: 1.14.0
 // algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
-// spec hash: 9f62dd74548ca875
+// spec hash: bd87a506fc9b504d
 //
 // No #version line: include this after your shader's own. Flat arrays in the numba kernels'
 // layouts (blade order of generated/layout.py); a 3x4 matrix is 12 floats row-major.
@@ -746,6 +746,30 @@ void cgaskin_segment_plane(in float plane[4], in float a[3], in float b[3], out 
     result[1] = (a0 + (t * (b0 - a0)));
     result[2] = (a1 + (t * (b1 - a1)));
     result[3] = (a2 + (t * (b2 - a2)));
+}
+
+// Distance |(x − a) ∧ u| / |u| of the point x from the line through a with direction u (u need not be unit), relative to a: with q = x − a and B = q ∧ u, d = sqrt(⟨B B̃⟩₀ / u·u). NaN for u = 0.
+//   a: (3,) 0 1 2
+//   u: (3,) 0 1 2
+//   x: (3,) 0 1 2
+//   result: (1,) flattened row-major to (1,): d
+void cgaskin_point_line_distance(in float a[3], in float u[3], in float x[3], out float result[1]) {
+    float a0 = a[0];
+    float a1 = a[1];
+    float a2 = a[2];
+    float u0 = u[0];
+    float u1 = u[1];
+    float u2 = u[2];
+    float x0 = x[0];
+    float x1 = x[1];
+    float x2 = x[2];
+    float q0 = (x0 - a0);
+    float q1 = (x1 - a1);
+    float q2 = (x2 - a2);
+    float b12 = ((q0 * u1) - (q1 * u0));
+    float b13 = ((q0 * u2) - (q2 * u0));
+    float b23 = ((q1 * u2) - (q2 * u1));
+    result[0] = (sqrt(((b12 * b12) + ((b13 * b13) + (b23 * b23)))) / sqrt(((u0 * u0) + ((u1 * u1) + (u2 * u2)))));
 }
 
 // Barycentric coordinates (λa, λb, λc) of p projected on triangle abc, relative to a: with u = b−a, w = c−a, q = p−a: λb = (q∧w)·(u∧w)~/|u∧w|², λc = (u∧q)·(u∧w)~/|u∧w|².

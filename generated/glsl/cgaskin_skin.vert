@@ -4,7 +4,7 @@
 // generator: 1
 // sympy: 1.14.0
 // algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
-// spec hash: 9f62dd74548ca875
+// spec hash: bd87a506fc9b504d
 
 // cgaskin_skin_vertex(position, joints, weights) blends the (B, 12) row-major 3x4 affines of the SSBO
 // at binding 0 (from cgaskin_skin_bones_f32.comp, or pose.bone_affines() uploaded as float) and

@@ -4,7 +4,7 @@
 // generator: 1
 // sympy: 1.14.0
 // algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
-// spec hash: 9f62dd74548ca875
+// spec hash: bd87a506fc9b504d
 
 // out[i] = (sum_k weights[i,k] affines[joints[i,k]]) applied to rest[i], as generated/skinning.py:
 // rest (n, 3), joints (n, k) int, weights (n, k), affines (B, 12) from the bones stage or any other

@@ -2,7 +2,7 @@
 // generator: 1
 // sympy: 1.14.0
 // algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
-// spec hash: 9f62dd74548ca875
+// spec hash: bd87a506fc9b504d
 // Kernels as WGSL functions (f32): fn cgaskin_<kernel>(inputs) -> array<f32, N>.
 // Inputs are flat arrays (multivectors in the blade order listed per kernel) or f32 scalars.
 
@@ -705,6 +705,32 @@ fn cgaskin_segment_plane(plane: array<f32, 4>, a: array<f32, 3>, b: array<f32, 3
         (a0 + (t * (b0 - a0))),
         (a1 + (t * (b1 - a1))),
         (a2 + (t * (b2 - a2))),
+    );
+}
+
+// Distance |(x − a) ∧ u| / |u| of the point x from the line through a with direction u (u need not be unit), relative to a: with q = x − a and B = q ∧ u, d = sqrt(⟨B B̃⟩₀ / u·u). NaN for u = 0.
+//   a: array<f32, 3>
+//   u: array<f32, 3>
+//   x: array<f32, 3>
+//   returns array<f32, 1> = (d)
+fn cgaskin_point_line_distance(a: array<f32, 3>, u: array<f32, 3>, x: array<f32, 3>) -> array<f32, 1> {
+    let a0 = a[0];
+    let a1 = a[1];
+    let a2 = a[2];
+    let u0 = u[0];
+    let u1 = u[1];
+    let u2 = u[2];
+    let x0 = x[0];
+    let x1 = x[1];
+    let x2 = x[2];
+    let q0 = (x0 - a0);
+    let q1 = (x1 - a1);
+    let q2 = (x2 - a2);
+    let b12 = ((q0 * u1) - (q1 * u0));
+    let b13 = ((q0 * u2) - (q2 * u0));
+    let b23 = ((q1 * u2) - (q2 * u1));
+    return array<f32, 1>(
+        (sqrt(((b12 * b12) + ((b13 * b13) + (b23 * b23)))) / sqrt(((u0 * u0) + ((u1 * u1) + (u2 * u2))))),
     );
 }
 

@@ -2,7 +2,7 @@
 // generator: 1
 // sympy: 1.14.0
 // algebra: G(4,1), null basis e1 e2 e3 e∞ e0 (e∞ = e− + e+, e0 = (e− − e+)/2)
-// spec hash: 9f62dd74548ca875
+// spec hash: bd87a506fc9b504d
 // Skinning in two compute passes over flat f32 storage buffers (one bind group, group 0):
 //   cgaskin_skin_bones : affines[b] = cgaskin_versor_to_affine(versors[b]) for b < n_bones
 //   cgaskin_skin_blend : skinned[i] = cgaskin_affine_point(sum_k weights[i,k] affines[joints[i,k]], rest[i])

@@ -52,6 +52,7 @@ def _batch_inputs(name):
         "plane_transform": (vs, planes),
         "point_plane_distance": (planes, pts),
         "segment_plane": (planes, pts, -pts),
+        "point_line_distance": (pts, _RNG.normal(size=(5, 3)), pts[::-1] + _RNG.normal(size=(5, 3))),
         "barycentric": (pts, pts + _RNG.normal(size=(5, 3)), pts + _RNG.normal(size=(5, 3)), pts + 0.3),
         "versor_exp": (_RNG.normal(size=(5, 7)),),
     }[name]

@@ -1,6 +1,6 @@
 """Geometry kernels against clifford and numpy: planes (from a normal and distance, from points,
-moved by a versor), point-plane distance, segment-plane meet, barycentric coordinates
-(codegen/kernels_geometry.py; the plane from a normal and the distance are written in the kernel
+moved by a versor), point-plane distance, segment-plane meet, point-line distance, barycentric
+coordinates (codegen/kernels_geometry.py; the plane from a normal and the distance are written in the kernel
 language, codegen/kernels_language.py).
 """
 from __future__ import annotations
@@ -15,7 +15,7 @@ from tests.helpers import strategies as S
 from tests.helpers.kernel_oracles import (PLANE_IDX, call, cl_vector, cl_versor, clifford_point_tol,
                                           coefficients, covers, e1, e2, e3, einf, eo,
                                           moderate_scale_versors, record, to_mv, versor_coefficients)
-from tests.helpers.tolerances import TOL, rel_err
+from tests.helpers.tolerances import EPS, TOL, rel_err
 
 # ==== planes ===================================================================================================
 @covers("plane_from_normal_distance")
@@ -156,6 +156,79 @@ def test_segment_plane_parallel_is_not_finite():
     plane = np.array([0.0, 0.0, 1.0, 1.0])
     t = call(K.segment_plane, plane, np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]))[0]
     assert not np.isfinite(t)                      # error_model='numpy': no exception, t = -inf
+
+
+# ==== point-line distance ======================================================================================
+def _line_distance(a, u, x) -> float:
+    return float(np.linalg.norm(np.cross(x - a, u)) / np.linalg.norm(u))
+
+
+def _offset_from_line(u, along, height, around):
+    """along û + height n, n a unit vector perpendicular to u (its angle about u is ``around``)."""
+    uh = u / np.linalg.norm(u)
+    helper = np.eye(3)[int(np.argmin(np.abs(uh)))]
+    n1 = np.cross(uh, helper)
+    n1 /= np.linalg.norm(n1)
+    n2 = np.cross(uh, n1)
+    return along * uh + height * (np.cos(around) * n1 + np.sin(around) * n2)
+
+
+_near_line_offsets = st.tuples(S.finite(-1e3, 1e3), st.one_of(st.just(0.0), S.log_uniform(1e-6, 1e3)),
+                               S.finite(0.0, 6.3))
+
+
+@covers("point_line_distance")
+@given(S.points(), S.unit_axes(), S.log_uniform(1e-3, 1e3),
+       st.one_of(S.points().map(lambda x: ("point", x)), _near_line_offsets.map(lambda o: ("offset", o))))
+def test_point_line_distance(a, axis, length, where):
+    u = axis * length
+    kind, value = where
+    x = value if kind == "point" else a + _offset_from_line(u, *value)
+    got = K.point_line_distance(a, u, x)
+    assert isinstance(got, float)                         # a Scalar comes back as a float
+    expected = _line_distance(a, u, x)
+    # both work with x − a (its rounding is the same in both): each coefficient of (x − a) ∧ u carries
+    # ~EPS |x − a||u|, so below ~EPS |x − a| the distance is float64 noise whatever the formula
+    floor = 8 * EPS * float(np.linalg.norm(x - a))
+    assert record("point_line_distance", abs(got - expected) / max(expected, floor / TOL.kernel, 1e-300)) <= TOL.kernel
+
+
+# An expanded form ((x_i − a_i) u_j multiplied out, as the kernel language would write it) cancels
+# terms ~|a|²|u|²: at 1e6 from the origin a unit distance would come out wrong in the 4th digit.
+@pytest.mark.parametrize("far", [1e4, 1e6])
+def test_point_line_distance_far_from_origin_precision(far):
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    for _ in range(300):
+        a = rng.uniform(-far, far, 3)
+        u = rng.normal(size=3) * 10 ** rng.uniform(-2, 2)
+        x = a + _offset_from_line(u, rng.uniform(-10, 10), 10 ** rng.uniform(-2, 1), rng.uniform(0, 6.3))
+        worst = max(worst, rel_err(K.point_line_distance(a, u, x), _line_distance(a, u, x)))
+    assert worst <= TOL.kernel, f"distance error {worst:.3g} for lines {far:g} from the origin"
+
+
+@given(S.moderate_points(), S.unit_axes(), S.log_uniform(0.1, 10.0),
+       st.one_of(S.moderate_points().map(lambda x: ("point", x)),
+                 st.tuples(S.finite(-10, 10), st.one_of(st.just(0.0), S.log_uniform(1e-6, 10.0)),
+                           S.finite(0.0, 6.3)).map(lambda o: ("offset", o))))
+def test_point_line_distance_vs_clifford(a, axis, length, where):
+    u = axis * length
+    kind, value = where
+    x = value if kind == "point" else a + _offset_from_line(u, *value)
+    got = K.point_line_distance(a, u, x)
+    # the conformal line through a along u, L = up(a) ∧ u ∧ e∞: d² = −(X ∧ L)² / L² for X = up(x)
+    line = g3c.up(cl_vector(a)) ^ cl_vector(u) ^ einf
+    meet = g3c.up(cl_vector(x)) ^ line
+    d2 = -(meet * meet)[()] / (line * line)[()]
+    mag = max(1.0, float(np.abs(a).max()), float(np.abs(x).max()))
+    # clifford's up loses ~EPS |x|² (the oracle's own error, on d² ~ |x|²)
+    assert record("point_line_distance (clifford)", abs(got * got - d2) / mag ** 2) <= clifford_point_tol(mag)
+
+
+def test_point_line_distance_degenerate():
+    a, x = np.array([1.0, 2.0, 3.0]), np.array([4.0, -5.0, 6.0])
+    assert K.point_line_distance(a, np.array([0.0, 0.0, 2.0]), a) == 0.0             # x on the line
+    assert np.isnan(K.point_line_distance(a, np.zeros(3), x))                        # no direction: NaN
 
 
 @covers("barycentric")

@@ -17,7 +17,8 @@ its plane) where float64 itself loses digits and f32 cannot be compared at 1e-5.
   [0.01, 100] log-uniform; the matrix of versor_from_matrix a 4x4 similarity (versor_to_affine of a
   versor); the L of versor_exp a versor_log; triangles (plane_from_points, barycentric) with sides
   in [0.1, 10] and angles of at least 0.3 rad; segments (segment_plane) of length [1, 10] at least
-  0.2 rad off their plane, meeting it at t in [-1, 2].
+  0.2 rad off their plane, meeting it at t in [-1, 2]; the direction u of point_line_distance a vector
+  of length [0.1, 10] (u = 0 has no line: NaN).
 - anything else (points, affine maps, a user's arrays and scalars): [-10, 10].
 """
 from __future__ import annotations
@@ -148,6 +149,8 @@ def _by_meaning(src, kernel, rows):
         return {"n": _axis(src, rows), "d": _uniform(src, rows, None, -10.0, 10.0)}
     if name in ("plane_from_points", "barycentric"):
         return dict(zip("abc", _triangle(src, rows)))
+    if name == "point_line_distance":
+        return {"u": _axis(src, rows)}
     if name == "segment_plane":
         plane = _plane(src, rows)
         return dict(zip(("plane", "a", "b"), (plane, *_segment(src, rows, plane))))
