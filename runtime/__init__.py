@@ -14,6 +14,7 @@ from .animation.skinning import skin, skin_affine, skin_normals, skin_vertices
 from .animation.validate import check_mesh
 from .surgery.bvh import TriangleBVH
 from .surgery.cut import CutResult, PlaneMissesMeshWarning, cut, cut_details
+from .surgery.drill import DrillResult, drill, drill_details
 from .surgery.tear import StrokeResult, TearPathError, TearPlacementWarning, TearResult, tear, tear_stroke
 from .surgery.topology import Topology, rig_topology
 from .surgery.session import OperationCost, Surgery

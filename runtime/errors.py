@@ -22,7 +22,7 @@ class NoSkinError(ModelFormatError):
 
 
 class MissesMeshError(CgaskinError, ValueError):
-    """A cutting plane or a scalpel does not meet the mesh."""
+    """A cutting plane, a scalpel or a drill bit does not meet the mesh."""
 
 
 class TearPathError(CgaskinError, ValueError):

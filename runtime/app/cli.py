@@ -137,7 +137,7 @@ def main(argv=None) -> int:
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options passed to the benchmark")
     p.set_defaults(run=_bench)
 
-    from . import commands                            # the model commands (demo, skin, cut, tear)
+    from . import commands                            # the model commands (demo, skin, cut, drill, tear)
     commands.register(sub)
 
     args = parser.parse_args(argv)

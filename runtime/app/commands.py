@@ -134,6 +134,26 @@ def _cut(args) -> int:
     return 0
 
 
+def _check_drill(args) -> None:
+    check_pose_options(args)
+    finite_point(args.start, "--start")
+    finite_point(args.end, "--end")
+    finite(args.radius, f"--radius {args.radius}", "model units")
+    check_output(args.out)
+
+
+def _drill(args) -> int:
+    from ..rigs import load, save
+    from ..surgery.drill import drill_details
+    rig = load(args.model)
+    result = drill_details(rig, args.start, args.end, args.radius, pose=pose_of(rig, args), wall=not args.no_wall)
+    save(result.rig, args.out)
+    hole = f"{result.wall_faces} wall faces" if result.wall_faces else "open"
+    print(f"wrote {args.out}: {result.rig.n_vertices} vertices, {result.rig.n_faces} faces (the hole: "
+          f"{len(result.rim)} rim vertices, {hole})")
+    return 0
+
+
 def _blades(args) -> list:
     """The blade positions in order: --from, every --stroke, the lines of --strokes, --to; each
     (label, (2, 3) array (handle, tip)), the label naming where the user gave it."""
@@ -280,6 +300,18 @@ def register(sub) -> None:
     p.add_argument("--out", nargs=2, required=True, metavar=("POSITIVE.glb", "NEGATIVE.glb"),
                    help="the half the normal points to, then the other")
     p.set_defaults(run=_cut, check_options=_check_cut)
+
+    p = sub.add_parser("drill", help="drill a hole through a model (.glb): a bit of --radius travelling from "
+                                     "--start to --end; the hole gets a wall where the bit passes inside")
+    p.add_argument("model")
+    p.add_argument("--start", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
+    p.add_argument("--end", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"),
+                   help="where the bit's round tip stops")
+    p.add_argument("--radius", type=float, required=True)
+    p.add_argument("--no-wall", action="store_true", help="leave the hole open (its rims a boundary)")
+    add_pose_options(p, "the mesh as stored")
+    p.add_argument("--out", required=True)
+    p.set_defaults(run=_drill, check_options=_check_drill)
 
     p = sub.add_parser("tear", help="tear a model along the path of a moving scalpel (.glb); the blade "
                                     "positions in order: --from, each --stroke, the --strokes file, --to")

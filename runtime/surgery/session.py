@@ -38,6 +38,7 @@ from .._shared.jit import F2, I1, i8, kernel
 from .._shared.memory import minor_page_faults, release_free_memory
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
+from .drill import drill_details
 from .dynamic_bvh import DynamicBVH
 from .bone_influences import weight_summary
 from .posed_bounds import PosedScratch, no_posing
@@ -73,7 +74,7 @@ class _Undo(NamedTuple):
 
 
 class OperationCost(NamedTuple):
-    """What a session's operation cost: ``operation`` ("tear", "cut" or "undo"), its wall-clock
+    """What a session's operation cost: ``operation`` ("tear", "cut", "drill" or "undo"), its wall-clock
     ``seconds``, and the minor ``page_faults`` of the process while it ran (the fresh memory pages it
     wrote, each a trip to the operating system; 0 where the system does not count them)."""
 
@@ -87,7 +88,7 @@ class Surgery:
     (default: the stored vertices).
 
     Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``cut(normal, point, pose=None,
-    cap=False)``, ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``, ``n_faces``,
+    cap=False)``, ``drill(start, end, radius, pose=None, wall=True)``, ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``, ``n_faces``,
     ``n_operations``, ``pose``, ``last_cost`` (an ``OperationCost``). The caller's rig is never modified.
 
     What a stroke reads of the session (``vertices``, ``faces``, ``positions``, ``labels``,
@@ -202,6 +203,18 @@ class Surgery:
             previous = self._state()
             self._reset(replace(_joined(positive, negative), name=self._template.name))
             self._history.append(previous)
+
+    def drill(self, start, end, radius, pose=None, wall: bool = True):
+        """Drill a hole (``cgaskin.drill_details`` in ``pose``, None: the session's pose; the same
+        arguments but the rig, the same errors); returns its ``DrillResult``. Like ``cut``, it works on
+        the whole mesh and builds the session's state again. A drill that raises changes nothing."""
+        with self._costed("drill"):
+            result = drill_details(self.rig, start, end, radius, pose=self._pose if pose is None else pose,
+                                   wall=wall)
+            previous = self._state()
+            self._reset(replace(result.rig, name=self._template.name))
+            self._history.append(previous)
+        return result
 
     def undo(self) -> None:
         """Take back the last operation (raises InvalidInputError when there is none)."""

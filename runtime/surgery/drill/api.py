@@ -1,0 +1,214 @@
+"""Drill a hole through a skinned mesh.
+
+``drill(rig, start, end, radius, pose=None) -> Rig``
+
+The bit (``bit.py``) is the solid within ``radius`` of the segment start -> end, its travel. Steps:
+
+1. Positions to drill: the stored vertices (``pose=None``), or the skinned positions in ``pose``.
+2. The faces whose box meets the bit's box widened by the rim step form the patch; faces near the bit's
+   surface are bisected until their edges are at most ``RIM_STEP`` of the radius (``refine.py``), so
+   that the rim has about 25 edges around a hole however large the model's faces are.
+3. The patch's faces inside the bit are taken away, faces crossing its surface keep their outside part,
+   with new vertices exactly on the surface (``rim.py``).
+4. New vertices (the refinement's and the rim's) get weights and attributes from the input vertices
+   they lie between (``new_vertices.py``); a posed drill places them in rest space so that skinning the
+   result in ``pose`` puts them where they were made (as a posed cut does).
+5. The result keeps the input vertices it uses in their order (attributes and weights bit for bit),
+   then the new vertices; faces away from the bit keep their order, then come the patch's.
+
+The hole is open: its rim is a boundary of the mesh (a wall along the bit is not made yet).
+A bit that touches no face raises ``MissesMeshError``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...animation.rig import Rig
+from ...animation.skinning import check_pose, skin_affine
+from ...errors import InvalidInputError, MissesMeshError, PlacementWarning
+from ..._shared.warn import warn
+from ...tolerances import tol
+from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute, place_in_rest
+from ..surface import mesh_arrays
+from ..topology import rig_topology
+from .bit import Bit, bit as checked_bit
+from .refine import SOURCES, Patch, refine
+from .rim import open_hole
+from .wall import WALL, Frame, build_walls
+from .inside import winding_number
+
+__all__ = ["drill", "drill_details", "DrillResult", "RIM_STEP", "NEW_VERTEX"]
+
+#: the longest edge near a rim, as a fraction of the radius: 2 sin(pi / 25), about 25 edges around a hole
+RIM_STEP = 2.0 * np.sin(np.pi / 25)
+#: ``DrillResult.sources`` of a vertex the drill made
+NEW_VERTEX = -1
+
+
+@dataclass(frozen=True, eq=False)
+class DrillResult:
+    """A drill with its bookkeeping.
+
+    rig : Rig, the drilled rig
+    sources : (n_out,) int64, the input vertex of each output vertex, ``NEW_VERTEX`` for a new one
+    new : NewVertices, the input vertices each new vertex lies between and its coefficients there
+        (new vertex j is output vertex ``first_new + j``)
+    first_new : int
+    rim : (r,) int64, the output vertices on the bit's surface
+    new_positions : (k, 3) float64, the new vertices in the space that was drilled (rest, or posed)
+    removed_faces : int, input faces (after refinement) taken away or cut by the bit ; wall_faces : int
+    bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
+        |skinned new vertex - where it was made| (0 for a drill at rest)
+    """
+
+    rig: Rig
+    sources: np.ndarray
+    new: NewVertices
+    first_new: int
+    rim: np.ndarray
+    new_positions: np.ndarray
+    removed_faces: int
+    wall_faces: int
+    bit: Bit
+    tolerance: float
+    residual: float
+
+
+def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> DrillResult:
+    """``drill`` with its bookkeeping (``DrillResult``); same arguments as ``drill``."""
+    vertices, faces, joints, weights = mesh_arrays(rig)
+    the_bit = checked_bit(start, end, radius)
+    if not isinstance(wall, (bool, np.bool_)):
+        raise InvalidInputError(f"wall must be True or False, got {wall!r}")
+    affines = None if pose is None else check_pose(rig, pose).bone_affines()
+    positions = vertices if affines is None else skin_affine(vertices, joints, weights, affines)
+    diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0))) if len(positions) else 0.0
+    step = RIM_STEP * the_bit.radius
+    patch = Patch(positions, faces, rig_topology(rig))
+    for face in _faces_near(positions, faces, the_bit, step):
+        patch.take(int(face))
+    tolerance = tol.on_plane * max(diagonal, the_bit.radius)
+    if patch.faces:
+        refine(patch, the_bit, step)
+        rim, opened = open_hole(patch, the_bit, tolerance)
+    else:
+        rim, opened = [], 0
+    if opened == 0:
+        raise MissesMeshError(f"the bit (radius {the_bit.radius:g} around {the_bit.start.tolist()} -> "
+                              f"{the_bit.end.tolist()}) does not reach into the mesh of {rig.name!r}")
+    walls = build_walls(patch, rim, the_bit, step, lambda p: winding_number(positions, faces, p) > 0.5) \
+        if wall else 0
+    return _assemble(rig, patch, rim, opened, walls, the_bit, tolerance, affines, diagonal)
+
+
+def drill(rig: Rig, start, end, radius, pose=None) -> Rig:
+    """Drill a hole with a bit of ``radius`` travelling from ``start`` to ``end``.
+
+    Parameters
+    ----------
+    rig : Rig
+    start, end : (3,) float, the bit's travel (in the space drilled: rest, or posed in ``pose``); the
+        bit takes away what lies within ``radius`` of the segment (a round tip at ``end``)
+    radius : float > 0
+    pose : Pose or None
+        Drill the mesh as skinned in this pose; the new vertices are placed in rest space so that the
+        result skinned in ``pose`` has them where the bit made them.
+
+    Returns
+    -------
+    Rig : the drilled rig (same skeleton and clips), the hole open (its rim a boundary).
+
+    Raises
+    ------
+    InvalidInputError : a radius that is not positive and finite, start equal to end, non-finite or
+        misshapen points, a pose of another skeleton, an invalid rig.
+    MissesMeshError : the bit does not reach into the mesh.
+    """
+    return drill_details(rig, start, end, radius, pose).rig
+
+
+def _faces_near(positions, faces, the_bit: Bit, step: float) -> np.ndarray:
+    """The faces whose bounding box meets the bit's, widened by ``step``."""
+    reach = the_bit.radius + step
+    lo = np.minimum(the_bit.start, the_bit.end) - reach
+    hi = np.maximum(the_bit.start, the_bit.end) + reach
+    corners = positions[faces]
+    return np.flatnonzero(((corners.max(axis=1) >= lo) & (corners.min(axis=1) <= hi)).all(axis=1))
+
+
+def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bit: Bit, tolerance: float, affines,
+              diagonal: float) -> DrillResult:
+    vertices, faces, joints, weights = mesh_arrays(rig)
+    n = len(vertices)
+    kept_faces = np.ones(len(faces), bool)
+    kept_faces[list(patch.taken)] = False
+    patch_faces = np.asarray(patch.faces, np.int64).reshape(-1, 3)
+    row_is_new = np.ones(len(patch.row_point), bool)
+    row_is_new[patch.input_rows] = False
+    # the rows' ids in the vertex table before compaction: input rows -> input vertex, new -> n + j
+    new_rows = np.flatnonzero(row_is_new)
+    row_ids = np.empty(len(row_is_new), np.int64)
+    row_ids[~row_is_new] = [int(patch.row_src[r][0]) for r in np.flatnonzero(~row_is_new)]
+    row_ids[new_rows] = n + np.arange(len(new_rows))
+    all_faces = np.concatenate([faces[kept_faces], row_ids[patch_faces]])
+    used = np.zeros(n + len(new_rows), bool)
+    used[all_faces.ravel()] = True
+    renumber = np.cumsum(used) - 1
+    kept_input = np.flatnonzero(used[:n])
+    kept_new = np.flatnonzero(used[n:])
+    new_rows = new_rows[kept_new]
+    new = NewVertices(np.array([patch.row_src[r] for r in new_rows], np.int64).reshape(-1, SOURCES),
+                      np.array([patch.row_coef[r] for r in new_rows]).reshape(-1, SOURCES))
+    points = patch.point_array()
+    new_positions = points[np.asarray(patch.row_point, np.int64)[new_rows]] if len(new_rows) else np.empty((0, 3))
+    new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
+    new_rest, residual = new_positions, 0.0
+    if affines is not None and len(new_rows):
+        new_rest, residual = _placed(vertices, new, new_positions, new_joints, new_weights, affines, diagonal)
+    out_vertices = np.concatenate([vertices[kept_input], new_rest])
+    out_joints = np.concatenate([joints[kept_input], new_joints])
+    out_weights = np.concatenate([weights[kept_input], new_weights])
+    attributes = {}
+    for name, values in rig.attributes.items():
+        values = np.asarray(values)
+        attributes[name] = np.concatenate([values[kept_input], interpolate_attribute(name, values, new)])
+    if walls and "NORMAL" in attributes:
+        _wall_normals(attributes["NORMAL"], len(kept_input), new_rows, patch, the_bit, new_joints, new_weights,
+                      affines)
+    result = Rig._of_checked(out_vertices, renumber[all_faces], out_joints, out_weights, rig.skeleton, rig.clips,
+                             attributes, f"{rig.name}_drilled")
+    sources = np.concatenate([kept_input, np.full(len(new_rows), NEW_VERTEX, np.int64)])
+    rim_ids = renumber[row_ids[np.asarray(rim, np.int64)]] if rim else np.empty(0, np.int64)
+    return DrillResult(result, sources, new, len(kept_input), np.sort(rim_ids), new_positions, opened, walls,
+                       the_bit, tolerance, residual)
+
+
+def _wall_normals(normals, first_new: int, new_rows, patch: Patch, the_bit: Bit, new_joints, new_weights, affines):
+    """The wall rows' normals (in place, rows of ``normals``) pointing to the bit's axis; for a posed drill
+    carried to rest by the transpose of each row's blended linear map (normals transform by its inverse
+    transpose)."""
+    wall_rows = np.unique(np.asarray(patch.faces, np.int64)[np.asarray(patch.face_source) <= WALL])
+    at = np.flatnonzero(np.isin(new_rows, wall_rows))
+    points = patch.point_array()[np.asarray(patch.row_point, np.int64)[new_rows[at]]]
+    inward = Frame(the_bit).inward(points)
+    if affines is not None:
+        linear = np.einsum("kb,kbij->kij", new_weights[at], affines[new_joints[at]].reshape(-1, 4, 3, 4)[..., :3])
+        inward = np.einsum("kji,kj->ki", linear, inward)
+        inward /= np.linalg.norm(inward, axis=1, keepdims=True)
+    normals[first_new + at] = inward.astype(normals.dtype)
+
+
+def _placed(vertices, new: NewVertices, targets, new_joints, new_weights, affines, diagonal: float):
+    """Rest positions of the new vertices of a posed drill (``place_in_rest``), and the largest residual
+    (a ``PlacementWarning`` when some miss where they were made)."""
+    guess = interpolate_attribute("POSITION", vertices, new)
+    rest, residuals = place_in_rest(targets, guess, new_joints, new_weights, affines)
+    residual = float(residuals.max()) if len(residuals) else 0.0
+    if residual > tol.placement * diagonal:
+        warn(f"{int(np.count_nonzero(residuals > tol.placement * diagonal))} new vertices of the drill miss "
+             f"where they were made in the pose by more than {tol.placement:g} of the diagonal (largest "
+             f"{residual:.3g}): a singular blended transform; they keep their interpolated rest positions",
+             PlacementWarning)
+    return rest, residual

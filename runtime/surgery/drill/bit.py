@@ -1,0 +1,169 @@
+"""The drill's bit: the solid within ``radius`` of the segment start -> end (a cylinder around the bit's
+travel with a round tip at ``end``, and a round back at ``start``), and the distances the drill measures
+with it.
+
+The distance of a point from the segment is the distance from its axis line (generated
+``point_line_distance``: the outer product (x - a) ^ u, relative to a point of the axis) where the point
+projects inside the travel, else from the nearer end. ``f(x) = distance - radius`` is negative inside
+the bit and convex, so along a mesh edge whose ends lie on either side it has exactly one root, found
+by bisection to the last bit of the edge parameter: a rim vertex lies on the bit's surface to rounding.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..._shared.checks import float_array, real_number
+from ..._shared.jit import F1, F2, I2, f8, helper, kernel
+from ...errors import InvalidInputError
+from ...generated.kernels import barycentric, point_line_distance
+
+__all__ = ["Bit", "bit"]
+
+
+class Bit(NamedTuple):
+    """A drill bit: start (3,), end (3,) float64 (its travel), radius > 0."""
+
+    start: np.ndarray
+    end: np.ndarray
+    radius: float
+
+
+def bit(start, end, radius) -> Bit:
+    """A checked ``Bit``: finite points, a travel of non-zero length, a positive finite radius."""
+    a = float_array(start, "start", 3, ndim=1).copy()
+    b = float_array(end, "end", 3, ndim=1).copy()
+    r = real_number(radius, "radius")
+    if not r > 0.0:
+        raise InvalidInputError(f"radius must be positive, got {r}")
+    if np.array_equal(a, b):
+        raise InvalidInputError("start and end are the same point: the bit has no travel (give the hole's "
+                                "direction by an end point beyond the start)")
+    return Bit(a, b, r)
+
+
+@helper
+def _distance(start, end, x):
+    """Distance of x (3,) from the segment start -> end."""
+    dx, dy, dz = end[0] - start[0], end[1] - start[1], end[2] - start[2]
+    wx, wy, wz = x[0] - start[0], x[1] - start[1], x[2] - start[2]
+    along = wx * dx + wy * dy + wz * dz
+    if along <= 0.0:
+        return math.sqrt(wx * wx + wy * wy + wz * wz)
+    if along >= dx * dx + dy * dy + dz * dz:
+        ex, ey, ez = x[0] - end[0], x[1] - end[1], x[2] - end[2]
+        return math.sqrt(ex * ex + ey * ey + ez * ez)
+    return point_line_distance(start, end - start, x)
+
+
+@helper
+def _on_edge(p, q, t):
+    """The point p + t (q - p) (3,)."""
+    out = np.empty(3)
+    for k in range(3):
+        out[k] = p[k] + t * (q[k] - p[k])
+    return out
+
+
+@helper
+def _closest_on_edge(start, end, p, q):
+    """The least distance between the segment p -> q and the bit's segment (Ericson, "Real-Time
+    Collision Detection", 5.1.9: the closest points' parameters, clamped; in coordinates relative to
+    the bit's start)."""
+    d1x, d1y, d1z = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+    d2x, d2y, d2z = end[0] - start[0], end[1] - start[1], end[2] - start[2]
+    rx, ry, rz = p[0] - start[0], p[1] - start[1], p[2] - start[2]
+    a = d1x * d1x + d1y * d1y + d1z * d1z
+    e = d2x * d2x + d2y * d2y + d2z * d2z
+    f = d2x * rx + d2y * ry + d2z * rz
+    c = d1x * rx + d1y * ry + d1z * rz
+    b = d1x * d2x + d1y * d2y + d1z * d2z
+    s = 0.0
+    if a > 0.0:
+        denom = a * e - b * b
+        if denom > 0.0:
+            s = min(max((b * f - c * e) / denom, 0.0), 1.0)
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = min(max(-c / a, 0.0), 1.0) if a > 0.0 else 0.0
+    elif t > 1.0:
+        t = 1.0
+        s = min(max((b - c) / a, 0.0), 1.0) if a > 0.0 else 0.0
+    dx = rx + s * d1x - t * d2x
+    dy = ry + s * d1y - t * d2y
+    dz = rz + s * d1z - t * d2z
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@helper
+def _closest_on_face(start, end, a, b, c):
+    """The least distance of triangle abc from the bit's segment: over its edges, the segment's ends
+    projected inside it, and 0 where the segment pierces it."""
+    best = min(_closest_on_edge(start, end, a, b), min(_closest_on_edge(start, end, b, c),
+                                                       _closest_on_edge(start, end, c, a)))
+    for e in (start, end):
+        la, lb, lc = barycentric(a, b, c, e)
+        if la >= 0.0 and lb >= 0.0 and lc >= 0.0:
+            foot = la * a + lb * b + lc * c
+            best = min(best, math.sqrt(((e - foot) ** 2).sum()))
+    # the segment's crossing of the triangle's plane, if it lies inside the triangle
+    n = np.cross(b - a, c - a)
+    da, db = ((start - a) * n).sum(), ((end - a) * n).sum()
+    if (da < 0.0) != (db < 0.0) and da != db:
+        la, lb, lc = barycentric(a, b, c, _on_edge(start, end, da / (da - db)))
+        if la >= 0.0 and lb >= 0.0 and lc >= 0.0:
+            best = 0.0
+    return best
+
+
+@kernel((F2, I2, F1, F1, f8))
+def near_faces(positions, faces, start, end, radius):
+    """Per face (m,): the least of f = distance - radius over the face and the largest over its corners
+    (the largest over the face, f being convex). positions (w, 3) ; faces (m, 3) over them ; returns low (m,), high (m,) float64."""
+    m = faces.shape[0]
+    low, high = np.empty(m), np.empty(m)
+    for i in range(m):
+        a, b, c = positions[faces[i, 0]], positions[faces[i, 1]], positions[faces[i, 2]]
+        low[i] = _closest_on_face(start, end, a, b, c) - radius
+        high[i] = max(_distance(start, end, a), max(_distance(start, end, b), _distance(start, end, c))) - radius
+    return low, high
+
+
+@kernel((F2, F1, F1, f8))
+def signed_distances(positions, start, end, radius):
+    """f = distance - radius (w,) of each point (w, 3): negative inside the bit."""
+    out = np.empty(positions.shape[0])
+    for i in range(positions.shape[0]):
+        out[i] = _distance(start, end, positions[i]) - radius
+    return out
+
+
+@kernel((F2, I2, F1, F1, f8))
+def crossings(positions, edges, start, end, radius):
+    """The parameter t (k,) where each edge p -> q (rows of ``edges`` (k, 2) into ``positions``), one
+    end inside the bit and the other outside, meets the bit's surface; by bisection until the bracket
+    cannot shrink. Returns t (k,), points (k, 3)."""
+    k = edges.shape[0]
+    ts, points = np.empty(k), np.empty((k, 3))
+    for i in range(k):
+        p, q = positions[edges[i, 0]], positions[edges[i, 1]]
+        inside_at_p = _distance(start, end, p) < radius
+        lo, hi = 0.0, 1.0
+        while True:
+            mid = 0.5 * (lo + hi)
+            if mid <= lo or mid >= hi:
+                break
+            if (_distance(start, end, _on_edge(p, q, mid)) < radius) == inside_at_p:
+                lo = mid
+            else:
+                hi = mid
+        # the end of the bracket nearer the surface
+        f_lo = abs(_distance(start, end, _on_edge(p, q, lo)) - radius)
+        f_hi = abs(_distance(start, end, _on_edge(p, q, hi)) - radius)
+        ts[i] = lo if f_lo <= f_hi else hi
+        x = _on_edge(p, q, ts[i])
+        points[i, 0], points[i, 1], points[i, 2] = x[0], x[1], x[2]
+    return ts, points

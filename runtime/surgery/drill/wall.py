@@ -1,0 +1,337 @@
+"""The walls of a hole: the part of the bit's surface inside the model, joined to the rims.
+
+The bit's surface is a surface of revolution: a point of it is (θ, σ), its angle around the axis and
+its height along the profile (the back hemisphere for σ < 0, the cylinder for 0 <= σ <= L, the tip
+hemisphere for σ > L, σ measured as arc length; ``_surface_point``). The rims (``rim.py``) are closed
+loops of the mesh's new boundary on that surface:
+
+* a loop that winds once around the axis is an entry or an exit; the loops are ordered by height, and
+  two consecutive ones are joined by a tunnel where the axis between them lies inside the input model
+  (its winding number, a solid-angle sum over the input faces, above one half); the last loop is joined
+  to the tip (a blind hole's wall and round bottom) where the axis beyond it is inside (the first to
+  the back likewise, for a bit that starts inside);
+* a tunnel is made of rings at heights between the two loops' (columns and rings about ``step``
+  apart), zipped together by angle; its vertices lie on the bit's surface;
+* a loop that does not wind around the axis (a bit grazing the model's side) is filled with the part of
+  the surface it encloses, triangulated flat in the unrolled (r θ, σ) plane.
+
+Wall faces face the axis (their outside is the hole). Wall vertices are rows of their own (the rims'
+positions, other normals): described, for weights and attributes, by the rim rows nearest in angle on
+the loops they lie between; their normal points to the axis.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...errors import InternalError, InvalidInputError
+from ...tolerances import tol
+from ..cut.cap import _ear_clip
+from ..topology import directed_loops
+from .refine import MAX_ROUNDS, Patch, _bisect, _combined
+
+#: a wall face's input face (``Patch.face_source``): a tunnel's, or a fill's (the inside of a loop that
+#: does not wind around the axis)
+WALL, WALL_FILL = -1, -2
+
+
+class Frame:
+    """The bit's axis frame: unit axis u, e1, e2 across it, travel length L, radius r."""
+
+    def __init__(self, bit):
+        self.start, self.end, self.r = bit.start, bit.end, bit.radius
+        d = bit.end - bit.start
+        self.length = float(np.linalg.norm(d))
+        self.u = d / self.length
+        helper = np.eye(3)[int(np.argmin(np.abs(self.u)))]
+        self.e1 = np.cross(self.u, helper)
+        self.e1 /= np.linalg.norm(self.e1)
+        self.e2 = np.cross(self.u, self.e1)
+        self.top = self.length + 0.5 * math.pi * self.r          # σ of the tip's pole
+        self.bottom = -0.5 * math.pi * self.r                    # σ of the back's pole
+
+    def coordinates(self, x) -> tuple:
+        """(θ, σ) of points x (k, 3) on the bit's surface."""
+        w = x - self.start
+        s, a, b = w @ self.u, w @ self.e1, w @ self.e2
+        theta = np.arctan2(b, a)
+        radial = np.hypot(a, b)
+        sigma = np.where(s > self.length, self.length + self.r * np.arctan2(s - self.length, radial),
+                         np.where(s < 0.0, -self.r * np.arctan2(-s, radial), s))
+        return theta, sigma
+
+    def point(self, theta: float, sigma: float) -> np.ndarray:
+        """The surface point (3,) at (θ, σ)."""
+        around = math.cos(theta) * self.e1 + math.sin(theta) * self.e2
+        if sigma > self.length:
+            phi = min((sigma - self.length) / self.r, 0.5 * math.pi)
+            return self.end + self.r * (math.sin(phi) * self.u + math.cos(phi) * around)
+        if sigma < 0.0:
+            phi = min(-sigma / self.r, 0.5 * math.pi)
+            return self.start + self.r * (-math.sin(phi) * self.u + math.cos(phi) * around)
+        return self.start + sigma * self.u + self.r * around
+
+    def axis_point(self, sigma: float) -> np.ndarray:
+        """The point of the axis at the height of σ (inside the bit)."""
+        if sigma > self.length:
+            return self.end + self.r * math.sin(min((sigma - self.length) / self.r, 0.5 * math.pi)) * self.u
+        if sigma < 0.0:
+            return self.start - self.r * math.sin(min(-sigma / self.r, 0.5 * math.pi)) * self.u
+        return self.start + sigma * self.u
+
+    def inward(self, x) -> np.ndarray:
+        """Unit normals (k, 3) at surface points x pointing into the bit (to the axis, or a pole's centre)."""
+        s = np.clip((x - self.start) @ self.u, 0.0, self.length)
+        d = self.start + s[:, None] * self.u - x
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+class Loop:
+    """A rim loop: its rows (one per corner, in the boundary's direction), points, (θ, σ), winding."""
+
+    def __init__(self, rows, points, theta, sigma):
+        self.rows, self.points, self.sigma = rows, points, sigma
+        turns = np.diff(np.concatenate([theta, theta[:1]]))
+        turns = (turns + math.pi) % (2 * math.pi) - math.pi
+        self.unwrapped = theta[0] + np.concatenate([[0.0], np.cumsum(turns[:-1])])
+        self.winding = int(round(turns.sum() / (2 * math.pi)))
+        self.theta = theta
+
+    def height_at(self, theta: np.ndarray) -> np.ndarray:
+        """σ of the loop at angles θ (linear between its corners, periodic)."""
+        order = np.argsort(self.theta)
+        t, s = self.theta[order], self.sigma[order]
+        return np.interp(theta, np.concatenate([t - 2 * math.pi, t, t + 2 * math.pi]), np.tile(s, 3))
+
+    def nearest_row(self, theta: float) -> int:
+        gap = np.abs((self.theta - theta + math.pi) % (2 * math.pi) - math.pi)
+        return self.rows[int(np.argmin(gap))]
+
+
+def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
+    """Add the holes' walls to the patch (module docstring); ``inside(point (3,)) -> bool`` says whether a
+    point is inside the input model. Returns the number of wall faces."""
+    frame = Frame(bit)
+    loops = _rim_loops(patch, set(rim), frame)
+    before = len(patch.faces)
+    around = sorted((loop for loop in loops if loop.winding != 0), key=lambda loop: float(loop.sigma.mean()))
+    for loop in around:
+        if np.any(np.diff(loop.unwrapped) * loop.winding < 0.0):
+            raise InvalidInputError("a rim of the hole winds back around the bit (the surface folds across "
+                                    "it), which a wall cannot follow; drill with wall=False")
+    for a, b in zip(around, around[1:] + [None]):      # None: the tip's pole
+        high = frame.top if b is None else float(b.sigma.min())
+        if inside(frame.axis_point(0.5 * (float(a.sigma.max()) + high))):
+            _tunnel(patch, frame, a, b, step)
+    for loop in loops:
+        if loop.winding == 0:
+            _fill(patch, frame, loop)
+    _refine_fills(patch, frame, step)
+    return len(patch.faces) - before
+
+
+def _rim_loops(patch: Patch, rim: set, frame: Frame) -> list:
+    """The loops of boundary edges between rim points, as ``Loop``s (point ids welded: seams are one)."""
+    directed = {}
+    counts = {}
+    rim_points = {patch.row_point[r] for r in rim}
+    for rows in patch.faces:
+        for k in range(3):
+            a, b = rows[k], rows[(k + 1) % 3]
+            key = patch.point_edge(a, b)
+            counts[key] = counts.get(key, 0) + 1
+            directed[(patch.row_point[a], patch.row_point[b])] = a
+    starts, ends = [], []
+    for (pa, pb), _ in directed.items():
+        if counts[(min(pa, pb), max(pa, pb))] == 1 and pa in rim_points and pb in rim_points:
+            starts.append(pa)
+            ends.append(pb)
+    points = patch.point_array()
+    out = []
+    for cycle in directed_loops(np.array(starts, np.int64), np.array(ends, np.int64)):
+        nxt = cycle[1:] + cycle[:1]
+        rows = [directed[(p, q)] for p, q in zip(cycle, nxt)]
+        theta, sigma = frame.coordinates(points[cycle])
+        out.append(Loop(rows, np.array(cycle), theta, sigma))
+    return out
+
+
+def _wall_row(patch: Patch, frame: Frame, theta: float, sigma: float, a: Loop | None, b: Loop | None,
+              weight: float) -> int:
+    """A new wall row at (θ, σ) between loops a and b (either may be a pole: None), described by their
+    rim rows nearest in angle (``weight``: b's share)."""
+    ra = None if a is None else a.nearest_row(theta)
+    rb = None if b is None else b.nearest_row(theta)
+    if ra is None or rb is None:
+        row = ra if rb is None else rb
+        description = (patch.row_src[row], patch.row_coef[row])
+    else:
+        description = _combined(patch.row_src[ra], patch.row_coef[ra], patch.row_src[rb], patch.row_coef[rb], weight)
+    return _surface_row(patch, frame.point(theta, sigma), description)
+
+
+def _pole_row(patch: Patch, frame: Frame, sigma: float, loop: Loop) -> int:
+    """The row at a pole of the bit, described by six rows spread around the loop it closes."""
+    picks = [loop.rows[i] for i in np.linspace(0, len(loop.rows) - 1, 6).astype(int)]
+    description = (patch.row_src[picks[0]], patch.row_coef[picks[0]])
+    for i, r in enumerate(picks[1:], start=2):
+        description = _combined(*description, patch.row_src[r], patch.row_coef[r], 1.0 / i)
+    return _surface_row(patch, frame.point(0.0, sigma), description)
+
+
+def _surface_row(patch: Patch, position, description) -> int:
+    point = len(patch.points)
+    patch.points.append(position)
+    return patch.new_row(point, description)
+
+
+def _loop_rows(patch: Patch, loop: Loop) -> list:
+    """Wall rows at the loop's own corners (the rim's points, rows of their own)."""
+    out = []
+    for row, point in zip(loop.rows, loop.points):
+        out.append(patch.new_row(int(point), (patch.row_src[row], patch.row_coef[row])))
+    return out
+
+
+def _tunnel(patch: Patch, frame: Frame, a: Loop | None, b: Loop | None, step: float) -> None:
+    """The wall between loop a (or the back's pole) and loop b (or the tip's pole)."""
+    count = max(8, int(math.ceil(2.0 * math.pi * frame.r / step)))
+    columns = np.linspace(-math.pi, math.pi, count, endpoint=False)     # the rings' angles, step apart
+    low = a.height_at(columns) if a is not None else np.full(len(columns), frame.bottom)
+    high = b.height_at(columns) if b is not None else np.full(len(columns), frame.top)
+    rings_between = max(1, int(math.ceil(float(np.max(np.abs(high - low))) / step)))
+    rings = []
+    if a is not None:
+        rings.append((a.theta, _loop_rows(patch, a)))
+    for k in range(1, rings_between):
+        w = k / rings_between
+        rows = [_wall_row(patch, frame, float(t), float((1 - w) * lo + w * hi), a, b, w)
+                for t, lo, hi in zip(columns, low, high)]
+        rings.append((columns, rows))
+    if b is not None:
+        rings.append((b.theta, _loop_rows(patch, b)))
+    for (ta, ra), (tb, rb) in zip(rings[:-1], rings[1:]):
+        _zip_rings(patch, frame, ta, ra, tb, rb)
+    for ring, pole, loop in ((rings[0], frame.bottom, b) if a is None else (None, 0.0, None),
+                             (rings[-1], frame.top, a) if b is None else (None, 0.0, None)):
+        if ring is not None:
+            centre = _pole_row(patch, frame, pole, loop)
+            rows = [ring[1][i] for i in np.argsort(ring[0])]
+            for i in range(len(rows)):
+                _add_facing(patch, frame, [rows[i], rows[(i + 1) % len(rows)], centre])
+
+
+def _zip_rings(patch: Patch, frame: Frame, ta, ra, tb, rb) -> None:
+    """Triangles between two rings of rows at angles ta, tb (each around once), advancing by angle."""
+    oa, ob = np.argsort(ta), np.argsort(tb)
+    ta, tb = np.asarray(ta)[oa], np.asarray(tb)[ob]
+    ra, rb = [ra[i] for i in oa], [rb[i] for i in ob]
+    na, nb = len(ra), len(rb)
+    j = int(np.argmin(np.abs((tb - ta[0] + math.pi) % (2 * math.pi) - math.pi)))
+    # angles unwrapped from ta[0]: ring a from 0, ring b from its start j
+    ua = np.concatenate([ta, ta[:1] + 2 * math.pi]) - ta[0]
+    tb_rot = np.concatenate([tb[j:], tb[:j]])
+    ub = (tb_rot - ta[0] + math.pi) % (2 * math.pi) - math.pi
+    ub = np.concatenate([[ub[0]], ub[0] + np.cumsum((np.diff(tb_rot) + 2 * math.pi) % (2 * math.pi))])
+    ub = np.concatenate([ub, ub[:1] + 2 * math.pi])
+    rb_rot = rb[j:] + rb[:j]
+    i = k = 0
+    while i < na or k < nb:
+        if k >= nb or (i < na and ua[i + 1] <= ub[k + 1]):
+            _add_facing(patch, frame, [ra[i], ra[(i + 1) % na], rb_rot[k % nb]])
+            i += 1
+        else:
+            _add_facing(patch, frame, [ra[i % na], rb_rot[(k + 1) % nb], rb_rot[k]])
+            k += 1
+
+
+def _fill(patch: Patch, frame: Frame, loop: Loop) -> None:
+    """The surface a loop that does not wind around the axis encloses. Split at its least and greatest
+    angle, a loop is usually two chains along which the angle only grows: they are zipped by angle,
+    faces narrow across the curvature and long along the straight axis. Otherwise the loop is ear-clipped
+    in (r θ, σ) and refined (``_refine_fills``)."""
+    for point, theta, sigma in zip(loop.points, loop.unwrapped, loop.sigma):
+        patch.fill_params[int(point)] = np.array([theta, sigma])     # (the fill's refinement halves them)
+    rows = _loop_rows(patch, loop)
+    n, first, last = len(rows), int(np.argmin(loop.unwrapped)), int(np.argmax(loop.unwrapped))
+    chains = [[(first + i) % n for i in range((last - first) % n + 1)],
+              [(first - i) % n for i in range((first - last) % n + 1)]]
+    if all(np.all(np.diff(loop.unwrapped[chain]) > 0.0) for chain in chains):
+        triangles = _zip_chains(loop.unwrapped, *chains)
+    else:
+        xy = np.column_stack([frame.r * loop.unwrapped, loop.sigma])
+        order = np.arange(n) if _area(xy) > 0.0 else np.arange(n)[::-1]
+        triangles = order[_ear_clip(np.ascontiguousarray(xy[order]), order.astype(np.int64), tol.min_sine)]
+    for tri in triangles:
+        a, b, c = (np.array([frame.r * loop.unwrapped[i], loop.sigma[i]]) for i in tri)
+        # counter-clockwise in (r θ, σ) faces away from the axis (∂θ × ∂σ is the outward radial): reversed
+        if _area(np.array([a, b, c])) > 0.0:
+            tri = (tri[0], tri[2], tri[1])
+        patch.faces.append([rows[i] for i in tri])
+        patch.face_source.append(WALL_FILL)
+
+
+def _zip_chains(theta, lower: list, upper: list) -> list:
+    """Triangles (corner indices) between two chains from one corner to another, angles increasing along
+    both, advancing the chain whose next corner comes first."""
+    out, i, k = [], 0, 0
+    while i < len(lower) - 1 or k < len(upper) - 1:
+        if k == len(upper) - 1 or (i < len(lower) - 1 and theta[lower[i + 1]] <= theta[upper[k + 1]]):
+            out.append((lower[i], lower[i + 1], upper[k]))
+            i += 1
+        else:
+            out.append((lower[i], upper[k + 1], upper[k]))
+            k += 1
+    return [tri for tri in out if len(set(tri)) == 3]
+
+
+def _area(xy) -> float:
+    """The signed area of polygon xy (k, 2) (> 0: counter-clockwise)."""
+    return 0.5 * float(np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1]))
+
+
+def _add_facing(patch: Patch, frame: Frame, rows: list) -> None:
+    """Add a wall face, wound so that its normal points into the bit."""
+    p = [patch.points[patch.row_point[r]] for r in rows]
+    normal = np.cross(p[1] - p[0], p[2] - p[0])
+    centre = (p[0] + p[1] + p[2]) / 3.0
+    if normal @ frame.inward(centre[None])[0] < 0.0:
+        rows = [rows[0], rows[2], rows[1]]
+    patch.faces.append(rows)
+    patch.face_source.append(WALL)
+
+
+def _curved_extent(frame: Frame, a, b) -> float:
+    """How far an edge between surface points (θ, σ) a and b runs across the surface's curvature: its
+    angle times the radius on the cylinder (which is straight along the axis: an edge along it lies on
+    it), its length where it reaches onto a round end."""
+    if min(a[1], b[1]) < 0.0 or max(a[1], b[1]) > frame.length:
+        return float(np.hypot(frame.r * (a[0] - b[0]), a[1] - b[1]))
+    return frame.r * abs(float(a[0] - b[0]))
+
+
+def _refine_fills(patch: Patch, frame: Frame, step: float) -> None:
+    """Bisect the fills' inner edges that span more than ``step`` across the surface's curvature
+    (``_curved_extent``; both faces of such an edge are fill faces), each midpoint the surface point
+    halfway in (θ, σ) (a chord across a wide fill passes near the axis, where the direction to the
+    surface is lost), until the fills follow the surface as closely as the rims do."""
+    params = patch.fill_params
+
+    def place(a: int, b: int) -> np.ndarray:
+        theta, sigma = 0.5 * (params[a] + params[b])
+        params[len(patch.points)] = np.array([theta, sigma])
+        return frame.point(theta, sigma)
+
+    for _ in range(MAX_ROUNDS):
+        points = patch.point_array()
+        fill, other = set(), set()
+        for rows, source in zip(patch.faces, patch.face_source):
+            for k in range(3):
+                (fill if source == WALL_FILL else other).add(patch.point_edge(rows[k], rows[(k + 1) % 3]))
+        marked = [(a << 32) | b for a, b in fill - other      # a fill's inner edge (its loop's are the rim's)
+                  if _curved_extent(frame, params[a], params[b]) > step]
+        if not marked:
+            return
+        _bisect(patch, np.unique(np.array(marked, np.int64)), place)
+    raise InternalError(f"a hole's wall did not become finer than {step:g} in {MAX_ROUNDS} rounds")
