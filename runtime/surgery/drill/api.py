@@ -1,6 +1,6 @@
 """Drill a hole through a skinned mesh.
 
-``drill(rig, start, end, radius, pose=None) -> Rig``
+``drill(rig, start, end, radius, pose=None, wall=True) -> Rig``
 
 The bit (``bit.py``) is the solid within ``radius`` of the segment start -> end, its travel. Steps:
 
@@ -16,7 +16,9 @@ The bit (``bit.py``) is the solid within ``radius`` of the segment start -> end,
 5. The result keeps the input vertices it uses in their order (attributes and weights bit for bit),
    then the new vertices; faces away from the bit keep their order, then come the patch's.
 
-The hole is open: its rim is a boundary of the mesh (a wall along the bit is not made yet).
+6. ``wall=True``: where the bit passes inside the model, the hole gets a wall on the bit's surface
+   (``wall.py``), so that a closed model stays closed; ``wall=False`` leaves the rims as boundaries.
+
 A bit that touches no face raises ``MissesMeshError``.
 """
 from __future__ import annotations
@@ -58,7 +60,8 @@ class DrillResult:
     first_new : int
     rim : (r,) int64, the output vertices on the bit's surface
     new_positions : (k, 3) float64, the new vertices in the space that was drilled (rest, or posed)
-    removed_faces : int, input faces (after refinement) taken away or cut by the bit ; wall_faces : int
+    removed_faces : int, input faces (after refinement) taken away or cut by the bit
+    wall_faces : int, the walls' faces: the last ``wall_faces`` rows of ``rig.faces``
     bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
         |skinned new vertex - where it was made| (0 for a drill at rest)
     """
@@ -103,7 +106,7 @@ def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) ->
     return _assemble(rig, patch, rim, opened, walls, the_bit, tolerance, affines, diagonal)
 
 
-def drill(rig: Rig, start, end, radius, pose=None) -> Rig:
+def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
     """Drill a hole with a bit of ``radius`` travelling from ``start`` to ``end``.
 
     Parameters
@@ -115,18 +118,24 @@ def drill(rig: Rig, start, end, radius, pose=None) -> Rig:
     pose : Pose or None
         Drill the mesh as skinned in this pose; the new vertices are placed in rest space so that the
         result skinned in ``pose`` has them where the bit made them.
+    wall : bool
+        Line the hole with a wall on the bit's surface where the bit passes inside the model (from
+        entry to exit, or to a blind hole's round bottom; a rim that does not go around the bit, where
+        it grazes the model's side, is filled along the bit), so that a closed model stays closed; with
+        False the hole is open, its rims a boundary of the mesh.
 
     Returns
     -------
-    Rig : the drilled rig (same skeleton and clips), the hole open (its rim a boundary).
+    Rig : the drilled rig (same skeleton and clips; new vertices after the input vertices it keeps).
 
     Raises
     ------
     InvalidInputError : a radius that is not positive and finite, start equal to end, non-finite or
-        misshapen points, a pose of another skeleton, an invalid rig.
+        misshapen points, a pose of another skeleton, an invalid rig; a rim that winds back around the
+        bit (a surface folded across it), which a wall cannot follow (drill with wall=False).
     MissesMeshError : the bit does not reach into the mesh.
     """
-    return drill_details(rig, start, end, radius, pose).rig
+    return drill_details(rig, start, end, radius, pose, wall).rig
 
 
 def _faces_near(positions, faces, the_bit: Bit, step: float) -> np.ndarray:
