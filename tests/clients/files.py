@@ -1,4 +1,4 @@
-"""The files that the client tests open: every kind the command line writes (demo, cut, tear, skin)
+"""The files that the client tests open: every kind the command line writes (demo, cut, tear, drill, skin)
 on the built-in capsule arm, Fox.glb and Arm5.glb, a user's file with its own VEC3 ``_FOO``
 attribute and that file torn, made once per session; and what cgaskin says their vertices are."""
 from __future__ import annotations
@@ -34,6 +34,11 @@ def _commands(models: Path, out: Path) -> list:
          "--out", out / "arm_cut_a.gltf", out / "arm_cut_b.glb"],
         ["tear", arm, *ARM_STROKE, "--opening", .3, "--out", out / "arm_torn.glb"],
         ["skin", arm, "--rest", "--rotate", ELBOW, 0, 0, 1, 40, "--out", out / "arm_bent.gltf"],
+        # a walled hole through the walking Fox's body, an open one through the arm's forearm
+        ["drill", fox, "--start", 0, 40, -50, "--end", 0, 40, 50, "--radius", 6, "--clip", "Walk", "--time", .3,
+         "--out", out / "fox_drilled.glb"],
+        ["drill", arm, "--start", -1, 36, -12, "--end", -1, 36, 12, "--radius", 1.5, "--no-wall",
+         "--out", out / "arm_drilled.glb"],
     ]
 
 
@@ -42,7 +47,7 @@ SKINNED = {"fox_run.glb": ("Fox.glb", lambda rig: rig.pose("Run", .5)),
            "arm_bent.gltf": ("Arm5.glb", lambda rig: rig.rest_pose().rotate(ELBOW, [0, 0, 1], np.radians(40)))}
 NAMES = ["capsule_arm.glb", "cut_upper.glb", "cut_lower.glb", "torn.glb", "fox_cut_a.glb", "fox_cut_b.glb",
          "fox_torn.glb", "fox_foo.glb", "fox_foo_torn.glb", "fox_run.glb", "arm_cut_a.gltf", "arm_cut_b.glb",
-         "arm_torn.glb", "arm_bent.gltf"]
+         "arm_torn.glb", "arm_bent.gltf", "fox_drilled.glb", "arm_drilled.glb"]
 
 
 def load(path) -> cgaskin.Rig:

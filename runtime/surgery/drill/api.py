@@ -131,8 +131,7 @@ def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
     Raises
     ------
     InvalidInputError : a radius that is not positive and finite, start equal to end, non-finite or
-        misshapen points, a pose of another skeleton, an invalid rig; a rim that winds back around the
-        bit (a surface folded across it), which a wall cannot follow (drill with wall=False).
+        misshapen points, a pose of another skeleton, an invalid rig.
     MissesMeshError : the bit does not reach into the mesh.
     """
     return drill_details(rig, start, end, radius, pose, wall).rig

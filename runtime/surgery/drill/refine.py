@@ -36,7 +36,7 @@ class Patch:
     row_point : list of point ids, the point of each row (rows: input vertex ids first as met, then new)
     row_src, row_coef : lists of (SOURCES,) int64 input vertex ids and float64 coefficients (summing to
         1) describing each row; an input vertex is (v, ..., v), (1, 0, ..., 0)
-    row_of : dict input vertex id -> row id ; input_rows : list of the input vertices. rows
+    row_of : dict input vertex id -> row id ; input_rows : the input vertices' rows
     faces : list of [row, row, row] ; face_source : list of the input face each descends from
     edge_rows : dict (row, row) -> the row at the midpoint of that vertex edge (lower row first), and
         ("rim", row, row) -> the row where that vertex edge crosses the bit's surface

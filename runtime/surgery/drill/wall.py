@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ...errors import InternalError, InvalidInputError
+from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
 from ..topology import directed_loops
@@ -116,10 +116,6 @@ def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
     loops = _rim_loops(patch, set(rim), frame)
     before = len(patch.faces)
     around = sorted((loop for loop in loops if loop.winding != 0), key=lambda loop: float(loop.sigma.mean()))
-    for loop in around:
-        if np.any(np.diff(loop.unwrapped) * loop.winding < 0.0):
-            raise InvalidInputError("a rim of the hole winds back around the bit (the surface folds across "
-                                    "it), which a wall cannot follow; drill with wall=False")
     for a, b in zip(around, around[1:] + [None]):      # None: the tip's pole
         high = frame.top if b is None else float(b.sigma.min())
         if inside(frame.axis_point(0.5 * (float(a.sigma.max()) + high))):
@@ -194,56 +190,64 @@ def _loop_rows(patch: Patch, loop: Loop) -> list:
     return out
 
 
-def _tunnel(patch: Patch, frame: Frame, a: Loop | None, b: Loop | None, step: float) -> None:
-    """The wall between loop a (or the back's pole) and loop b (or the tip's pole)."""
+def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) -> None:
+    """The wall from loop a up to loop b (or to the tip's pole): rings between them, each zipped to the
+    next in the direction of increasing angle; faces wound to face the axis (in (θ, σ), counter-clockwise
+    faces away from it: ∂θ × ∂σ is the outward radial)."""
     count = max(8, int(math.ceil(2.0 * math.pi * frame.r / step)))
     columns = np.linspace(-math.pi, math.pi, count, endpoint=False)     # the rings' angles, step apart
-    low = a.height_at(columns) if a is not None else np.full(len(columns), frame.bottom)
+    low = a.height_at(columns)
     high = b.height_at(columns) if b is not None else np.full(len(columns), frame.top)
     rings_between = max(1, int(math.ceil(float(np.max(np.abs(high - low))) / step)))
-    rings = []
-    if a is not None:
-        rings.append((a.theta, _loop_rows(patch, a)))
+    rings = [_loop_ring(patch, a)]
     for k in range(1, rings_between):
         w = k / rings_between
-        rows = [_wall_row(patch, frame, float(t), float((1 - w) * lo + w * hi), a, b, w)
-                for t, lo, hi in zip(columns, low, high)]
-        rings.append((columns, rows))
+        rings.append(([_wall_row(patch, frame, float(t), float((1 - w) * lo + w * hi), a, b, w)
+                       for t, lo, hi in zip(columns, low, high)], columns))
     if b is not None:
-        rings.append((b.theta, _loop_rows(patch, b)))
-    for (ta, ra), (tb, rb) in zip(rings[:-1], rings[1:]):
-        _zip_rings(patch, frame, ta, ra, tb, rb)
-    for ring, pole, loop in ((rings[0], frame.bottom, b) if a is None else (None, 0.0, None),
-                             (rings[-1], frame.top, a) if b is None else (None, 0.0, None)):
-        if ring is not None:
-            centre = _pole_row(patch, frame, pole, loop)
-            rows = [ring[1][i] for i in np.argsort(ring[0])]
-            for i in range(len(rows)):
-                _add_facing(patch, frame, [rows[i], rows[(i + 1) % len(rows)], centre])
+        rings.append(_loop_ring(patch, b))
+    for lower, upper in zip(rings[:-1], rings[1:]):
+        for tri in _zip_rings(*lower, *upper):
+            _add(patch, (tri[0], tri[2], tri[1]))
+    if b is None:
+        pole = _pole_row(patch, frame, frame.top, a)
+        rows = rings[-1][0]
+        for i in range(len(rows)):
+            _add(patch, (rows[i], pole, rows[(i + 1) % len(rows)]))
 
 
-def _zip_rings(patch: Patch, frame: Frame, ta, ra, tb, rb) -> None:
-    """Triangles between two rings of rows at angles ta, tb (each around once), advancing by angle."""
-    oa, ob = np.argsort(ta), np.argsort(tb)
-    ta, tb = np.asarray(ta)[oa], np.asarray(tb)[ob]
-    ra, rb = [ra[i] for i in oa], [rb[i] for i in ob]
+def _loop_ring(patch: Patch, loop: Loop) -> tuple:
+    """(rows, unwrapped angles) of a winding loop's own wall rows, in the direction of increasing angle."""
+    rows, angles = _loop_rows(patch, loop), loop.unwrapped
+    return (rows, angles) if loop.winding > 0 else (rows[::-1], angles[::-1])
+
+
+def _zip_rings(ra, ua, rb, ub) -> list:
+    """Triangles (a, a', b) and (a, b', b) between two rings of rows, each once around the axis in the
+    direction of increasing angle (``ua``, ``ub`` unwrapped; a rim may step back a little), advancing
+    on the ring whose next corner comes first. Every edge of either ring is used once, whatever the
+    angles: the strip is closed. In (θ, σ), with ring a below ring b, they are counter-clockwise."""
     na, nb = len(ra), len(rb)
-    j = int(np.argmin(np.abs((tb - ta[0] + math.pi) % (2 * math.pi) - math.pi)))
-    # angles unwrapped from ta[0]: ring a from 0, ring b from its start j
-    ua = np.concatenate([ta, ta[:1] + 2 * math.pi]) - ta[0]
-    tb_rot = np.concatenate([tb[j:], tb[:j]])
-    ub = (tb_rot - ta[0] + math.pi) % (2 * math.pi) - math.pi
-    ub = np.concatenate([[ub[0]], ub[0] + np.cumsum((np.diff(tb_rot) + 2 * math.pi) % (2 * math.pi))])
-    ub = np.concatenate([ub, ub[:1] + 2 * math.pi])
-    rb_rot = rb[j:] + rb[:j]
-    i = k = 0
+    ua, ub = np.asarray(ua, np.float64), np.asarray(ub, np.float64)
+    j = int(np.argmin(np.abs((ub - ua[0] + math.pi) % (2 * math.pi) - math.pi)))    # b starts near a
+    rb = list(rb[j:]) + list(rb[:j])
+    ub = np.concatenate([ub[j:], ub[:j] + 2 * math.pi])
+    ub -= 2 * math.pi * round((ub[0] - ua[0]) / (2 * math.pi))
+    ua, ub = np.append(ua, ua[0] + 2 * math.pi), np.append(ub, ub[0] + 2 * math.pi)
+    out, i, k = [], 0, 0
     while i < na or k < nb:
-        if k >= nb or (i < na and ua[i + 1] <= ub[k + 1]):
-            _add_facing(patch, frame, [ra[i], ra[(i + 1) % na], rb_rot[k % nb]])
+        if k == nb or (i < na and ua[i + 1] <= ub[k + 1]):
+            out.append((ra[i], ra[(i + 1) % na], rb[k % nb]))
             i += 1
         else:
-            _add_facing(patch, frame, [ra[i % na], rb_rot[(k + 1) % nb], rb_rot[k]])
+            out.append((ra[i % na], rb[(k + 1) % nb], rb[k]))
             k += 1
+    return out
+
+
+def _add(patch: Patch, rows) -> None:
+    patch.faces.append(list(rows))
+    patch.face_source.append(WALL)
 
 
 def _fill(patch: Patch, frame: Frame, loop: Loop) -> None:
@@ -289,17 +293,6 @@ def _zip_chains(theta, lower: list, upper: list) -> list:
 def _area(xy) -> float:
     """The signed area of polygon xy (k, 2) (> 0: counter-clockwise)."""
     return 0.5 * float(np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1]))
-
-
-def _add_facing(patch: Patch, frame: Frame, rows: list) -> None:
-    """Add a wall face, wound so that its normal points into the bit."""
-    p = [patch.points[patch.row_point[r]] for r in rows]
-    normal = np.cross(p[1] - p[0], p[2] - p[0])
-    centre = (p[0] + p[1] + p[2]) / 3.0
-    if normal @ frame.inward(centre[None])[0] < 0.0:
-        rows = [rows[0], rows[2], rows[1]]
-    patch.faces.append(rows)
-    patch.face_source.append(WALL)
 
 
 def _curved_extent(frame: Frame, a, b) -> float:
