@@ -36,7 +36,7 @@ from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute
 from ..surface import mesh_arrays
 from ..topology import rig_topology
 from .bit import Bit, bit as checked_bit
-from .refine import SOURCES, Patch, refine
+from .refine import Patch, refine
 from .rim import open_hole
 from .wall import WALL, Frame, build_walls
 from .inside import winding_number
@@ -158,7 +158,7 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
     # the rows' ids in the vertex table before compaction: input rows -> input vertex, new -> n + j
     new_rows = np.flatnonzero(row_is_new)
     row_ids = np.empty(len(row_is_new), np.int64)
-    row_ids[~row_is_new] = [int(patch.row_src[r][0]) for r in np.flatnonzero(~row_is_new)]
+    row_ids[~row_is_new] = np.asarray(patch.row_vertex, np.int64)[~row_is_new]
     row_ids[new_rows] = n + np.arange(len(new_rows))
     all_faces = np.concatenate([faces[kept_faces], row_ids[patch_faces]])
     used = np.zeros(n + len(new_rows), bool)
@@ -167,8 +167,8 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
     kept_input = np.flatnonzero(used[:n])
     kept_new = np.flatnonzero(used[n:])
     new_rows = new_rows[kept_new]
-    new = NewVertices(np.array([patch.row_src[r] for r in new_rows], np.int64).reshape(-1, SOURCES),
-                      np.array([patch.row_coef[r] for r in new_rows]).reshape(-1, SOURCES))
+    src, coef = patch.descriptions()
+    new = NewVertices(src[new_rows], coef[new_rows])
     points = patch.point_array()
     new_positions = points[np.asarray(patch.row_point, np.int64)[new_rows]] if len(new_rows) else np.empty((0, 3))
     new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)

@@ -1,12 +1,13 @@
 """The faces around a drill's rim, refined until the rim can be drawn finely: longest-edge bisection.
 
 A hole is round only if the mesh has vertices close together where the bit's surface crosses it; a real
-model's faces are often larger than the hole. So before the rim is placed, every face that comes within
-``step`` of the bit's surface (and is not wholly inside it) and whose longest edge is longer than
-``step`` is bisected on its longest edge, and a face that shares a bisected edge is bisected too (on its
+model's faces are often larger than the hole. So before the rim is placed, every face that the bit's
+surface passes through (part of it inside the bit, part outside: ``bit.near_faces``) and whose longest
+edge is longer than ``step`` is bisected on its longest edge, and a face that shares a bisected edge is bisected too (on its
 longest edge first, then on the shared one: Rivara's longest-edge bisection, which keeps the angles of
 the refined faces bounded and leaves no vertex in the middle of a neighbour's edge). Rounds repeat until
-no face near the rim is longer than ``step``.
+no face the surface passes through is longer than ``step``: the rim's edges are then at most ``step``
+long, and a face left outside the bit reaches into it by no more than such an edge's sagitta.
 
 The working mesh is the part of the surface refined so far (``Patch``): its faces are rows of the
 vertex table (attribute-split copies kept apart: a seam edge bisected gets one new row per copy, all at
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._shared.jit import F1, I1, I2, kernel
 from ...errors import InternalError
 from .bit import near_faces
 
@@ -34,8 +36,8 @@ class Patch:
     point_of : dict welded id of the input -> point id (input vertices); point_welded : its inverse (new
         points have no welded id)
     row_point : list of point ids, the point of each row (rows: input vertex ids first as met, then new)
-    row_src, row_coef : lists of (SOURCES,) int64 input vertex ids and float64 coefficients (summing to
-        1) describing each row; an input vertex is (v, ..., v), (1, 0, ..., 0)
+    row_vertex : list, the input vertex of each row (-1 for a new one) ; row_parents : list of (a, b, t):
+        a new row blends earlier rows a and b as (1 - t) a + t b (``descriptions`` resolves them)
     row_of : dict input vertex id -> row id ; input_rows : the input vertices' rows
     faces : list of [row, row, row] ; face_source : list of the input face each descends from
     edge_rows : dict (row, row) -> the row at the midpoint of that vertex edge (lower row first), and
@@ -47,7 +49,7 @@ class Patch:
     def __init__(self, positions, faces, topology):
         self.positions, self.mesh_faces, self.topology = positions, faces, topology
         self.points, self.point_of, self.point_welded = [], {}, {}
-        self.row_point, self.row_src, self.row_coef, self.row_of, self.input_rows = [], [], [], {}, []
+        self.row_point, self.row_vertex, self.row_parents, self.row_of, self.input_rows = [], [], [], {}, []
         self.faces, self.face_source, self.edge_rows, self.midpoints = [], [], {}, {}
         self.taken = set()
         self.fill_params = {}
@@ -65,8 +67,8 @@ class Patch:
                 self.point_welded[p] = w
             r = self.row_of[v] = len(self.row_point)
             self.row_point.append(p)
-            self.row_src.append(np.full(SOURCES, v, np.int64))
-            self.row_coef.append(np.eye(1, SOURCES)[0])
+            self.row_vertex.append(v)
+            self.row_parents.append((r, r, 0.0))
             self.input_rows.append(r)
         return r
 
@@ -94,18 +96,25 @@ class Patch:
             p = self.midpoints[point_key] = len(self.points)
             self.points.append(0.5 * (self.points[point_key[0]] + self.points[point_key[1]]) if place is None
                                else place(*point_key))
-        return self.new_row(p, _combined(self.row_src[a], self.row_coef[a], self.row_src[b],
-                                          self.row_coef[b], 0.5), key)
+        return self.new_row(p, a, b, 0.5, key)
 
-    def new_row(self, point: int, description: tuple, key: tuple | None = None) -> int:
-        """A new row at ``point`` described by (src, coef); kept under ``key`` in ``edge_rows`` if given."""
+    def new_row(self, point: int, a: int, b: int, t: float, key: tuple | None = None) -> int:
+        """A new row at ``point`` whose weights and attributes blend rows a and b as (1 - t) a + t b; kept
+        under ``key`` in ``edge_rows`` if given."""
         r = len(self.row_point)
         if key is not None:
             self.edge_rows[key] = r
         self.row_point.append(point)
-        self.row_src.append(description[0])
-        self.row_coef.append(description[1])
+        self.row_vertex.append(-1)
+        self.row_parents.append((a, b, t))
         return r
+
+    def descriptions(self) -> tuple:
+        """(src (R, SOURCES) int64, coef (R, SOURCES) float64): each row as input vertices and their
+        coefficients (``_descriptions``)."""
+        parents = np.array([(a, b) for a, b, _ in self.row_parents], np.int64).reshape(-1, 2)
+        t = np.array([t for _, _, t in self.row_parents], np.float64)
+        return _descriptions(np.array(self.row_vertex, np.int64), parents, t)
 
     def point_edge(self, a: int, b: int) -> tuple:
         pa, pb = self.row_point[a], self.row_point[b]
@@ -120,20 +129,56 @@ class Patch:
         return rp[np.asarray(self.faces, np.int64).reshape(-1, 3)]
 
 
-def _combined(src_a, coef_a, src_b, coef_b, t):
-    """(src, coef) (SOURCES,) of (1 - t) A + t B, A and B combinations of input vertices (in one face: at
-    most three in all; between two rims, the largest six kept and renormalised)."""
-    keys = {}
-    for src, coef, scale in ((src_a, coef_a, 1.0 - t), (src_b, coef_b, t)):
-        for v, c in zip(src, coef):
-            if c != 0.0:
-                keys[int(v)] = keys.get(int(v), 0.0) + scale * c
-    items = sorted(keys.items(), key=lambda kv: -kv[1])[:SOURCES]
-    total = sum(c for _, c in items)
-    items = [(v, c / total) for v, c in items]
-    while len(items) < SOURCES:
-        items.append((items[0][0], 0.0))
-    return np.array([v for v, _ in items], np.int64), np.array([c for _, c in items])
+@kernel((I1, I2, F1), cost=0.4)
+def _descriptions(vertex, parents, t):
+    """Rows as input vertices and coefficients: row r is input vertex ``vertex[r]`` (>= 0), or the blend
+    (1 - t[r]) of row parents[r, 0] and t[r] of row parents[r, 1] (earlier rows), of whose input
+    vertices the SOURCES with the largest coefficients are kept and renormalised (in one face there are
+    at most three; between two rims six). Returns src (R, SOURCES) int64, coef (R, SOURCES) float64,
+    largest first, unused slots the first vertex with 0."""
+    rows = vertex.shape[0]
+    src, coef = np.zeros((rows, SOURCES), np.int64), np.zeros((rows, SOURCES))
+    keys, values = np.empty(2 * SOURCES, np.int64), np.empty(2 * SOURCES)
+    for r in range(rows):
+        if vertex[r] >= 0:
+            src[r, :] = vertex[r]
+            coef[r, 0] = 1.0
+            continue
+        if t[r] == 0.0 or t[r] == 1.0:        # a copy (a wall's row at a rim's point): bit for bit, so that
+            p = parents[r, 0] if t[r] == 0.0 else parents[r, 1]     # a posed drill places both alike
+            src[r, :], coef[r, :] = src[p, :], coef[p, :]
+            continue
+        count = 0
+        for side in range(2):
+            p = parents[r, side]
+            scale = t[r] if side == 1 else 1.0 - t[r]
+            for s in range(SOURCES):
+                c = scale * coef[p, s]
+                if c == 0.0:
+                    continue
+                found = False
+                for q in range(count):
+                    if keys[q] == src[p, s]:
+                        values[q] += c
+                        found = True
+                        break
+                if not found:
+                    keys[count], values[count] = src[p, s], c
+                    count += 1
+        kept = min(count, SOURCES)
+        total = 0.0
+        for slot in range(kept):                 # selection of the largest (ties: the first met)
+            best = slot
+            for q in range(slot + 1, count):
+                if values[q] > values[best]:
+                    best = q
+            keys[slot], keys[best] = keys[best], keys[slot]
+            values[slot], values[best] = values[best], values[slot]
+            total += values[slot]
+        for slot in range(SOURCES):
+            src[r, slot] = keys[slot] if slot < kept else keys[0]
+            coef[r, slot] = values[slot] / total if slot < kept else 0.0
+    return src, coef
 
 
 def _edge_codes(face_points) -> np.ndarray:
@@ -158,14 +203,14 @@ def _longest(points, face_points) -> tuple:
 
 
 def refine(patch: Patch, bit, step: float) -> None:
-    """Bisect the patch's faces near the bit's surface until none is longer than ``step`` (module
-    docstring), taking in the input faces beyond the patch that share a bisected edge."""
+    """Bisect the patch's faces that the bit's surface passes through until none is longer than ``step``
+    (module docstring), taking in the input faces beyond the patch that share a bisected edge."""
     start, end, radius = bit
     for _ in range(MAX_ROUNDS):
         points, face_points = patch.point_array(), patch.face_points()
         low, high = near_faces(points, face_points, start, end, radius)
         k, squared = _longest(points, face_points)
-        chosen = np.flatnonzero((low < step) & (high > -step) & (squared > step * step))
+        chosen = np.flatnonzero((low < 0.0) & (high > 0.0) & (squared > step * step))    # the bit's surface meets it
         if not len(chosen):
             return
         marked = _close(patch, np.unique(_edge_codes(face_points)[chosen, k[chosen]]))

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .bit import crossings, signed_distances
-from .refine import Patch, _combined
+from .refine import Patch
 
 OUTSIDE, ON, INSIDE = 1, 0, -1
 
@@ -89,9 +89,7 @@ def _crossing_row(patch: Patch, a: int, b: int, crossed: dict) -> int:
     point, t = crossed[patch.point_edge(a, b)]
     if patch.row_point[key[0]] != min(patch.row_point[a], patch.row_point[b]):
         t = 1.0 - t                         # t runs from the lower point id
-    description = _combined(patch.row_src[key[0]], patch.row_coef[key[0]], patch.row_src[key[1]],
-                            patch.row_coef[key[1]], t)
-    return patch.new_row(point, description, ("rim",) + key)
+    return patch.new_row(point, key[0], key[1], t, ("rim",) + key)
 
 
 def _triangles(patch: Patch, polygon: list) -> list:

@@ -2,18 +2,21 @@
 
 The bit's surface is a surface of revolution: a point of it is (θ, σ), its angle around the axis and
 its height along the profile (the back hemisphere for σ < 0, the cylinder for 0 <= σ <= L, the tip
-hemisphere for σ > L, σ measured as arc length; ``_surface_point``). The rims (``rim.py``) are closed
+hemisphere for σ > L, σ measured as arc length; ``Frame.point``). The rims (``rim.py``) are closed
 loops of the mesh's new boundary on that surface:
 
-* a loop that winds once around the axis is an entry or an exit; the loops are ordered by height, and
-  two consecutive ones are joined by a tunnel where the axis between them lies inside the input model
-  (its winding number, a solid-angle sum over the input faces, above one half); the last loop is joined
-  to the tip (a blind hole's wall and round bottom) where the axis beyond it is inside (the first to
-  the back likewise, for a bit that starts inside);
+* a loop that winds once around the axis is an entry or an exit: the boundary of a surface around a
+  hole runs clockwise seen from the side the surface faces, so on an outward-facing surface an entry
+  (facing the bit as it comes) winds positively about the travel, an exit negatively. The loops are
+  ordered by height; an entry followed by an exit is joined to it by a tunnel; an entry followed by
+  nothing (or by another entry: a surface facing the wrong way) is joined to the tip (a blind hole's
+  wall and round bottom) or to that loop only where the axis beyond it is inside the input model (its
+  winding number, a solid-angle sum over all its faces: the one global step, taken only then);
 * a tunnel is made of rings at heights between the two loops' (columns and rings about ``step``
   apart), zipped together by angle; its vertices lie on the bit's surface;
 * a loop that does not wind around the axis (a bit grazing the model's side) is filled with the part of
-  the surface it encloses, triangulated flat in the unrolled (r θ, σ) plane.
+  the surface it encloses: its two chains zipped by angle (or ear-clipped in the unrolled (r θ, σ)
+  plane and refined, ``_refine_fills``).
 
 Wall faces face the axis (their outside is the hole). Wall vertices are rows of their own (the rims'
 positions, other normals): described, for weights and attributes, by the rim rows nearest in angle on
@@ -29,8 +32,10 @@ from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
 from ..topology import directed_loops
-from .refine import MAX_ROUNDS, Patch, _bisect, _combined
+from .refine import MAX_ROUNDS, Patch, _bisect
 
+#: the winding about the bit's travel of a rim where it enters an outward-facing surface
+ENTRY = 1
 #: a wall face's input face (``Patch.face_source``): a tunnel's, or a fill's (the inside of a loop that
 #: does not wind around the axis)
 WALL, WALL_FILL = -1, -2
@@ -117,9 +122,12 @@ def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
     before = len(patch.faces)
     around = sorted((loop for loop in loops if loop.winding != 0), key=lambda loop: float(loop.sigma.mean()))
     for a, b in zip(around, around[1:] + [None]):      # None: the tip's pole
-        high = frame.top if b is None else float(b.sigma.min())
-        if inside(frame.axis_point(0.5 * (float(a.sigma.max()) + high))):
-            _tunnel(patch, frame, a, b, step)
+        if a.winding != ENTRY:
+            continue
+        if b is not None and b.winding != ENTRY:
+            _tunnel(patch, frame, a, b, step)           # an entry, then an exit
+        elif inside(frame.axis_point(0.5 * (float(a.sigma.max()) + (frame.top if b is None else float(b.sigma.min()))))):
+            _tunnel(patch, frame, a, b, step)           # a blind hole (or a surface facing the wrong way)
     for loop in loops:
         if loop.winding == 0:
             _fill(patch, frame, loop)
@@ -153,40 +161,37 @@ def _rim_loops(patch: Patch, rim: set, frame: Frame) -> list:
     return out
 
 
-def _wall_row(patch: Patch, frame: Frame, theta: float, sigma: float, a: Loop | None, b: Loop | None,
+def _wall_row(patch: Patch, frame: Frame, theta: float, sigma: float, a: Loop, b: Loop | None,
               weight: float) -> int:
-    """A new wall row at (θ, σ) between loops a and b (either may be a pole: None), described by their
-    rim rows nearest in angle (``weight``: b's share)."""
-    ra = None if a is None else a.nearest_row(theta)
-    rb = None if b is None else b.nearest_row(theta)
-    if ra is None or rb is None:
-        row = ra if rb is None else rb
-        description = (patch.row_src[row], patch.row_coef[row])
-    else:
-        description = _combined(patch.row_src[ra], patch.row_coef[ra], patch.row_src[rb], patch.row_coef[rb], weight)
-    return _surface_row(patch, frame.point(theta, sigma), description)
+    """A new wall row at (θ, σ) between loop a and loop b (or the tip: None), its weights and attributes
+    blended from their rim rows nearest in angle (``weight``: b's share)."""
+    ra = a.nearest_row(theta)
+    rb = ra if b is None else b.nearest_row(theta)
+    return _surface_row(patch, frame.point(theta, sigma), ra, rb, 0.0 if b is None else weight)
 
 
 def _pole_row(patch: Patch, frame: Frame, sigma: float, loop: Loop) -> int:
-    """The row at a pole of the bit, described by six rows spread around the loop it closes."""
+    """The row at the bit's tip, blended evenly from six rows spread around the loop it closes (a chain
+    of blends: the rows between are used by no face, and dropped)."""
     picks = [loop.rows[i] for i in np.linspace(0, len(loop.rows) - 1, 6).astype(int)]
-    description = (patch.row_src[picks[0]], patch.row_coef[picks[0]])
+    position = frame.point(0.0, sigma)
+    row = picks[0]
     for i, r in enumerate(picks[1:], start=2):
-        description = _combined(*description, patch.row_src[r], patch.row_coef[r], 1.0 / i)
-    return _surface_row(patch, frame.point(0.0, sigma), description)
+        row = _surface_row(patch, position, row, r, 1.0 / i)
+    return row
 
 
-def _surface_row(patch: Patch, position, description) -> int:
+def _surface_row(patch: Patch, position, a: int, b: int, t: float) -> int:
     point = len(patch.points)
     patch.points.append(position)
-    return patch.new_row(point, description)
+    return patch.new_row(point, a, b, t)
 
 
 def _loop_rows(patch: Patch, loop: Loop) -> list:
     """Wall rows at the loop's own corners (the rim's points, rows of their own)."""
     out = []
     for row, point in zip(loop.rows, loop.points):
-        out.append(patch.new_row(int(point), (patch.row_src[row], patch.row_coef[row])))
+        out.append(patch.new_row(int(point), row, row, 0.0))
     return out
 
 
@@ -267,11 +272,12 @@ def _fill(patch: Patch, frame: Frame, loop: Loop) -> None:
         xy = np.column_stack([frame.r * loop.unwrapped, loop.sigma])
         order = np.arange(n) if _area(xy) > 0.0 else np.arange(n)[::-1]
         triangles = order[_ear_clip(np.ascontiguousarray(xy[order]), order.astype(np.int64), tol.min_sine)]
-    for tri in triangles:
-        a, b, c = (np.array([frame.r * loop.unwrapped[i], loop.sigma[i]]) for i in tri)
-        # counter-clockwise in (r θ, σ) faces away from the axis (∂θ × ∂σ is the outward radial): reversed
-        if _area(np.array([a, b, c])) > 0.0:
-            tri = (tri[0], tri[2], tri[1])
+    triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
+    x, y = frame.r * loop.unwrapped[triangles], loop.sigma[triangles]
+    turn = (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (y[:, 1] - y[:, 0]) * (x[:, 2] - x[:, 0])
+    # counter-clockwise in (r θ, σ) faces away from the axis (∂θ × ∂σ is the outward radial): reversed
+    triangles[turn > 0.0] = triangles[turn > 0.0][:, [0, 2, 1]]
+    for tri in triangles.tolist():
         patch.faces.append([rows[i] for i in tri])
         patch.face_source.append(WALL_FILL)
 
