@@ -55,6 +55,7 @@ def _demo(args) -> int:
     written = [out / "deform.png", out / "capsule_arm.glb"]
     written += _demo_cut(rig, out)
     written += _demo_tear(rig, out)
+    written += _demo_drill(rig, out)
     print("wrote " + ", ".join(map(str, written)))
     return 0
 
@@ -105,6 +106,29 @@ def _demo_tear(rig, out: Path) -> list:
     render_strip(frames, out / "tear.png", titles=list(poses), elev=80.0)
     save(torn, out / "torn.glb")
     return [out / "tear.png", out / "torn.glb"]
+
+
+def _demo_drill(rig, out: Path) -> list:
+    """A hole through the upper arm and a blind one into the bent forearm, walled, then animated again."""
+    from ..animation.skinning import skin
+    from ..rigs import save
+    from ..surgery.drill import drill_details
+    from .render import render_strip
+    elbow = rig.skeleton.names[1]
+    bent = rig.rest_pose().rotate(elbow, [0, 0, 1], np.radians(50))
+    through = drill_details(rig, [0.5, 0.0, -1.0], [0.5, 0.0, 1.0], 0.12)
+    forearm = bent.global_matrices()[1] @ np.array([0.5, 0.0, 0.0, 1.0])   # half way down the forearm
+    blind = drill_details(through.rig, forearm[:3] + [0.0, 0.0, -1.0], forearm[:3] + [0.0, 0.0, 0.02], 0.1,
+                          pose=bent)
+    drilled = blind.rig
+    marked = np.zeros(drilled.n_faces, bool)
+    marked[drilled.n_faces - blind.wall_faces:] = True               # the blind hole's wall and bottom
+    poses = {"drilled (through, rest; blind, bent)": bent, "elbow straight": drilled.rest_pose(),
+             "clip 'wave' t=1s": drilled.pose("wave", 1.0)}
+    frames = [(skin(drilled, p), drilled.faces, marked) for p in poses.values()]
+    render_strip(frames, out / "drill.png", titles=list(poses), elev=-70.0)
+    save(drilled, out / "drilled.glb")
+    return [out / "drill.png", out / "drilled.glb"]
 
 
 def _check_cut(args) -> None:

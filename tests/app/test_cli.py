@@ -25,9 +25,11 @@ def run(capsys, *argv):
 def test_demo_writes_pictures_and_rigs(tmp_path, capsys):
     code, out, err = run(capsys, "demo", "--out", tmp_path)
     assert code == 0 and err == ""
-    for name in ("deform.png", "cut.png", "tear.png"):
+    for name in ("deform.png", "cut.png", "tear.png", "drill.png"):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     arm = cgaskin.load(tmp_path / "capsule_arm.glb")
+    drilled = cgaskin.load(tmp_path / "drilled.glb")
+    assert drilled.n_faces > arm.n_faces and drilled.clips[0].name == "wave"
     upper, lower = cgaskin.load(tmp_path / "cut_upper.glb"), cgaskin.load(tmp_path / "cut_lower.glb")
     torn = cgaskin.load(tmp_path / "torn.glb")
     assert arm.n_vertices == capsule_arm().n_vertices
