@@ -1,7 +1,7 @@
-"""What a fresh install waits for: the first tear, skin and cut in one process, and ``cgaskin demo``,
+"""What a fresh install waits for: the first tear, skin, cut and drill in one process, and ``cgaskin demo``,
 each with an empty numba cache, with the compile seconds of every compiled function.
 
-    python -m benchmarks.bench_cold_start [first_tear|first_skin|first_cut|demo ...] [--top N] [--variants]
+    python -m benchmarks.bench_cold_start [first_tear|first_skin|first_cut|first_drill|demo ...] [--top N] [--variants]
 
 Each case runs in a child process whose ``NUMBA_CACHE_DIR`` is a new empty folder (a fresh install:
 nothing compiled, nothing cached). numba's event API (``numba:compile`` events) gives each function's
@@ -23,6 +23,7 @@ CASES = {
     "first_cut": "import cgaskin; rig = cgaskin.capsule_arm(); cgaskin.cut(rig, [1, 0, 0], [1.2, 0, 0])",
     "first_tear": ("import cgaskin; rig = cgaskin.capsule_arm(); "
                    "cgaskin.tear(rig, ([0.6, 0.05, 1.0], [0.6, 0.05, 0.0]), ([1.2, 0.05, 1.0], [1.2, 0.05, 0.0]))"),
+    "first_drill": "import cgaskin; rig = cgaskin.capsule_arm(); cgaskin.drill(rig, [1.0, 0, -1], [1.0, 0, 1], 0.1)",
     "demo": "from cgaskin.app.cli import main; import sys, tempfile; main(['demo', '--out', tempfile.mkdtemp()])",
 }
 
