@@ -200,3 +200,17 @@ def test_cli_drill(tmp_path, models_dir):
                           "0", "--end", "0", "0", "1", "--radius", "0", "--out", str(tmp_path / "x.glb")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "radius must be positive" in bad.stderr
+
+
+def test_drills_across_a_slit_and_a_cut_and_a_tear_from_a_rim(capsule):
+    """A hole across a (closed) slit and one through a capped cut half stay closed and manifold; a tear
+    that starts at a hole's rim goes on from it."""
+    torn = cgaskin.tear(capsule, ([0.6, 0.05, 1.0], [0.6, 0.05, 0.0]), ([1.4, 0.05, 1.0], [1.4, 0.05, 0.0]))
+    _, lower = cgaskin.cut(capsule, [1.0, 0.0, 0.0], [1.6, 0.0, 0.0], cap=True)    # x < 1.6
+    for rig in (torn, lower):
+        result = cgaskin.drill_details(rig, [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], 0.08)
+        _, _, t = _welded(result.rig)
+        assert result.wall_faces > 0 and (t.edge_face_counts == 2).all()
+    holed = cgaskin.drill(capsule, [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], 0.08)
+    from_rim = cgaskin.tear(holed, ([1.09, 0.0, 1.0], [1.09, 0.0, 0.0]), ([1.5, 0.0, 1.0], [1.5, 0.0, 0.0]))
+    assert from_rim.n_faces > holed.n_faces

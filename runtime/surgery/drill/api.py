@@ -169,12 +169,18 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
     new_rows = new_rows[kept_new]
     src, coef = patch.descriptions()
     new = NewVertices(src[new_rows], coef[new_rows])
-    points = patch.point_array()
-    new_positions = points[np.asarray(patch.row_point, np.int64)[new_rows]] if len(new_rows) else np.empty((0, 3))
-    new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
-    new_rest, residual = new_positions, 0.0
+    new_points = np.asarray(patch.row_point, np.int64)[new_rows]
+    new_positions = patch.point_array()[new_points]
+    # the copies of a new vertex at one point (a seam's sides, a wall's row at its rim) skin alike: their
+    # weights and rest position are the first copy's (blended from other input rows, ties in the blend
+    # could pick other bones), their attributes their own
+    _, first, copy_of = np.unique(new_points, return_index=True, return_inverse=True)
+    one = NewVertices(new.src[first], new.coef[first])
+    new_joints, new_weights = blend_weight_rows(one.src, one.coef, joints, weights)
+    new_rest, residual = new_positions[first], 0.0
     if affines is not None and len(new_rows):
-        new_rest, residual = _placed(vertices, new, new_positions, new_joints, new_weights, affines, diagonal)
+        new_rest, residual = _placed(vertices, one, new_rest, new_joints, new_weights, affines, diagonal)
+    new_joints, new_weights, new_rest = new_joints[copy_of], new_weights[copy_of], new_rest[copy_of]
     out_vertices = np.concatenate([vertices[kept_input], new_rest])
     out_joints = np.concatenate([joints[kept_input], new_joints])
     out_weights = np.concatenate([weights[kept_input], new_weights])
