@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._shared.jit import F1, F2, I2, kernel
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
 from ...errors import InvalidInputError, MissesMeshError, PlacementWarning
@@ -90,8 +91,9 @@ def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) ->
     diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0))) if len(positions) else 0.0
     step = RIM_STEP * the_bit.radius
     patch = Patch(positions, faces, rig_topology(rig))
-    for face in _faces_near(positions, faces, the_bit, step):
-        patch.take(int(face))
+    reach = the_bit.radius + step               # the faces whose box meets the bit's, widened by a step
+    patch.take_all(_faces_near(positions, faces, np.minimum(the_bit.start, the_bit.end) - reach,
+                               np.maximum(the_bit.start, the_bit.end) + reach))
     tolerance = tol.on_plane * max(diagonal, the_bit.radius)
     if patch.faces:
         refine(patch, the_bit, step)
@@ -137,13 +139,22 @@ def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
     return drill_details(rig, start, end, radius, pose, wall).rig
 
 
-def _faces_near(positions, faces, the_bit: Bit, step: float) -> np.ndarray:
-    """The faces whose bounding box meets the bit's, widened by ``step``."""
-    reach = the_bit.radius + step
-    lo = np.minimum(the_bit.start, the_bit.end) - reach
-    hi = np.maximum(the_bit.start, the_bit.end) + reach
-    corners = positions[faces]
-    return np.flatnonzero(((corners.max(axis=1) >= lo) & (corners.min(axis=1) <= hi)).all(axis=1))
+@kernel((F2, I2, F1, F1), cost=0.2)
+def _faces_near(positions, faces, lo, hi):
+    """The faces (k,) whose bounding box meets the box [lo, hi] (3,)."""
+    out = np.empty(faces.shape[0], np.int64)
+    count = 0
+    for f in range(faces.shape[0]):
+        meets = True
+        for k in range(3):
+            a, b, c = positions[faces[f, 0], k], positions[faces[f, 1], k], positions[faces[f, 2], k]
+            if max(a, max(b, c)) < lo[k] or min(a, min(b, c)) > hi[k]:
+                meets = False
+                break
+        if meets:
+            out[count] = f
+            count += 1
+    return out[:count].copy()
 
 
 def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bit: Bit, tolerance: float, affines,

@@ -72,6 +72,16 @@ class Patch:
             self.input_rows.append(r)
         return r
 
+    def take_all(self, faces) -> None:
+        """Add the input faces ``faces`` (k,) to the patch (none taken yet: the first ones)."""
+        corners = self.mesh_faces[faces]
+        for v in np.unique(corners).tolist():
+            self.row(v)
+        row_of = self.row_of
+        self.faces.extend([[row_of[a], row_of[b], row_of[c]] for a, b, c in corners.tolist()])
+        self.face_source.extend(faces.tolist())
+        self.taken.update(faces.tolist())
+
     def take(self, face: int) -> bool:
         """Add input face ``face`` to the patch (once); whether it was added."""
         if face in self.taken:

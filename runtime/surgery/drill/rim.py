@@ -26,31 +26,31 @@ def open_hole(patch: Patch, bit, tolerance: float) -> tuple:
     points = patch.point_array()
     f = signed_distances(points, start, end, radius)
     side = np.where(f > tolerance, OUTSIDE, np.where(f < -tolerance, INSIDE, ON))
-    faces, sources, opened = [], [], 0
+    rows = np.asarray(patch.faces, np.int64).reshape(-1, 3)
+    sides = side[np.asarray(patch.row_point, np.int64)[rows]]
+    has_inside, has_outside = (sides == INSIDE).any(axis=1), (sides == OUTSIDE).any(axis=1)
+    kept = ~has_inside & has_outside
+    on_surface = np.flatnonzero(~has_inside & ~has_outside)     # every corner on the surface: kept if outside
+    kept[on_surface] = _centres_outside(points, patch, rows[on_surface], bit)
+    crossing = has_inside & has_outside
+    faces = rows[kept].tolist()
+    sources = np.asarray(patch.face_source)[kept].tolist()
+    opened = len(rows) - int(kept.sum())
     crossed = {}                            # (point, point), lower id first -> crossing point id
     pending = []                            # faces to finish once the crossings are placed
-    for rows, source in zip(patch.faces, patch.face_source):
-        s = [side[patch.row_point[r]] for r in rows]
-        if INSIDE not in s:
-            if OUTSIDE in s or _centre_outside(points, patch, rows, bit):
-                faces.append(rows)
-                sources.append(source)
-            else:
-                opened += 1
-            continue
-        opened += 1
-        if OUTSIDE not in s:
-            continue
+    for corners, source, s in zip(rows[crossing].tolist(), np.asarray(patch.face_source)[crossing].tolist(),
+                                  sides[crossing].tolist()):
         for k in range(3):
             if s[k] * s[(k + 1) % 3] == -1:
-                crossed.setdefault(patch.point_edge(rows[k], rows[(k + 1) % 3]), None)
-        pending.append((rows, source, s))
+                crossed.setdefault(patch.point_edge(corners[k], corners[(k + 1) % 3]), None)
+        pending.append((corners, source, s))
     _place(patch, points, crossed, bit)
-    rim = {r for rows in faces for r in rows if side[patch.row_point[r]] == ON}
-    for rows, source, s in pending:
+    kept_rows = rows[kept].ravel()
+    rim = set(kept_rows[side[np.asarray(patch.row_point, np.int64)[kept_rows]] == ON].tolist())
+    for corners, source, s in pending:
         polygon = []
         for k in range(3):
-            a, b = rows[k], rows[(k + 1) % 3]
+            a, b = corners[k], corners[(k + 1) % 3]
             if s[k] != INSIDE:
                 polygon.append(a)
             if s[k] * s[(k + 1) % 3] == -1:
@@ -63,9 +63,10 @@ def open_hole(patch: Patch, bit, tolerance: float) -> tuple:
     return sorted(rim), opened
 
 
-def _centre_outside(points, patch, rows, bit) -> bool:
-    centre = points[[patch.row_point[r] for r in rows]].mean(axis=0)
-    return signed_distances(centre[None], bit.start, bit.end, bit.radius)[0] > 0.0
+def _centres_outside(points, patch: Patch, rows, bit) -> np.ndarray:
+    """(F,) whether each face's centre is outside the bit."""
+    centres = points[np.asarray(patch.row_point, np.int64)[rows]].mean(axis=1)
+    return signed_distances(np.ascontiguousarray(centres), bit.start, bit.end, bit.radius) > 0.0
 
 
 def _place(patch: Patch, points, crossed: dict, bit) -> None:

@@ -118,7 +118,7 @@ def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
     """Add the holes' walls to the patch (module docstring); ``inside(point (3,)) -> bool`` says whether a
     point is inside the input model. Returns the number of wall faces."""
     frame = Frame(bit)
-    loops = _rim_loops(patch, set(rim), frame)
+    loops = _rim_loops(patch, rim, frame)
     before = len(patch.faces)
     around = sorted((loop for loop in loops if loop.winding != 0), key=lambda loop: float(loop.sigma.mean()))
     for a, b in zip(around, around[1:] + [None]):      # None: the tip's pole
@@ -128,36 +128,32 @@ def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
             _tunnel(patch, frame, a, b, step)           # an entry, then an exit
         elif inside(frame.axis_point(0.5 * (float(a.sigma.max()) + (frame.top if b is None else float(b.sigma.min()))))):
             _tunnel(patch, frame, a, b, step)           # a blind hole (or a surface facing the wrong way)
-    for loop in loops:
-        if loop.winding == 0:
-            _fill(patch, frame, loop)
-    _refine_fills(patch, frame, step)
+    fills = [loop for loop in loops if loop.winding == 0]
+    for loop in fills:
+        _fill(patch, frame, loop)
+    if fills:
+        _refine_fills(patch, frame, step)
     return len(patch.faces) - before
 
 
-def _rim_loops(patch: Patch, rim: set, frame: Frame) -> list:
+def _rim_loops(patch: Patch, rim: list, frame: Frame) -> list:
     """The loops of boundary edges between rim points, as ``Loop``s (point ids welded: seams are one)."""
-    directed = {}
-    counts = {}
-    rim_points = {patch.row_point[r] for r in rim}
-    for rows in patch.faces:
-        for k in range(3):
-            a, b = rows[k], rows[(k + 1) % 3]
-            key = patch.point_edge(a, b)
-            counts[key] = counts.get(key, 0) + 1
-            directed[(patch.row_point[a], patch.row_point[b])] = a
-    starts, ends = [], []
-    for (pa, pb), _ in directed.items():
-        if counts[(min(pa, pb), max(pa, pb))] == 1 and pa in rim_points and pb in rim_points:
-            starts.append(pa)
-            ends.append(pb)
+    rows = np.asarray(patch.faces, np.int64).reshape(-1, 3)
+    row_point = np.asarray(patch.row_point, np.int64)
+    tails, heads = rows.ravel(), np.roll(rows, -1, axis=1).ravel()          # each face's corner edges
+    a, b = row_point[tails], row_point[heads]
+    codes = (np.minimum(a, b) << 32) | np.maximum(a, b)
+    unique, counts = np.unique(codes, return_counts=True)
+    on_rim = np.zeros(len(patch.points), bool)
+    on_rim[row_point[np.asarray(rim, np.int64)]] = True
+    boundary = (counts[np.searchsorted(unique, codes)] == 1) & on_rim[a] & on_rim[b]
+    row_of_edge = {(int(p), int(q)): int(r) for p, q, r in zip(a[boundary], b[boundary], tails[boundary])}
     points = patch.point_array()
     out = []
-    for cycle in directed_loops(np.array(starts, np.int64), np.array(ends, np.int64)):
-        nxt = cycle[1:] + cycle[:1]
-        rows = [directed[(p, q)] for p, q in zip(cycle, nxt)]
+    for cycle in directed_loops(a[boundary], b[boundary]):
+        ring = [row_of_edge[(p, q)] for p, q in zip(cycle, cycle[1:] + cycle[:1])]
         theta, sigma = frame.coordinates(points[cycle])
-        out.append(Loop(rows, np.array(cycle), theta, sigma))
+        out.append(Loop(ring, np.array(cycle), theta, sigma))
     return out
 
 
