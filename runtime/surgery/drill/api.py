@@ -37,7 +37,8 @@ from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute
 from ..surface import mesh_arrays
 from ..topology import rig_topology
 from .bit import Bit, bit as checked_bit
-from .refine import Patch, refine
+from .patch import Patch
+from .refine import refine
 from .rim import open_hole
 from .wall import WALL, Frame, build_walls
 from .inside import winding_number

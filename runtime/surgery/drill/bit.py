@@ -122,7 +122,9 @@ def _closest_on_face(start, end, a, b, c):
 @kernel((F2, I2, F1, F1, f8))
 def near_faces(positions, faces, start, end, radius):
     """Per face (m,): the least of f = distance - radius over the face and the largest over its corners
-    (the largest over the face, f being convex). positions (w, 3) ; faces (m, 3) over them ; returns low (m,), high (m,) float64."""
+    (the largest over the face, f being convex).
+
+    positions (w, 3) ; faces (m, 3) over them ; returns low (m,), high (m,) float64"""
     m = faces.shape[0]
     low, high = np.empty(m), np.empty(m)
     for i in range(m):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .bit import crossings, signed_distances
-from .refine import Patch
+from .patch import Patch
 
 OUTSIDE, ON, INSIDE = 1, 0, -1
 

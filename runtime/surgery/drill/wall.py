@@ -32,7 +32,8 @@ from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
 from ..topology import directed_loops
-from .refine import MAX_ROUNDS, Patch, _bisect
+from .patch import Patch
+from .refine import MAX_ROUNDS, bisect_marked
 
 #: the winding about the bit's travel of a rim where it enters an outward-facing surface
 ENTRY = 1
@@ -126,7 +127,9 @@ def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
             continue
         if b is not None and b.winding != ENTRY:
             _tunnel(patch, frame, a, b, step)           # an entry, then an exit
-        elif inside(frame.axis_point(0.5 * (float(a.sigma.max()) + (frame.top if b is None else float(b.sigma.min()))))):
+            continue
+        beyond = frame.top if b is None else float(b.sigma.min())
+        if inside(frame.axis_point(0.5 * (float(a.sigma.max()) + beyond))):
             _tunnel(patch, frame, a, b, step)           # a blind hole (or a surface facing the wrong way)
     fills = [loop for loop in loops if loop.winding == 0]
     for loop in fills:
@@ -328,5 +331,5 @@ def _refine_fills(patch: Patch, frame: Frame, step: float) -> None:
                   if _curved_extent(frame, params[a], params[b]) > step]
         if not marked:
             return
-        _bisect(patch, np.unique(np.array(marked, np.int64)), place)
+        bisect_marked(patch, np.unique(np.array(marked, np.int64)), place)
     raise InternalError(f"a hole's wall did not become finer than {step:g} in {MAX_ROUNDS} rounds")
