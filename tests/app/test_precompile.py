@@ -70,6 +70,16 @@ WORKLOAD = textwrap.dedent("""
             session.undo()
             cgaskin.skin(session.rig, posed)
             cgaskin.Surgery(rig).tear(blade[0], blade[1], pose=posed)   # a stroke in a pose the session is not in
+            # holes through a surface vertex along z: through, open, and blind from either side
+            at = rig.vertices if pose is None else cgaskin.skin(rig, pose)
+            v, size = at[np.argmin(np.linalg.norm(at - at.mean(axis=0), axis=1))], float(np.ptp(at, axis=0).max())
+            z = np.array([0.0, 0.0, size])
+            cgaskin.drill(rig, v - z, v + z, 0.03 * size, pose=pose)
+            cgaskin.drill(rig, v - z, v + z, 0.03 * size, pose=pose, wall=False)
+            for side in (1.0, -1.0):
+                cgaskin.drill(rig, v - side * z, v + side * 0.01 * z, 0.03 * size, pose=pose)
+            session.drill(v - z, v + z, 0.03 * size)
+            session.undo()
     print(" ".join(sorted(set(compiled))))
 """)
 

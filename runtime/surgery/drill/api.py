@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._shared.frozen import kernel_array
 from ..._shared.jit import F1, F2, I2, kernel
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
@@ -198,7 +199,7 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
     out_weights = np.concatenate([weights[kept_input], new_weights])
     attributes = {}
     for name, values in rig.attributes.items():
-        values = np.asarray(values)
+        values = kernel_array(np.asarray(values))     # (read-only: its writeable buffer, one kernel type)
         attributes[name] = np.concatenate([values[kept_input], interpolate_attribute(name, values, new)])
     if walls and "NORMAL" in attributes:
         _wall_normals(attributes["NORMAL"], len(kept_input), new_rows, patch, the_bit, new_joints, new_weights,
