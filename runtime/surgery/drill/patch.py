@@ -20,7 +20,7 @@ SOURCES = 6
 class Patch:
     """The refined part of a mesh around a bit.
 
-    points : list of (3,) float64, one position per welded vertex of the patch
+    point_array() : (P, 3) float64, one position per welded vertex of the patch and per new point
     point_of : dict welded id of the input -> point id (input vertices); point_welded : its inverse (new
         points have no welded id)
     row_point : list of point ids, the point of each row (rows: input vertex ids first as met, then new)
@@ -36,7 +36,7 @@ class Patch:
 
     def __init__(self, positions, faces, topology):
         self.positions, self.mesh_faces, self.topology = positions, faces, topology
-        self.points, self.point_of, self.point_welded = [], {}, {}
+        self._points, self.n_points, self.point_of, self.point_welded = np.empty((64, 3)), 0, {}, {}
         self.row_point, self.row_vertex, self.row_parents, self.row_of, self.input_rows = [], [], [], {}, []
         self.faces, self.face_source, self.edge_rows, self.midpoints = [], [], {}, {}
         self.taken = set()
@@ -50,8 +50,7 @@ class Patch:
             w = int(self.topology.welded[v])
             p = self.point_of.get(w)
             if p is None:
-                p = self.point_of[w] = len(self.points)
-                self.points.append(self.positions[v])
+                p = self.point_of[w] = self.add_point(self.positions[v])
                 self.point_welded[p] = w
             r = self.row_of[v] = len(self.row_point)
             self.row_point.append(p)
@@ -91,9 +90,9 @@ class Patch:
         point_key = (pa, pb) if pa < pb else (pb, pa)
         p = self.midpoints.get(point_key)
         if p is None:
-            p = self.midpoints[point_key] = len(self.points)
-            self.points.append(0.5 * (self.points[point_key[0]] + self.points[point_key[1]]) if place is None
-                               else place(*point_key))
+            points = self._points
+            p = self.midpoints[point_key] = self.add_point(
+                0.5 * (points[point_key[0]] + points[point_key[1]]) if place is None else place(*point_key))
         return self.new_row(p, a, b, 0.5, key)
 
     def new_row(self, point: int, a: int, b: int, t: float, key: tuple | None = None) -> int:
@@ -120,7 +119,16 @@ class Patch:
 
     # -- arrays --------------------------------------------------------------------------------------
     def point_array(self) -> np.ndarray:
-        return np.array(self.points, dtype=np.float64).reshape(-1, 3)
+        """(P, 3) the points so far (a view, valid until the next point is added)."""
+        return self._points[:self.n_points]
+
+    def add_point(self, position) -> int:
+        """A new point at ``position`` (3,); its id."""
+        if self.n_points == len(self._points):
+            self._points = np.concatenate([self._points, np.empty_like(self._points)])
+        self._points[self.n_points] = position
+        self.n_points += 1
+        return self.n_points - 1
 
     def face_points(self) -> np.ndarray:
         rp = np.asarray(self.row_point, np.int64)

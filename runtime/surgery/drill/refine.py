@@ -99,17 +99,19 @@ def _input_faces(topology, wa: int, wb: int) -> np.ndarray:
 
 def bisect_marked(patch: Patch, marked, place=None) -> None:
     """Split every face with marked edges (codes): on its longest edge where it is marked (``_close``
-    sees to it), then each half on the marked edge it keeps; ``place`` as for ``Patch.midpoint_row``."""
+    sees to it), then each half on the marked edge it keeps; ``place`` as for ``Patch.midpoint_row``.
+    The faces split go, their halves come after the others."""
     points, face_points = patch.point_array(), patch.face_points()
     k, _ = _longest(points, face_points)
     split = np.isin(_edge_codes(face_points), marked)
     pairs = _edge_pairs(marked)
-    faces, sources = [], []
-    for f, (rows, source) in enumerate(zip(patch.faces, patch.face_source)):
-        children = _split(patch, rows, int(k[f]), split[f].tolist(), pairs, place) if split[f].any() else (rows,)
-        for child in children:
-            faces.append(child)
-            sources.append(source)
+    splitting = split.any(axis=1)
+    faces = [rows for rows, s in zip(patch.faces, splitting.tolist()) if not s]
+    sources = [source for source, s in zip(patch.face_source, splitting.tolist()) if not s]
+    for f in np.flatnonzero(splitting).tolist():
+        children = _split(patch, patch.faces[f], int(k[f]), split[f].tolist(), pairs, place)
+        faces.extend(children)
+        sources.extend([patch.face_source[f]] * len(children))
     patch.faces, patch.face_source = faces, sources
 
 

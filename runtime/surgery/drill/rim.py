@@ -76,8 +76,7 @@ def _place(patch: Patch, points, crossed: dict, bit) -> None:
     edges = np.array(list(crossed), np.int64).reshape(-1, 2)
     ts, xs = crossings(points, edges, bit.start, bit.end, bit.radius)
     for (key, t, x) in zip(list(crossed), ts, xs):
-        crossed[key] = (len(patch.points), float(t))
-        patch.points.append(x)
+        crossed[key] = (patch.add_point(x), float(t))
 
 
 def _crossing_row(patch: Patch, a: int, b: int, crossed: dict) -> int:
@@ -97,7 +96,7 @@ def _triangles(patch: Patch, polygon: list) -> list:
     """A triangle, or a convex quad split on its shorter diagonal (both wound as the polygon)."""
     if len(polygon) == 3:
         return [polygon]
-    p = [patch.points[patch.row_point[r]] for r in polygon]
+    p = patch.point_array()[[patch.row_point[r] for r in polygon]]
     if np.sum((p[0] - p[2]) ** 2) <= np.sum((p[1] - p[3]) ** 2):
         return [[polygon[0], polygon[1], polygon[2]], [polygon[0], polygon[2], polygon[3]]]
     return [[polygon[0], polygon[1], polygon[3]], [polygon[1], polygon[2], polygon[3]]]

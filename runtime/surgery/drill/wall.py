@@ -55,7 +55,6 @@ class Frame:
         self.e1 /= np.linalg.norm(self.e1)
         self.e2 = np.cross(self.u, self.e1)
         self.top = self.length + 0.5 * math.pi * self.r          # σ of the tip's pole
-        self.bottom = -0.5 * math.pi * self.r                    # σ of the back's pole
 
     def coordinates(self, x) -> tuple:
         """(θ, σ) of points x (k, 3) on the bit's surface."""
@@ -147,7 +146,7 @@ def _rim_loops(patch: Patch, rim: list, frame: Frame) -> list:
     a, b = row_point[tails], row_point[heads]
     codes = (np.minimum(a, b) << 32) | np.maximum(a, b)
     unique, counts = np.unique(codes, return_counts=True)
-    on_rim = np.zeros(len(patch.points), bool)
+    on_rim = np.zeros(patch.n_points, bool)
     on_rim[row_point[np.asarray(rim, np.int64)]] = True
     boundary = (counts[np.searchsorted(unique, codes)] == 1) & on_rim[a] & on_rim[b]
     row_of_edge = {(int(p), int(q)): int(r) for p, q, r in zip(a[boundary], b[boundary], tails[boundary])}
@@ -181,9 +180,7 @@ def _pole_row(patch: Patch, frame: Frame, sigma: float, loop: Loop) -> int:
 
 
 def _surface_row(patch: Patch, position, a: int, b: int, t: float) -> int:
-    point = len(patch.points)
-    patch.points.append(position)
-    return patch.new_row(point, a, b, t)
+    return patch.new_row(patch.add_point(position), a, b, t)
 
 
 def _loop_rows(patch: Patch, loop: Loop) -> list:
@@ -318,11 +315,10 @@ def _refine_fills(patch: Patch, frame: Frame, step: float) -> None:
 
     def place(a: int, b: int) -> np.ndarray:
         theta, sigma = 0.5 * (params[a] + params[b])
-        params[len(patch.points)] = np.array([theta, sigma])
+        params[patch.n_points] = np.array([theta, sigma])
         return frame.point(theta, sigma)
 
     for _ in range(MAX_ROUNDS):
-        points = patch.point_array()
         fill, other = set(), set()
         for rows, source in zip(patch.faces, patch.face_source):
             for k in range(3):
