@@ -53,7 +53,7 @@ def _verify(args) -> int:
 
 
 BENCHMARKS = {"skinning": "bench_skinning", "frame": "bench_frame", "animation": "bench_animation",
-              "cut": "bench_cut", "tear": "bench_tear", "fig1": "fig1_compare"}
+              "cut": "bench_cut", "tear": "bench_tear", "drill": "bench_drill", "fig1": "fig1_compare"}
 
 
 def benchmarks_root() -> Path | None:
