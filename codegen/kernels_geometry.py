@@ -13,20 +13,23 @@ from .layouts import PLANE, VERSOR
 from .symbolic import MV, up
 
 
+def _relative(k, name: str, point, origin) -> tuple:
+    """Intermediates name0..name2 = point − origin: products of them stay in relative coordinates
+    (expanding point − origin into the products would bring back absolute ones: error ~ε|origin|²)."""
+    syms = k.intermediate(*(f"{name}{i}" for i in range(3)))
+    for s_, pi, oi in zip(syms, point, origin):
+        k.let(s_, pi - oi)
+    return syms
+
+
 def plane_from_points():
     k = KernelBuilder("plane_from_points",
                       "Dual plane through a, b, c (normal along (b−a)×(c−a)), computed relative to a for "
                       "accuracy far from the origin: π' = −(e0 ∧ up(b−a) ∧ up(c−a) ∧ e∞)*, then "
                       "normalised and moved back by d = n̂·a.")
     a, b, c = k.array("a", 3), k.array("b", 3), k.array("c", 3)
-    # the edge vectors are intermediates, so that the products below stay in relative coordinates
-    # (expanding b − a into the products would reintroduce absolute ones: error ~ε|a|²)
-    u = k.intermediate("u0", "u1", "u2")
-    w = k.intermediate("w0", "w1", "w2")
+    u, w = _relative(k, "u", b, a), _relative(k, "w", c, a)        # the edge vectors
     n1, n2, n3, inv = k.intermediate("n1", "n2", "n3", "inv_len")
-    for syms, other in ((u, b), (w, c)):
-        for s_, oi, ai in zip(syms, other, a):
-            k.let(s_, oi - ai)
     o = MV(k.ring, {algebra.mask_of("eo"): k.ring.one})
     inf = MV(k.ring, {algebra.mask_of("ei"): k.ring.one})
     U = up(k.ring, [k.poly(e) for e in u])
@@ -78,10 +81,8 @@ def point_line_distance():
                       "(u need not be unit), relative to a: with q = x − a and B = q ∧ u, "
                       "d = sqrt(⟨B B̃⟩₀ / u·u). NaN for u = 0.")
     a, u, x = k.array("a", 3), k.array("u", 3), k.array("x", 3)
-    q = k.intermediate("q0", "q1", "q2")
+    q = _relative(k, "q", x, a)
     b = k.intermediate("b12", "b13", "b23")
-    for s_, xi, ai in zip(q, x, a):
-        k.let(s_, xi - ai)
     vec = lambda syms: k.mv(("e1", "e2", "e3"), syms)  # noqa: E731
     U = vec(u)
     B = vec(q) ^ U
@@ -97,10 +98,7 @@ def barycentric():
                       "Barycentric coordinates (λa, λb, λc) of p projected on triangle abc, relative to a: "
                       "with u = b−a, w = c−a, q = p−a: λb = (q∧w)·(u∧w)~/|u∧w|², λc = (u∧q)·(u∧w)~/|u∧w|².")
     a, b, c, pt = (k.array(n, 3) for n in ("a", "b", "c", "p"))
-    ub, wb, qb = (k.intermediate(*(f"{n}{i}" for i in range(3))) for n in ("u", "w", "q"))
-    for syms, other in ((ub, b), (wb, c), (qb, pt)):
-        for s_, oi, ai in zip(syms, other, a):
-            k.let(s_, oi - ai)
+    ub, wb, qb = _relative(k, "u", b, a), _relative(k, "w", c, a), _relative(k, "q", pt, a)
     vec = lambda syms: k.mv(("e1", "e2", "e3"), syms)  # noqa: E731
     U, W, Q = vec(ub), vec(wb), vec(qb)
     area = U ^ W

@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._shared.jit import F2, I1, I2, helper, i8, kernel
+from .._shared.jit import F2, I1, I2, helper, i8, inlined, kernel
 from ..generated.kernels import affine_point
 
 __all__ = ["NewVertices", "on_edges", "blend_weight_rows", "attribute_rule", "interpolate_attribute",
@@ -69,32 +69,42 @@ def blend_weight_rows(src, coef, joints, weights):
             v = src[i, r]
             for s in range(4):
                 w = coef[i, r] * weights[v, s]
-                if w <= 0.0:
-                    continue
-                found = False
-                for q in range(count):
-                    if bones[q] == joints[v, s]:
-                        values[q] += w
-                        found = True
-                        break
-                if not found:
-                    bones[count] = joints[v, s]
-                    values[count] = w
-                    count += 1
+                if w > 0.0:
+                    count = accumulate(bones, values, count, joints[v, s], w)
         kept = min(4, count)
-        total = 0.0
-        for slot in range(kept):            # selection of the largest (ties: the bone met first)
-            best = slot
-            for q in range(slot + 1, count):
-                if values[q] > values[best]:
-                    best = q
-            bones[slot], bones[best] = bones[best], bones[slot]
-            values[slot], values[best] = values[best], values[slot]
-            total += values[slot]
+        total = largest_first(bones, values, count, kept)
         for slot in range(kept):
             out_j[i, slot] = bones[slot]
             out_w[i, slot] = values[slot] / total
     return out_j, out_w
+
+
+@inlined
+def accumulate(keys, values, count, key, value):
+    """Add ``value`` to the entry of ``key`` among the first ``count`` of keys, values (a new entry at
+    the end when there is none); returns the number of entries."""
+    for q in range(count):
+        if keys[q] == key:
+            values[q] += value
+            return count
+    keys[count], values[count] = key, value
+    return count + 1
+
+
+@inlined
+def largest_first(keys, values, count, kept):
+    """Move the ``kept`` largest of the first ``count`` values, with their keys, to the front, largest
+    first (ties: the entry met first); returns their sum."""
+    total = 0.0
+    for slot in range(kept):                # selection of the largest
+        best = slot
+        for q in range(slot + 1, count):
+            if values[q] > values[best]:
+                best = q
+        keys[slot], keys[best] = keys[best], keys[slot]
+        values[slot], values[best] = values[best], values[slot]
+        total += values[slot]
+    return total
 
 
 @helper

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._shared.jit import F1, I1, I2, kernel
+from ..new_vertices import accumulate, largest_first
 
 #: input vertices a new vertex is described by at most: 3 in a face, 6 on a wall (between two rims)
 SOURCES = 6
@@ -159,28 +160,10 @@ def _descriptions(vertex, parents, t):
             p = parents[r, side]
             scale = t[r] if side == 1 else 1.0 - t[r]
             for s in range(SOURCES):
-                c = scale * coef[p, s]
-                if c == 0.0:
-                    continue
-                found = False
-                for q in range(count):
-                    if keys[q] == src[p, s]:
-                        values[q] += c
-                        found = True
-                        break
-                if not found:
-                    keys[count], values[count] = src[p, s], c
-                    count += 1
+                if coef[p, s] != 0.0:
+                    count = accumulate(keys, values, count, src[p, s], scale * coef[p, s])
         kept = min(count, SOURCES)
-        total = 0.0
-        for slot in range(kept):                 # selection of the largest (ties: the first met)
-            best = slot
-            for q in range(slot + 1, count):
-                if values[q] > values[best]:
-                    best = q
-            keys[slot], keys[best] = keys[best], keys[slot]
-            values[slot], values[best] = values[best], values[slot]
-            total += values[slot]
+        total = largest_first(keys, values, count, kept)
         for slot in range(SOURCES):
             src[r, slot] = keys[slot] if slot < kept else keys[0]
             coef[r, slot] = values[slot] / total if slot < kept else 0.0
