@@ -254,17 +254,21 @@ def _add(patch: Patch, rows) -> None:
 def _fill(patch: Patch, frame: Frame, loop: Loop) -> None:
     """The surface a loop that does not wind around the axis encloses. Split at its least and greatest
     angle, a loop is usually two chains along which the angle only grows: they are zipped by angle,
-    faces narrow across the curvature and long along the straight axis. Otherwise the loop is ear-clipped
-    in (r θ, σ) and refined (``_refine_fills``)."""
+    faces narrow across the curvature and long along the straight axis; a rim that runs along the axis
+    (a bit grazing lengthwise) is split and zipped by height instead. Otherwise the loop is ear-clipped
+    in (r θ, σ). Edges that then span the curvature are bisected (``_refine_fills``)."""
     for point, theta, sigma in zip(loop.points, loop.unwrapped, loop.sigma):
         patch.fill_params[int(point)] = np.array([theta, sigma])     # (the fill's refinement halves them)
     rows = _loop_rows(patch, loop)
-    n, first, last = len(rows), int(np.argmin(loop.unwrapped)), int(np.argmax(loop.unwrapped))
-    chains = [[(first + i) % n for i in range((last - first) % n + 1)],
-              [(first - i) % n for i in range((first - last) % n + 1)]]
-    if all(np.all(np.diff(loop.unwrapped[chain]) > 0.0) for chain in chains):
-        triangles = _zip_chains(loop.unwrapped, *chains)
-    else:
+    n, triangles = len(rows), None
+    for key in (loop.unwrapped, loop.sigma):     # across the axis, else along it (a bit grazing lengthwise)
+        first, last = int(np.argmin(key)), int(np.argmax(key))
+        chains = [[(first + i) % n for i in range((last - first) % n + 1)],
+                  [(first - i) % n for i in range((first - last) % n + 1)]]
+        if all(np.all(np.diff(key[chain]) > 0.0) for chain in chains):
+            triangles = _zip_chains(key, *chains)
+            break
+    if triangles is None:
         xy = np.column_stack([frame.r * loop.unwrapped, loop.sigma])
         order = np.arange(n) if _area(xy) > 0.0 else np.arange(n)[::-1]
         triangles = order[_ear_clip(np.ascontiguousarray(xy[order]), order.astype(np.int64), tol.min_sine)]
@@ -278,12 +282,12 @@ def _fill(patch: Patch, frame: Frame, loop: Loop) -> None:
         patch.face_source.append(WALL_FILL)
 
 
-def _zip_chains(theta, lower: list, upper: list) -> list:
-    """Triangles (corner indices) between two chains from one corner to another, angles increasing along
-    both, advancing the chain whose next corner comes first."""
+def _zip_chains(key, lower: list, upper: list) -> list:
+    """Triangles (corner indices) between two chains from one corner to another, ``key`` (an angle or a
+    height per corner) increasing along both, advancing the chain whose next corner comes first."""
     out, i, k = [], 0, 0
     while i < len(lower) - 1 or k < len(upper) - 1:
-        if k == len(upper) - 1 or (i < len(lower) - 1 and theta[lower[i + 1]] <= theta[upper[k + 1]]):
+        if k == len(upper) - 1 or (i < len(lower) - 1 and key[lower[i + 1]] <= key[upper[k + 1]]):
             out.append((lower[i], lower[i + 1], upper[k]))
             i += 1
         else:
