@@ -22,7 +22,8 @@ what it touches, like one at rest.
 A stroke is ``tear/splice.py`` run on the session as its source, exactly as the functional ``tear``
 runs it on a rig, so a session's mesh after k strokes is the functional chain's (tests check it).
 ``rig`` is an immutable snapshot, copied on export (once per state; O(mesh)). ``cut`` cuts the whole
-mesh (a global operation: its cost is the mesh's) and keeps both halves in the session, apart.
+mesh (a global operation: its cost is the mesh's) and keeps both halves in the session, apart; ``drill``
+drills the whole mesh the same way (for now: a hole should cost what the bit touches, as a stroke does).
 """
 from __future__ import annotations
 
@@ -88,8 +89,9 @@ class Surgery:
     (default: the stored vertices).
 
     Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``cut(normal, point, pose=None,
-    cap=False)``, ``drill(start, end, radius, pose=None, wall=True)``, ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``, ``n_faces``,
-    ``n_operations``, ``pose``, ``last_cost`` (an ``OperationCost``). The caller's rig is never modified.
+    cap=False)``, ``drill(start, end, radius, pose=None, wall=True)``, ``undo()``; ``rig`` the current
+    mesh as an immutable Rig; ``n_vertices``, ``n_faces``, ``n_operations``, ``pose``, ``last_cost`` (an
+    ``OperationCost``). The caller's rig is never modified.
 
     What a stroke reads of the session (``vertices``, ``faces``, ``positions``, ``labels``,
     ``boundary``, ... : the source interface of ``tear/splice.py``) are views of its own buffers,
