@@ -1,4 +1,5 @@
-"""Model subcommands of the ``cgaskin`` command line (demo, skin, cut, tear)."""
+"""Model subcommands of the ``cgaskin`` command line (demo, skin, cut, tear, drill; batch in
+``batch_command``)."""
 from __future__ import annotations
 
 import sys
@@ -353,3 +354,6 @@ def register(sub) -> None:
     add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", required=True)
     p.set_defaults(run=_tear, check_options=_check_tear)
+
+    from . import batch_command                       # cgaskin batch (a dataset on Dask)
+    batch_command.register(sub)

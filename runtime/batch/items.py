@@ -1,0 +1,113 @@
+"""A spec expanded into items: one per (model, pose entry, time, operation entry, instance).
+
+An item's id is a content hash of what defines its output: the model file's sha256 (not its path),
+the pose entry's clip, time and edits, the operation's kind and parameters (defaults filled in), the
+instance index and the global seed. So the same spec gives the same ids on every machine, a changed
+spec changes only the ids of what it changed, and an item's random draws (``Item.rng``) come from
+its id, never from the order in which workers pick items up.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict
+from typing import NamedTuple
+
+import numpy as np
+
+from .spec import Spec
+
+__all__ = ["Item", "expand", "file_sha256", "ID_LENGTH"]
+
+#: hex digits of an item id (64 bits: a collision among a million items has odds ~3e-8)
+ID_LENGTH = 16
+#: bumped when the meaning of an item's parameters changes (so that old outputs are not kept)
+_VERSION = 1
+
+
+class Item(NamedTuple):
+    """One output item, all a worker needs to make it (small: specs and seeds cross the network,
+    rigs never do).
+
+    id : str, ID_LENGTH hex digits
+    digest : str, the full sha256 (hex) the id begins with; seeds the item's generator
+    model : str, the model as the spec names it (the manifest's ``model``)
+    path : str, the model file's absolute path (read by the worker)
+    model_sha256 : str, the file's sha256 when the batch started
+    clip : str | int | None, None for the rest pose
+    time : float | None
+    edits : tuple of EditSpec
+    operation : str, cut | tear | drill | none
+    params : tuple of (name, value), the operation entry's parameters
+    instance : int, 0 .. count - 1
+    """
+
+    id: str
+    digest: str
+    model: str
+    path: str
+    model_sha256: str
+    clip: object
+    time: object
+    edits: tuple
+    operation: str
+    params: tuple
+    instance: int
+
+    @property
+    def pose_label(self) -> str:
+        """The manifest's ``pose``: "rest" or "<clip>@<time>" (edits are in ``params``)."""
+        return "rest" if self.clip is None else f"{self.clip}@{self.time:g}"
+
+    def rng(self) -> np.random.Generator:
+        """The item's own random generator, seeded from its whole digest (the global seed is in it)."""
+        return np.random.default_rng(int(self.digest, 16))
+
+
+def file_sha256(path) -> str:
+    """sha256 (hex) of a file's bytes, read in 1 MiB blocks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _digest(definition: dict) -> str:
+    text = json.dumps(definition, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def expand(spec: Spec, hashes: dict | None = None) -> list:
+    """The spec's items in spec order (models, poses, times, operations, instances); an item that
+    an earlier one duplicates (the same file listed twice, two equal entries) appears once.
+
+    hashes : optional dict path -> sha256 (the model files', to skip hashing them again)
+
+    A model file that cannot be read is hashed as "unreadable:<reason>": its items still get ids
+    and become error rows (a bad model is a row with its error, not a failed batch).
+    """
+    hashes = {} if hashes is None else hashes
+    items, seen = [], set()
+    for model in spec.models:
+        if model.path not in hashes:
+            try:
+                hashes[model.path] = file_sha256(model.path)
+            except OSError as exc:
+                hashes[model.path] = f"unreadable:{exc.strerror}"
+        sha = hashes[model.path]
+        for pose in spec.poses:
+            edits = [asdict(e) for e in pose.edits]
+            for time in pose.times:
+                for op in spec.operations:
+                    for instance in range(op.count):
+                        digest = _digest({"v": _VERSION, "seed": spec.seed, "model": sha,
+                                          "pose": {"clip": pose.clip, "time": time, "edits": edits},
+                                          "operation": {"kind": op.kind, **dict(op.params)},
+                                          "instance": instance})
+                        if digest in seen:
+                            continue
+                        seen.add(digest)
+                        items.append(Item(digest[:ID_LENGTH], digest, model.name, model.path, sha, pose.clip,
+                                          time, pose.edits, op.kind, op.params, instance))
+    return items

@@ -1,0 +1,185 @@
+"""Run a batch on Dask: one task per item that the batch folder does not hold yet.
+
+``run(spec, out)`` expands the spec into items (``items.py``), keeps the items that an earlier run
+finished (the manifest's row, every file there with its recorded sha256), and submits the others to a
+``dask.distributed`` cluster: a ``LocalCluster`` of worker processes by default, or the scheduler at
+``scheduler`` (an address), or the caller's ``client``. A task carries an item (paths, hashes,
+parameters: a few hundred bytes) and returns its row; the rig is loaded by the worker, once per
+process (``operate.py``), so rigs never cross the network. Workers warm numba's cache
+(``cgaskin.precompile``) once, before their first item (``Warmup``). The manifest is rewritten
+(atomically) about every ``flush_seconds`` while rows come in, so a run killed half-way leaves the
+rows of the items it finished, and the next run makes only the others.
+"""
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import logging
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import InvalidInputError
+from .items import expand
+from .manifest import MANIFEST, read_manifest, reusable_rows, write_manifest
+from .operate import TMP_SUFFIX, Row, item_row
+from .spec import Spec, load_spec
+
+__all__ = ["run", "Manifest", "Warmup"]
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """What a run left: ``rows`` (Row, one per item, in spec order) as written to ``path``;
+    ``computed`` items were made by this run, ``kept`` ones by an earlier run; ``dashboard`` is the
+    cluster's dashboard address (None when it has none)."""
+
+    path: Path
+    rows: tuple
+    computed: int
+    kept: int
+    dashboard: str | None = None
+
+    @property
+    def errors(self) -> list:
+        """The rows whose item failed."""
+        return [r for r in self.rows if r.error is not None]
+
+    def table(self):
+        """The manifest as a ``pyarrow.Table`` (read from ``path``)."""
+        import pyarrow.parquet as pq
+        return pq.read_table(self.path)
+
+
+class Warmup:
+    """A Dask worker plugin: ``cgaskin.precompile(jobs=1)`` once per worker, before its first task
+    (in a thread, so that a cold cache's minute of compiling does not stall the worker's heartbeats).
+    Made a ``WorkerPlugin`` subclass at first use (``_warmup_plugin``), so importing this module
+    does not import dask."""
+
+    name = "cgaskin-precompile"
+
+    async def setup(self, worker):
+        await asyncio.get_running_loop().run_in_executor(None, _precompile_one_process)
+
+
+def _precompile_one_process() -> None:
+    from ..app.precompile import precompile
+    precompile(jobs=1)
+
+
+def _warmup_plugin():
+    from distributed.diagnostics.plugin import WorkerPlugin
+    return type("CgaskinWarmup", (Warmup, WorkerPlugin), {"__module__": __name__})()
+
+
+def _cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def run(spec, out, client=None, workers: int | None = None, scheduler: str | None = None,
+        progress: bool = False, flush_seconds: float = 1.0) -> Manifest:
+    """Make every item of ``spec`` under the folder ``out`` (``out/items/``, ``out/manifest.parquet``).
+
+    spec : a path to the TOML spec, or a ``Spec`` (``load_spec``)
+    out : the batch folder (made if absent); items already there (manifest row + files with their
+        sha256) are kept, the others made
+    client : a ``dask.distributed.Client`` to run on (left open); else a cluster is made and closed
+    workers : worker processes of the default ``LocalCluster`` (default: one per core)
+    scheduler : the address of a running Dask scheduler (``tcp://host:8786``) instead of a local
+        cluster; its workers need cgaskin installed and the model files and ``out`` at the same paths
+    progress : draw a progress bar (and print the dashboard address) on stderr
+    flush_seconds : how often the manifest is rewritten while items finish
+
+    Returns the ``Manifest``. Items that fail are rows with an ``error``; nothing raises for them.
+    Raises InvalidInputError for a bad spec or conflicting arguments, before any cluster starts.
+    """
+    if sum(x is not None for x in (client, scheduler)) > 1:
+        raise InvalidInputError("give a client or a scheduler address, not both")
+    if workers is not None and (client is not None or scheduler is not None):
+        raise InvalidInputError("workers is the size of the local cluster: with a client or a scheduler, "
+                                "the cluster has its own workers")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise InvalidInputError(f"workers must be a whole number >= 1, got {workers!r}")
+    spec = spec if isinstance(spec, Spec) else load_spec(spec)
+    out = Path(out).resolve()
+    (out / "items").mkdir(parents=True, exist_ok=True)
+    for stale in (out / "items").glob("*" + TMP_SUFFIX):     # what a killed run was writing
+        stale.unlink(missing_ok=True)
+    items = expand(spec)
+    manifest_path = out / MANIFEST
+    done = reusable_rows(read_manifest(manifest_path), items, out)
+    todo = [item for item in items if item.id not in done]
+    computed: dict = {}
+
+    def flush():
+        write_manifest([done.get(i.id) or computed[i.id] for i in items if i.id in done or i.id in computed],
+                       manifest_path)
+
+    dashboard = None
+    if todo:
+        from dask.distributed import Client, LocalCluster
+        owned = []
+        try:
+            if client is None:
+                if scheduler is None:
+                    # compile here, on every core, before the workers start: they then only load the cache
+                    from ..app.precompile import precompile
+                    precompile(verbose=progress)
+                    cluster = LocalCluster(n_workers=workers or _cores(), threads_per_worker=1, processes=True,
+                                           silence_logs=logging.ERROR)
+                    owned.append(cluster)
+                    client = Client(cluster)
+                else:
+                    client = Client(scheduler)
+                owned.append(client)
+            if "dashboard" in client.scheduler_info().get("services", {}):
+                dashboard = client.dashboard_link
+            if progress:
+                print(f"batch: {len(todo)} of {len(items)} items to make on {len(client.scheduler_info()['workers'])} "
+                      f"worker(s)" + (f"; dashboard: {dashboard}" if dashboard else ""), file=sys.stderr, flush=True)
+            client.register_plugin(_warmup_plugin())
+            _compute(client, todo, out, computed, flush, flush_seconds, progress)
+        finally:
+            for thing in reversed(owned):
+                thing.close()
+    flush()
+    rows = tuple(done.get(i.id) or computed[i.id] for i in items)
+    return Manifest(manifest_path, rows, len(computed), len(done), dashboard)
+
+
+def _compute(client, todo, out: Path, computed: dict, flush, flush_seconds: float, progress: bool) -> None:
+    """Submit one task per item, collect the rows as they come, flushing the manifest now and then."""
+    from dask.distributed import as_completed
+    # keys name the item and the folder: two batches on one scheduler never share a task
+    folder = hashlib.sha256(str(out).encode()).hexdigest()[:8]
+    futures = {client.submit(item_row, item, str(out), key=f"cgaskin-item-{item.id}-{folder}", pure=False): item
+               for item in todo}
+    start = last = time.monotonic()
+    try:
+        for future in as_completed(futures):
+            item = futures[future]
+            if future.status == "error":          # the task itself failed (a worker died under it)
+                exc = future.exception()
+                computed[item.id] = Row(item.id, item.model, item.pose_label, item.operation, "{}", (), (), (),
+                                        0.0, (), f"{type(exc).__name__}: {exc}".splitlines()[0])
+            else:
+                computed[item.id] = future.result()
+            future.release()
+            if time.monotonic() - last >= flush_seconds or len(computed) == 1:
+                flush()
+                last = time.monotonic()
+            if progress:
+                _bar(len(computed), len(todo), time.monotonic() - start)
+    finally:
+        if progress and computed:          # (interrupted too: a message then starts on a line of its own)
+            print(file=sys.stderr)
+
+
+def _bar(done: int, total: int, seconds: float) -> None:
+    """A one-line progress bar on stderr (redrawn in place)."""
+    filled = 30 * done // total
+    print(f"\ritems [{'#' * filled}{'.' * (30 - filled)}] {done}/{total} ({done / max(seconds, 1e-9):.1f}/s)",
+          end="", file=sys.stderr, flush=True)
