@@ -65,9 +65,16 @@ class Warmup:
         await asyncio.get_running_loop().run_in_executor(None, _precompile_one_process)
 
 
+#: whether this (worker) process has run precompile: a client registering the plugin again (each
+#: ``run`` on a long-lived cluster does) then costs nothing
+_WARM = []
+
+
 def _precompile_one_process() -> None:
-    from ..app.precompile import precompile
-    precompile(jobs=1)
+    if not _WARM:
+        from ..app.precompile import precompile
+        precompile(jobs=1)
+        _WARM.append(True)
 
 
 def _warmup_plugin():

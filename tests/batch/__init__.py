@@ -1,0 +1,1 @@
+"""Tests of cgaskin.batch (datasets on Dask)."""
