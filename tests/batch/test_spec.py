@@ -1,6 +1,7 @@
 """The batch spec and its items, without a cluster: errors name the key, ids are content hashes."""
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -112,3 +113,14 @@ def test_importing_cgaskin_imports_no_dask():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+def test_the_readme_spec_is_valid(tmp_path, models_dir):
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    text = readme.split("### Datasets: `cgaskin batch`")[1].split("```toml\n")[1].split("```")[0]
+    (tmp_path / "models").mkdir()
+    (tmp_path / "models" / "Fox.glb").symlink_to(models_dir / "Fox.glb")
+    spec = load_spec(_spec(tmp_path, text))
+    assert [e.kind for e in spec.poses[0].edits] == ["dilate", "rotate"]
+    assert dict(spec.operations[0].params)["radius"] == (0.02, 0.04)
+    assert len(expand(spec)) == 1 * 3 * 3

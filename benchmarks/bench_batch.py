@@ -1,0 +1,72 @@
+"""cgaskin batch: items per second on a LocalCluster of 1 and of 2 worker processes, same spec, one run.
+
+    python -m benchmarks.bench_batch [--count 5] [--repeat 3]
+
+The spec: Fox.glb, Arm5.glb and 3Cylinder4bones.glb at rest with a random dilation, each with
+``--count`` cuts, tears and drills and one posed copy (3 x (3 count + 1) items). Each cluster is
+started, then warmed by a batch of the same spec with another seed (the workers load the cache of
+compiled kernels and the rigs), then timed over ``--repeat`` batches into fresh folders (median):
+what a long batch sees per item, the cluster's start (printed apart) left out. The scaling goal on
+a 2-core machine: 2 workers >= 1.7x the items per second of 1.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+from ._timing import print_table
+from .bench_tear import models_dir
+
+MODELS = ("Fox.glb", "Arm5.glb", "3Cylinder4bones.glb")
+
+
+def _spec(folder: Path, count: int, seed: int) -> Path:
+    models = "".join(f'[[models]]\npath = "{models_dir() / name}"\n' for name in MODELS)
+    operations = "".join(f'[[operations]]\nkind = "{kind}"\ncount = {count}\n' for kind in ("cut", "tear", "drill"))
+    path = folder / f"spec{seed}.toml"
+    path.write_text(f"seed = {seed}\n{models}[[poses]]\nrest = true\n"
+                    f"edits = {{ dilate = {{ joint = 2, range = [0.8, 1.2] }} }}\n{operations}"
+                    f'[[operations]]\nkind = "none"\n', encoding="utf-8")
+    return path
+
+
+def measure(workers: int, count: int, repeat: int, folder: Path) -> list:
+    """[workers, items, start s, seconds per batch (median), items/s, failed items] on a fresh cluster."""
+    from dask.distributed import Client, LocalCluster
+
+    from cgaskin.batch import run
+    start = time.perf_counter()
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, silence_logs=logging.ERROR,
+                      dashboard_address=":0") as cluster, Client(cluster) as client:
+        started = time.perf_counter() - start
+        run(_spec(folder, count, seed=1000 + workers), folder / f"warm{workers}", client=client)
+        seconds, manifest = [], None
+        for k in range(repeat):
+            begin = time.perf_counter()
+            manifest = run(_spec(folder, count, seed=1), folder / f"w{workers}-{k}", client=client)
+            seconds.append(time.perf_counter() - begin)
+    median = statistics.median(seconds)
+    return [workers, len(manifest.rows), started, median, len(manifest.rows) / median, len(manifest.errors)]
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--count", type=int, default=5, help="instances of each operation per model")
+    parser.add_argument("--repeat", type=int, default=3, help="timed batches per cluster (median)")
+    args = parser.parse_args(argv)
+    from cgaskin import precompile
+    precompile()
+    with tempfile.TemporaryDirectory() as tmp:
+        rows = [measure(n, args.count, args.repeat, Path(tmp)) for n in (1, 2)]
+    rows[0].append(1.0)
+    rows[1].append(rows[1][4] / rows[0][4])
+    print_table("cgaskin batch on a LocalCluster (median of the timed batches; start apart)",
+                ["workers", "items", "start s", "batch s", "items/s", "failed", "x 1 worker"], rows)
+
+
+if __name__ == "__main__":
+    main()
