@@ -44,6 +44,13 @@ def capsule_arm(*args, **kwargs):
     return _capsule_arm(*args, **kwargs)
 
 
+def show(rig, pose=None, clip=None, **options):
+    """A viewer page for ``rig`` (a ``Rig`` or a model path) that a notebook shows inline and
+    ``.save(path)`` writes as an offline .html file: ``cgaskin.view.show``."""
+    from .view import show as _show
+    return _show(rig, pose=pose, clip=clip, **options)
+
+
 def __getattr__(name):
     # the plain reference implementations (test oracles, benchmark baselines): production code never
     # imports them, so they load on first use

@@ -302,6 +302,27 @@ def _skin(args) -> int:
     return 0
 
 
+def _check_view(args) -> None:
+    if Path(args.out).suffix.lower() not in (".html", ".htm"):
+        raise InvalidInputError(f"--out {args.out}: the view is a web page; give a file name ending in "
+                                f".html, e.g. --out {Path(args.out).with_suffix('.html').name}")
+    finite(args.time, f"--time {args.time}", "seconds")
+    if args.time < 0:
+        raise InvalidInputError(f"--time {args.time:g}: give seconds >= 0")
+
+
+def _view(args) -> int:
+    from ..rigs import load
+    from ..view import show
+    rig = load(args.model)
+    view = show(rig, clip=clip_of(rig, args), play=not args.paused, time=args.time)
+    view.save(args.out)
+    clips = ", ".join(c.name for c in rig.clips) or "none"
+    print(f"wrote {args.out}: {len(view.html) / 1e6:.1f} MB, {rig.n_vertices} vertices, clips: {clips} "
+          f"(open it in a browser; it needs no network)")
+    return 0
+
+
 def register(sub) -> None:
     """Add the model subcommands to the argparse subparsers ``sub``."""
     p = sub.add_parser("demo", help="deform the built-in capsule arm; write pictures and a .glb (no files needed)")
@@ -354,6 +375,15 @@ def register(sub) -> None:
     add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", required=True)
     p.set_defaults(run=_tear, check_options=_check_tear)
+
+    p = sub.add_parser("view", help="write one self-contained web page (.html) that plays the model: "
+                                    "clips, skeleton, weights, live dilation, cut rims; offline")
+    p.add_argument("model", metavar="MODEL_OR_RIG", help="any model cgaskin.load reads (.glb, .gltf, .fbx, ...)")
+    p.add_argument("--clip", default=None, help="clip name or index to start with (default: the first)")
+    p.add_argument("--time", type=float, default=0.0, help="seconds into the clip to start at")
+    p.add_argument("--paused", action="store_true", help="start paused")
+    p.add_argument("--out", required=True, metavar="PAGE.html")
+    p.set_defaults(run=_view, check_options=_check_view)
 
     from . import batch_command                       # cgaskin batch (a dataset on Dask)
     batch_command.register(sub)

@@ -1,0 +1,56 @@
+"""``cgaskin.show``: the viewer page for notebooks (``_repr_html_``) and files (``save``)."""
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+from ..errors import InvalidInputError
+from .model import view_html
+
+
+class View:
+    """A rig's viewer page. In a notebook it shows itself inline (an ``<iframe srcdoc>`` holding the
+    whole page: three.js and the model inside, no request, no server); ``save(path)`` writes it as
+    an .html file that opens offline in a browser.
+
+    html : str, the page (what ``cgaskin view`` writes)
+    height : int, the iframe's height in CSS pixels
+    """
+
+    def __init__(self, page: str, height: int = 480):
+        self.html = page
+        self.height = int(height)
+
+    def _repr_html_(self) -> str:
+        # srcdoc: the page runs in its own document (its import map and blob: modules do not meet the
+        # notebook's), without a server; html.escape(quote=True) makes it one attribute value
+        return (f'<iframe srcdoc="{html.escape(self.html, quote=True)}" style="width: 100%; '
+                f'height: {self.height}px; border: 0;" title="cgaskin view"></iframe>')
+
+    def save(self, path) -> Path:
+        """Write the page to ``path`` (an .html file); returns the path."""
+        path = Path(path)
+        if path.suffix.lower() not in (".html", ".htm"):
+            raise InvalidInputError(f"{path}: the view is a web page; give a file name ending in .html")
+        path.write_text(self.html, encoding="utf-8")
+        return path
+
+    def __repr__(self) -> str:
+        return f"<cgaskin View: {len(self.html) / 1e6:.1f} MB page; save(path) or display it in a notebook>"
+
+
+def show(rig, pose=None, clip=None, *, play=None, time: float = 0.0, height: int = 480) -> View:
+    """The viewer for ``rig`` (a ``Rig`` or a model path): plays its clips (timeline, speed, loop),
+    orbits, shows the skeleton with bone names, weights by joint, a live dilation of a joint, the
+    open edges (cut rims, slits, holes), and saves PNGs.
+
+    pose : a ``Pose`` of the rig to show (held by an extra clip "pose" of two equal keys, selected
+        and paused; the rig's own clips stay in the clip menu)
+    clip : name or index of the clip to start with (default: the first); not with ``pose``
+    play : start playing (default: yes for a clip, no for a pose)
+    time : seconds into the clip to start at
+    height : the notebook iframe's height in pixels
+    """
+    if not isinstance(height, int) or height < 100:
+        raise InvalidInputError(f"height {height!r}: give whole pixels >= 100")
+    return View(view_html(rig, clip=clip, pose=pose, play=play, time=time), height=height)
