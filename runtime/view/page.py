@@ -20,6 +20,7 @@ import json
 import posixpath
 import re
 
+from ..errors import InvalidInputError
 from .assets import THREE_FILES, THREE_VERSION, VIEWER_MODULES, asset_text
 
 #: the page's skinning modes: "three" is three.js's matrix skinning (the one mode built so far)
@@ -99,7 +100,7 @@ def page_html(glb: bytes, *, name: str, rims, clip: str | None, play: bool = Tru
     skinning : one of ``SKINNING_MODES``
     """
     if skinning not in SKINNING_MODES:
-        raise ValueError(f"skinning {skinning!r}: the page knows {', '.join(SKINNING_MODES)}")
+        raise InvalidInputError(f"skinning {skinning!r}: the page knows {', '.join(SKINNING_MODES)}")
     data = {"name": name, "clip": clip, "play": bool(play), "time": float(time), "skinning": skinning,
             "rims": [int(v) for v in rims], "three": THREE_VERSION}
     blocks = [f'<script type="text/plain" data-module="{html.escape(module)}">\n{_script_text(module_text(module))}\n</script>'
