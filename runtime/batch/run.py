@@ -113,7 +113,8 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
     spec = spec if isinstance(spec, Spec) else load_spec(spec)
     out = Path(out).resolve()
     (out / "items").mkdir(parents=True, exist_ok=True)
-    for stale in (out / "items").glob("*" + TMP_SUFFIX):     # what a killed run was writing
+    # what a killed run was writing (one batch per folder at a time: these are no one else's)
+    for stale in [*(out / "items").glob("*" + TMP_SUFFIX), *out.glob(MANIFEST + ".*.tmp")]:
         stale.unlink(missing_ok=True)
     items = expand(spec)
     manifest_path = out / MANIFEST
@@ -150,9 +151,11 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
             client.register_plugin(_warmup_plugin())
             _compute(client, todo, out, computed, flush, flush_seconds, progress)
         finally:
+            flush()                    # (interrupted too: the rows that came in are kept)
             for thing in reversed(owned):
                 thing.close()
-    flush()
+    else:
+        flush()
     rows = tuple(done.get(i.id) or computed[i.id] for i in items)
     return Manifest(manifest_path, rows, len(computed), len(done), dashboard)
 
