@@ -168,7 +168,7 @@ def _models(tables, folder: Path, fail) -> tuple:
         if not isinstance(pattern, str) or not pattern:
             fail(f"{key}.path", f"give the model's path (a string), got {pattern!r}")
         full = folder / pattern                 # (an absolute pattern stays itself)
-        if glob.has_magic(pattern):
+        if any(c in pattern for c in "*?["):        # a glob (the characters glob.glob expands)
             found = sorted(p for p in glob.glob(str(full), recursive=True) if Path(p).is_file())
             if not found:
                 fail(f"{key}.path", f"{pattern!r} matches no file (relative to {folder})")
