@@ -1,4 +1,5 @@
-"""Printers of the kernel IR (``codegen.ir.Kernel``) for targets outside numba: C99, GLSL, WGSL, CUDA.
+"""Printers of the kernel IR (``codegen.ir.Kernel``) for targets outside numba: C99, GLSL, WGSL, CUDA,
+JavaScript.
 
 Every target module has the same entry point:
 
@@ -21,7 +22,7 @@ import importlib
 from ..ir import CodegenError
 
 #: every target ``cgaskin build --target`` knows; numba is the default (``codegen.printer``)
-TARGETS = ("numba", "c", "glsl", "wgsl", "cuda")
+TARGETS = ("numba", "c", "glsl", "wgsl", "cuda", "js")
 
 
 def parse_targets(text: str) -> tuple[str, ...]:

@@ -9,6 +9,8 @@ shader that skins in the vertex stage.
 <prefix>_skin.vert            a vertex shader (float) whose <prefix>_skin_vertex(position, joints,
                               weights) blends the affines of an SSBO; captured by transform feedback
                               or used for gl_Position
+<prefix>_skin_webgl.glsl      GLSL ES 3.00 (WebGL2) functions for a page's vertex shader: each bone's
+                              versor -> affine in the shader, then the blend (``webgl_chunk``)
 
 Storage buffers are std430 arrays of scalars (flat: std430's vec3[] has a 16-byte stride), sizes in a
 std140 uniform block at binding 0 (SPIR-V needs loose uniforms in a block). Work groups are 64 wide; the
@@ -140,6 +142,75 @@ void main() {{
 """
 
 
+def webgl_chunk(by_name, prefix: str, header) -> str:
+    """GLSL ES 3.00 (WebGL2: no SSBO, no double, no compute) for a page's vertex shader. The bones come in
+    a float RGBA texture, 6 texels a bone: the bone's global versor (12 floats, blade order), then a
+    3x4 map R applied first (row-major: a bone's inverse bind matrix, and whatever the page folds in;
+    for a bone whose global is not a similarity the page gives the identity versor and its whole map as
+    R). ``<prefix>_versor_to_affine`` (float) runs per influence, as the compute shaders do per bone."""
+    return f"""{comment(header, "cgaskin skinning for WebGL2 (GLSL ES 3.00, float): versors in, blended 3x4 maps out")}
+// No #version line: paste or inject after the shader's own (#version 300 es, precision highp float).
+// {prefix}_bones: (bone_count * 6) RGBA float texels, row-major over the texture's width: per bone b, texels
+// 6b..6b+2 hold its versor V (blade order of generated/layout.py), 6b+3..6b+5 a 3x4 map R (row-major).
+// Bone b moves a point p to versor_to_affine(V) applied to R p. {prefix}_blend(joints, weights, a) sums
+// weights[k] times bone joints[k]'s map into a[12] (joints outside [0, bone_count) are skipped, not
+// read); {prefix}_apply_point / {prefix}_apply_direction apply it to a point / a direction.
+uniform highp sampler2D {prefix}_bones;
+uniform int {prefix}_bone_count;
+
+{_functions(by_name, prefix, False, ["versor_to_affine", "affine_point"])}
+vec4 {prefix}_bone_texel(int i) {{
+    int width = textureSize({prefix}_bones, 0).x;
+    return texelFetch({prefix}_bones, ivec2(i % width, i / width), 0);
+}}
+
+void {prefix}_bone_map(int b, out float a[12]) {{
+    float v[12];
+    float r[12];
+    for (int t = 0; t < 3; t++) {{
+        vec4 versor = {prefix}_bone_texel(6 * b + t);
+        vec4 map = {prefix}_bone_texel(6 * b + 3 + t);
+        for (int c = 0; c < 4; c++) {{
+            v[4 * t + c] = versor[c];
+            r[4 * t + c] = map[c];
+        }}
+    }}
+    float l[12];
+    {prefix}_versor_to_affine(v, l);
+    for (int i = 0; i < 3; i++) {{
+        for (int j = 0; j < 4; j++) {{
+            float s = j == 3 ? l[4 * i + 3] : 0.0;
+            for (int k = 0; k < 3; k++) s += l[4 * i + k] * r[4 * k + j];
+            a[4 * i + j] = s;
+        }}
+    }}
+}}
+
+void {prefix}_blend(vec4 joints, vec4 weights, out float a[12]) {{
+    for (int c = 0; c < 12; c++) a[c] = 0.0;
+    for (int k = 0; k < 4; k++) {{
+        int b = int(joints[k]);
+        if (b < 0 || b >= {prefix}_bone_count || weights[k] == 0.0) continue;
+        float m[12];
+        {prefix}_bone_map(b, m);
+        for (int c = 0; c < 12; c++) a[c] += weights[k] * m[c];
+    }}
+}}
+
+vec3 {prefix}_apply_point(float a[12], vec3 p) {{
+    float x[3] = float[3](p.x, p.y, p.z);
+    float r[3];
+    {prefix}_affine_point(a, x, r);
+    return vec3(r[0], r[1], r[2]);
+}}
+
+vec3 {prefix}_apply_direction(float a[12], vec3 d) {{
+    return vec3(a[0] * d.x + a[1] * d.y + a[2] * d.z, a[4] * d.x + a[5] * d.y + a[6] * d.z,
+                a[8] * d.x + a[9] * d.y + a[10] * d.z);
+}}
+"""
+
+
 def skin_files(kernels, prefix: str, header) -> dict:
     """{file name: text} of the skinning shaders (module docstring)."""
     by_name = {k.name: k for k in kernels}
@@ -150,4 +221,5 @@ def skin_files(kernels, prefix: str, header) -> dict:
             f"{prefix}_skin.comp": blend_shader(by_name, prefix, header, True),
             f"{prefix}_skin_bones_f32.comp": bones_shader(by_name, prefix, header, False),
             f"{prefix}_skin_f32.comp": blend_shader(by_name, prefix, header, False),
-            f"{prefix}_skin.vert": vertex_shader(by_name, prefix, header)}
+            f"{prefix}_skin.vert": vertex_shader(by_name, prefix, header),
+            f"{prefix}_skin_webgl.glsl": webgl_chunk(by_name, prefix, header)}

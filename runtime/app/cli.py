@@ -113,7 +113,7 @@ def main(argv=None) -> int:
     p.add_argument("--out", metavar="DIR", help="with --catalogue: the folder to write FILE's module into "
                                                 "(DIR/<FILE stem>.py), or the .py file itself")
     p.add_argument("--target", metavar="LIST", help="comma-separated printers: numba (the default), c, glsl, "
-                                                    "wgsl, cuda; generated/<target>/ for the built-in catalogue "
+                                                    "wgsl, cuda, js; generated/<target>/ for the built-in catalogue "
                                                     "(kept fresh once there), beside the module for --catalogue")
     p.add_argument("--report", action="store_true", help="print each kernel's operation counts after CSE "
                                                          "(mul, add, div, sqrt, other; hoisted parts apart)")

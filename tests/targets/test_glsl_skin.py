@@ -132,3 +132,26 @@ def test_bad_input_is_skipped_and_counted_like_numba(runner, shaders, fox, doubl
     finite = np.isfinite(want).all(axis=1)
     assert not np.isfinite(got[~finite]).all(axis=1).any()
     assert_points_close(got[finite], want[finite], 1e-12 if double else 1e-5, "bad input")
+
+
+def test_webgl_chunk_is_valid_glsl_es_300(shaders):
+    """cgaskin_skin_webgl.glsl in a WebGL2 vertex shader (#version 300 es) passes glslangValidator (its
+    run in a browser, against three.js's skinning: tests/clients/test_view.py)."""
+    require([] if gl_compute.validator() else ["glslangValidator (Debian glslang-tools)"], "the GLSL ES check")
+    source = f"""#version 300 es
+precision highp float;
+precision highp int;
+{shaders["cgaskin_skin_webgl.glsl"]}
+in vec3 position;
+in vec4 joints;
+in vec4 weights;
+in vec3 normal;
+out vec3 turned;
+void main() {{
+    float a[12];
+    cgaskin_blend(joints, weights, a);
+    turned = cgaskin_apply_direction(a, normal);
+    gl_Position = vec4(cgaskin_apply_point(a, position), 1.0);
+}}
+"""
+    gl_compute.validate(source, "vert", spirv=False)
