@@ -315,7 +315,7 @@ def _view(args) -> int:
     from ..rigs import load
     from ..view import show
     rig = load(args.model)
-    view = show(rig, clip=clip_of(rig, args), play=not args.paused, time=args.time)
+    view = show(rig, clip=clip_of(rig, args), play=not args.paused, time=args.time, skinning=args.skinning)
     view.save(args.out)
     clips = ", ".join(c.name for c in rig.clips) or "none"
     print(f"wrote {args.out}: {len(view.html) / 1e6:.1f} MB, {rig.n_vertices} vertices, clips: {clips} "
@@ -382,6 +382,9 @@ def register(sub) -> None:
     p.add_argument("--clip", default=None, help="clip name or index to start with (default: the first)")
     p.add_argument("--time", type=float, default=0.0, help="seconds into the clip to start at")
     p.add_argument("--paused", action="store_true", help="start paused")
+    p.add_argument("--skinning", choices=("cgaskin", "three"), default="cgaskin",
+                   help="who skins in the page first (it can switch): cgaskin's versors in generated GLSL ES "
+                        "(default) or three.js's bone matrices")
     p.add_argument("--out", required=True, metavar="PAGE.html")
     p.set_defaults(run=_view, check_options=_check_view)
 

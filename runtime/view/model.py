@@ -85,7 +85,7 @@ def _with_pose(rig: Rig, pose: Pose) -> tuple[Rig, str]:
     return rig.with_clips(clip), name
 
 
-def view_html(model, *, clip=None, pose=None, play=None, time: float = 0.0) -> str:
+def view_html(model, *, clip=None, pose=None, play=None, time: float = 0.0, skinning: str = "cgaskin") -> str:
     """The self-contained page that shows ``model`` (a ``Rig`` or a model path).
 
     clip : name or index of the clip to start with (default: the first clip; the page can switch)
@@ -93,6 +93,8 @@ def view_html(model, *, clip=None, pose=None, play=None, time: float = 0.0) -> s
         paused); not with ``clip``
     play : start playing (default: True for a clip, False for a pose)
     time : seconds into the clip to start at
+    skinning : who skins the mesh in the page first (it can switch): "cgaskin" (the bones' versors
+        blended by the generated GLSL ES in the vertex shader) or "three" (three.js's bone matrices)
     """
     rig = as_rig(model)
     if pose is not None and clip is not None:
@@ -107,4 +109,4 @@ def view_html(model, *, clip=None, pose=None, play=None, time: float = 0.0) -> s
         name = clip_name(rig, clip)
         play = name is not None if play is None else play
     return page_html(rig_glb(rig), name=rig.name or "model", rims=rim_edges(rig).reshape(-1), clip=name,
-                     play=bool(play), time=float(time))
+                     play=bool(play), time=float(time), skinning=skinning)

@@ -19,12 +19,19 @@ import html
 import json
 import posixpath
 import re
+from importlib import resources
 
 from ..errors import InvalidInputError
 from .assets import THREE_FILES, THREE_VERSION, VIEWER_MODULES, asset_text
 
-#: the page's skinning modes: "three" is three.js's matrix skinning (the one mode built so far)
-SKINNING_MODES = ("three",)
+#: the page's skinning modes: "cgaskin" blends the bones' versors with the generated GLSL ES chunk in
+#: the vertex shader (assets/viewer/cgaskin_skinning.js), "three" is three.js's matrix skinning
+SKINNING_MODES = ("cgaskin", "three")
+
+#: modules made of files of cgaskin.generated (built by ``cgaskin build``, never edited by hand): the
+#: kernels in JavaScript, and the WebGL2 skinning chunk as a module whose default export is its text
+GENERATED_MODULES = {"cgaskin/kernels.js": ("js", "cgaskin.mjs"),
+                     "cgaskin/skin_webgl.js": ("glsl", "cgaskin_skin_webgl.glsl")}
 
 #: import specifier -> the file under assets/ that it names
 def _module_files() -> dict:
@@ -34,7 +41,7 @@ def _module_files() -> dict:
             files["three" if mine == "three.module.js" else f"three/{mine}"] = f"three/{mine}"
     for name in VIEWER_MODULES:
         files[f"cgaskin/{name}"] = f"viewer/{name}"
-    return files
+    return files | dict.fromkeys(GENERATED_MODULES)
 
 
 MODULES = _module_files()
@@ -62,6 +69,8 @@ BOOTSTRAP = """\
 def module_text(name: str) -> str:
     """The text of the module imported as ``name``, its relative imports rewritten to bare names of
     ``MODULES`` (the only imports a blob: URL can resolve)."""
+    if name in GENERATED_MODULES:
+        return _generated_text(*GENERATED_MODULES[name])
     path = MODULES[name]
     text = asset_text(path)
     folder = posixpath.dirname(path)
@@ -75,6 +84,13 @@ def module_text(name: str) -> str:
         return f"{match.group(1)}{match.group(2)}{names[0]}{match.group(2)}"
 
     return _RELATIVE.sub(bare, text)
+
+
+def _generated_text(folder: str, file: str) -> str:
+    """A module of a file of ``cgaskin.generated.<folder>``: an ES module as it is, other text as the
+    default export of a module (a JSON string literal is a JavaScript one)."""
+    text = resources.files(f"cgaskin.generated.{folder}").joinpath(file).read_text(encoding="utf-8")
+    return text if file.endswith(".mjs") else f"export default {json.dumps(text)};\n"
 
 
 def _script_text(text: str) -> str:

@@ -39,7 +39,8 @@ class View:
         return f"<cgaskin View: {len(self.html) / 1e6:.1f} MB page; save(path) or display it in a notebook>"
 
 
-def show(rig, pose=None, clip=None, *, play=None, time: float = 0.0, height: int = 480) -> View:
+def show(rig, pose=None, clip=None, *, play=None, time: float = 0.0, height: int = 480,
+         skinning: str = "cgaskin") -> View:
     """The viewer for ``rig`` (a ``Rig`` or a model path): plays its clips (timeline, speed, loop),
     orbits, shows the skeleton with bone names, weights by joint, a live dilation of a joint, the
     open edges (cut rims, slits, holes), and saves PNGs.
@@ -50,7 +51,9 @@ def show(rig, pose=None, clip=None, *, play=None, time: float = 0.0, height: int
     play : start playing (default: yes for a clip, no for a pose)
     time : seconds into the clip to start at
     height : the notebook iframe's height in pixels
+    skinning : "cgaskin" (the bones' versors, cgaskin's generated GLSL ES in the vertex shader) or
+        "three" (three.js's matrix skinning) to start with; the page switches between them
     """
     if not isinstance(height, int) or height < 100:
         raise InvalidInputError(f"height {height!r}: give whole pixels >= 100")
-    return View(view_html(rig, clip=clip, pose=pose, play=play, time=time), height=height)
+    return View(view_html(rig, clip=clip, pose=pose, play=play, time=time, skinning=skinning), height=height)

@@ -1,7 +1,9 @@
 """`cgaskin view` and `cgaskin.show` in headless Chromium: the page opens from file:// with no request
 and no console error, frames the model, plays and scrubs clips, colours weights by joint, dilates a
 joint live, draws cut rims that follow the skinning, shows bone names on hover, and what it draws is
-`cgaskin.skin` (three.js's skinned positions against cgaskin's, 1e-4 of the diagonal).
+`cgaskin.skin` (three.js's skinned positions against cgaskin's, 1e-4 of the diagonal), in its default
+skinning too: cgaskin's versors and generated GLSL ES, read back from the GPU against three.js's matrix
+skinning read back the same way.
 
 One browser for every page (tests/clients/js/view_page.mjs); the screenshots go to a temporary folder
 (printed in the summary), or to $CGASKIN_VIEW_SCREENSHOTS when set (how docs/view/ was made)."""
@@ -88,11 +90,17 @@ def pages(threejs, fox, arm, tmp_path_factory):
             ["call", "showSkeleton", True], ["hoverBone", HEAD], ["call", "snapshot"],
             ["call", "showSkeleton", False], ["call", "setWeightJoint", None],
             ["call", "setDilation", HEAD, 1.8], ["pixels"], ["call", "positions"],
-            ["dom", "#dilation", 1, "input"], ["pixels"]]},
+            ["dom", "#dilation", 1, "input"], ["pixels"],
+            # 30-: cgaskin's shader against three.js's, read back from the GPU; the picture of each
+            ["call", "skinning"], ["call", "shaderPositions", "cgaskin"], ["call", "shaderPositions", "three"],
+            ["call", "setDilation", HEAD, 1.8], ["call", "shaderPositions", "cgaskin"],
+            ["call", "setSkinning", "three"], ["pixels"], ["dom", "#skinning", "cgaskin", "change"], ["pixels"],
+            ["call", "skinning"]]},
         {"name": "notebook", "url": notebook.as_uri(), "frame": True, "steps": [
             ["call", "clip"], ["call", "isPlaying"], ["call", "positions"], ["call", "rimCount"],
             ["call", "rimPositions"], ["call", "snapshot"],
-            ["call", "setClip", "wave"], ["call", "pause"], ["call", "setTime", 0.5], ["call", "positions"]]},
+            ["call", "setClip", "wave"], ["call", "pause"], ["call", "setTime", 0.5], ["call", "positions"],
+            ["call", "shaderPositions", "cgaskin"], ["call", "shaderPositions", "three"]]},
     ]
     (work / "jobs.json").write_text(json.dumps(jobs))
     run = subprocess.run([threejs["node"], str(threejs["js"] / "view_page.mjs"), str(work / "jobs.json"),
@@ -160,6 +168,33 @@ def test_dilation_is_the_algebras(pages, fox):
     expected = cgaskin.skin(rig, rig.pose("Walk", WALK_TIMES[1]).dilate(HEAD, 1.8))
     error = np.abs(_positions(r[27], rig.n_vertices) - expected).max() / np.linalg.norm(np.ptp(rig.vertices, axis=0))
     assert error < TOLERANCE, f"dilating {HEAD} by 1.8: the page differs from Pose.dilate by {error:.2e}"
+
+
+def test_cgaskin_shader_skins_as_threejs_and_cgaskin_do(pages, fox, arm):
+    """The page's default skinning is cgaskin's: the bones' versors composed by the generated JavaScript
+    kernels, blended by the generated GLSL ES in the vertex shader. Read back from the GPU (a float
+    render target), it equals three.js's matrix skinning read back the same way, and cgaskin.skin, to
+    1e-4 of the diagonal (float32 on the GPU), also with a dilated joint and on a cut rig; switching
+    the mode from the page's control leaves the picture as it was."""
+    _, rig = fox
+    r = pages["fox"]["results"]
+    diagonal = np.linalg.norm(np.ptp(rig.vertices, axis=0))
+    assert r[30] == "cgaskin" and r[39] == "cgaskin"
+    ours, theirs = _positions(r[31], rig.n_vertices), _positions(r[32], rig.n_vertices)
+    SUMMARY.append(f"cgaskin view: cgaskin's shader skinning against three.js's on the GPU (Fox, Walk): "
+                   f"{np.abs(ours - theirs).max() / diagonal:.1e} of the diagonal")
+    assert np.abs(ours - theirs).max() / diagonal < TOLERANCE
+    assert np.abs(ours - cgaskin.skin(rig, rig.pose("Walk", WALK_TIMES[1]))).max() / diagonal < TOLERANCE
+    dilated = cgaskin.skin(rig, rig.pose("Walk", WALK_TIMES[1]).dilate(HEAD, 1.8))
+    assert np.abs(_positions(r[34], rig.n_vertices) - dilated).max() / diagonal < TOLERANCE
+    assert np.abs(dilated - theirs).max() / diagonal > 10 * TOLERANCE       # (the dilation moved the head)
+    assert _changed(_image(r[36]), _image(r[38])) < 0.002
+    upper, _ = arm
+    n = pages["notebook"]["results"]
+    arm_diagonal = np.linalg.norm(np.ptp(upper.vertices, axis=0))
+    ours, theirs = _positions(n[10], upper.n_vertices), _positions(n[11], upper.n_vertices)
+    assert np.abs(ours - theirs).max() / arm_diagonal < TOLERANCE
+    assert np.abs(ours - cgaskin.skin(upper, upper.pose("wave", 0.5))).max() / arm_diagonal < TOLERANCE
 
 
 def test_show_in_a_notebook_iframe_shows_the_pose_and_the_rims(pages, arm):

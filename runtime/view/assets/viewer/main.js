@@ -8,7 +8,8 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { buildPanel, showDilation, showPlaying, showStatus, showTime } from 'cgaskin/ui.js';
-import { createSkinnedMaterial, createView, frame, resize } from 'cgaskin/scene.js';
+import { SKINNING_MODES, createSkinnedMaterial, createView, frame, resize } from 'cgaskin/scene.js';
+import { CgaskinSkinning, readSkinnedPositions } from 'cgaskin/cgaskin_skinning.js';
 import { Playback, dilatable } from 'cgaskin/playback.js';
 import { showWeights } from 'cgaskin/weights.js';
 import { SkeletonView, hoverNames } from 'cgaskin/skeleton.js';
@@ -51,8 +52,10 @@ async function start(container) {
     const meshes = [];
     root.traverse((object) => { if (object.isSkinnedMesh) meshes.push(object); });
     if (!meshes.length) throw new Error('the model has no skinned mesh');
+    let skinningMode = data.skinning;
     for (const mesh of meshes) {
-        mesh.material = createSkinnedMaterial(mesh.material, data.skinning);
+        mesh.userData.sourceMaterial = mesh.material;
+        mesh.material = createSkinnedMaterial(mesh.material, skinningMode, mesh);
         mesh.frustumCulled = false;       // three culls skinned meshes by their bind-pose bounds
     }
     const bones = [...new Set(meshes.flatMap((mesh) => mesh.skeleton.bones))];
@@ -72,6 +75,7 @@ async function start(container) {
         playback.advance(seconds);
         for (const bone of bones) bone.userData.dilation = dilations.get(bone.name) ?? 1;
         root.updateMatrixWorld(true);
+        for (const mesh of meshes) mesh.material.userData.cgaskinSkinning?.update();
         rims.update();
         showTime(panel, playback.time, playback.duration);
         showPlaying(panel, playback.playing);
@@ -92,7 +96,40 @@ async function start(container) {
         clips: gltf.animations.map((clip) => ({name: clip.name, duration: clip.duration})),
         bones: boneNames,
         vertices: meshes.reduce((sum, mesh) => sum + mesh.geometry.attributes.position.count, 0),
-        skinning: data.skinning,
+        skinningModes: SKINNING_MODES,
+        skinning() { return skinningMode; },
+        setSkinning(mode) {
+            if (!SKINNING_MODES.includes(mode))
+                throw new Error(`skinning ${JSON.stringify(mode)}: one of ${SKINNING_MODES.join(', ')}`);
+            skinningMode = mode;
+            for (const mesh of meshes) {
+                mesh.material.dispose();
+                mesh.material = createSkinnedMaterial(mesh.userData.sourceMaterial, mode, mesh);
+            }
+            showWeights(meshes, panel.weightJoint.value || null);     // (on the new materials)
+            panel.skinning.value = mode;
+            redraw();
+            return mode;
+        },
+        // What the vertex shader of a skinning mode computes for every vertex in the pose shown, read
+        // back from the GPU: base64 of (n, 3) float64 (float32 values), world space, meshes in file order.
+        shaderPositions(mode) {
+            root.updateMatrixWorld(true);
+            const parts = meshes.map((mesh) => {
+                const skinning = mode === 'cgaskin' ? (mesh.material.userData.cgaskinSkinning || new CgaskinSkinning(mesh)) : null;
+                const local = readSkinnedPositions(view.renderer, mesh, mode, skinning);
+                const out = new Float64Array(local.length), p = new THREE.Vector3();
+                for (let i = 0; i < local.length; i += 3) {
+                    p.set(local[i], local[i + 1], local[i + 2]).applyMatrix4(mesh.matrixWorld);
+                    out[i] = p.x; out[i + 1] = p.y; out[i + 2] = p.z;
+                }
+                return out;
+            });
+            const all = new Float64Array(parts.reduce((sum, part) => sum + part.length, 0));
+            let at = 0;
+            for (const part of parts) { all.set(part, at); at += part.length; }
+            return base64(all);
+        },
         setClip(name) { playback.setClip(name); panel.clip.value = name; redraw(); return name; },
         clip() { return playback.clip ? playback.clip.name : null; },
         play() { playback.playing = Boolean(playback.clip); redraw(); },
@@ -133,7 +170,7 @@ async function start(container) {
         frame() { frameModel(); redraw(); },
     };
 
-    const panel = buildPanel(container, api.clips, boneNames, rims.count, {
+    const panel = buildPanel(container, api.clips, boneNames, rims.count, SKINNING_MODES, skinningMode, {
         clip: (name) => api.setClip(name),
         play: () => (playback.playing ? api.pause() : api.play()),
         time: (seconds) => api.setTime(seconds),
@@ -144,6 +181,7 @@ async function start(container) {
         dilateJoint: (name) => { dilateJoint = name; showDilation(panel, name, dilations.get(name) || 1); },
         dilation: (factor) => api.setDilation(dilateJoint, factor),
         rims: (on) => api.showRims(on),
+        skinning: (mode) => api.setSkinning(mode),
         savePng: () => {
             const link = document.createElement('a');
             link.download = `${data.name || 'cgaskin'}.png`;
@@ -176,7 +214,7 @@ async function start(container) {
     const clock = new THREE.Clock();
     view.renderer.setAnimationLoop(() => { pose(clock.getDelta()); render(); });
     showStatus(panel, `${data.name}: ${api.vertices} vertices, ${boneNames.length} joints, ` +
-                      `${api.clips.length} clips; skinning: ${data.skinning}`);
+                      `${api.clips.length} clips; skinning: ${skinningMode}`);
     return api;
 }
 

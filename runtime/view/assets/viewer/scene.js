@@ -1,6 +1,7 @@
 // Renderer, camera, lights, orbit controls, framing, and the skinned meshes' material.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { useCgaskinSkinning } from 'cgaskin/cgaskin_skinning.js';
 
 export const BACKGROUND = 0x1d2026;
 
@@ -50,13 +51,13 @@ export function frame(view, box) {
     view.sun.position.copy(center).add(new THREE.Vector3(radius, 2 * radius, 1.5 * radius));
 }
 
-// The skinning modes the page knows. "three" is three.js's own matrix skinning; another mode (cgaskin's
-// generated GLSL ES skinning) plugs in here by adding its name and, in createSkinnedMaterial, an
-// onBeforeCompile that replaces three's skinning chunks.
-export const SKINNING_MODES = ['three'];
+// The skinning modes the page knows: "cgaskin", the bones' versors blended by cgaskin's generated
+// GLSL ES in the vertex shader (cgaskin_skinning.js), and "three", three.js's own matrix skinning.
+export const SKINNING_MODES = ['cgaskin', 'three'];
 
-// The one place where a skinned mesh's material is made (the seam for another skinning mode).
-export function createSkinnedMaterial(source, mode) {
+// The one place where a skinned mesh's material is made. In the "cgaskin" mode the material's
+// userData.cgaskinSkinning holds the bones' texture, to update after every pose.
+export function createSkinnedMaterial(source, mode, mesh) {
     if (!SKINNING_MODES.includes(mode))
         throw new Error(`skinning mode ${JSON.stringify(mode)} is not one of ${SKINNING_MODES.join(', ')}`);
     const material = new THREE.MeshStandardMaterial({
@@ -71,5 +72,6 @@ export function createSkinnedMaterial(source, mode) {
         polygonOffsetUnits: 1,
     });
     material.userData.skinning = mode;
+    if (mode === 'cgaskin') material.userData.cgaskinSkinning = useCgaskinSkinning(material, mesh);
     return material;
 }

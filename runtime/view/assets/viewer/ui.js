@@ -23,8 +23,9 @@ function options(select, names, withNone) {
 }
 
 // clips: [{name, duration}], bones: [names]; handlers: {clip, play, time, speed, loop, skeleton,
-// weightJoint, dilateJoint, dilation, rims, savePng}. Returns the controls by id.
-export function buildPanel(root, clips, bones, rimCount, handlers) {
+// weightJoint, dilateJoint, dilation, rims, skinning, savePng}; skinningModes: the modes, the first
+// one shown `skinning`. Returns the controls by id.
+export function buildPanel(root, clips, bones, rimCount, skinningModes, skinning, handlers) {
     const c = {
         clip: element('select', {id: 'clip', title: 'clip to play'}),
         play: element('button', {id: 'play', type: 'button', text: 'pause'}),
@@ -39,6 +40,8 @@ export function buildPanel(root, clips, bones, rimCount, handlers) {
         dilation: element('input', {id: 'dilation', type: 'range', min: '0.2', max: '3', step: '0.01', value: '1'}),
         dilationLabel: element('span', {id: 'dilation-label', class: 'value', text: '×1.00'}),
         rims: element('input', {id: 'rims', type: 'checkbox'}),
+        skinning: element('select', {id: 'skinning', title: 'who skins the mesh: cgaskin (the bones\' versors, '
+                                     + 'generated GLSL ES) or three.js (bone matrices)'}),
         savePng: element('button', {id: 'save-png', type: 'button', text: 'save PNG'}),
         status: element('div', {id: 'status'}),
         boneLabel: element('div', {id: 'bone-label', class: 'bone-label'}),
@@ -49,6 +52,8 @@ export function buildPanel(root, clips, bones, rimCount, handlers) {
     c.speed.value = '1';
     options(c.weightJoint, bones, '(off)');
     options(c.dilateJoint, bones, null);
+    options(c.skinning, skinningModes, null);
+    c.skinning.value = skinning;
     if (rimCount) c.rims.checked = true;
     else c.rims.disabled = true;
     // (a rim is a boundary edge of the welded mesh: a cut's open side, a slit, a hole)
@@ -62,6 +67,7 @@ export function buildPanel(root, clips, bones, rimCount, handlers) {
         row('weights', c.weightJoint),
         row('dilate', c.dilateJoint, c.dilation, c.dilationLabel),
         row('rims', element('label', {}, [c.rims, element('span', {text: ' ' + rimText})])),
+        row('skinning', c.skinning),
         row('', c.savePng),
         c.status,
     ]));
@@ -77,6 +83,7 @@ export function buildPanel(root, clips, bones, rimCount, handlers) {
     c.dilateJoint.addEventListener('change', () => handlers.dilateJoint(c.dilateJoint.value));
     c.dilation.addEventListener('input', () => handlers.dilation(Number(c.dilation.value)));
     c.rims.addEventListener('change', () => handlers.rims(c.rims.checked));
+    c.skinning.addEventListener('change', () => handlers.skinning(c.skinning.value));
     c.savePng.addEventListener('click', () => handlers.savePng());
     return c;
 }
