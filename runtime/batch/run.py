@@ -169,14 +169,15 @@ def _compute(client, todo, out: Path, computed: dict, flush, flush_seconds: floa
                for item in todo}
     start = last = time.monotonic()
     try:
-        for future in as_completed(futures):
+        # (results come with the completions, in batches: no round trip to the scheduler per item)
+        for future, result in as_completed(futures, with_results=True, raise_errors=False):
             item = futures[future]
             if future.status == "error":          # the task itself failed (a worker died under it)
-                exc = future.exception()
+                exc = result[1] if isinstance(result, tuple) else result
                 computed[item.id] = Row(item.id, item.model, item.pose_label, item.operation, "{}", (), (), (),
                                         0.0, (), f"{type(exc).__name__}: {exc}".splitlines()[0])
             else:
-                computed[item.id] = future.result()
+                computed[item.id] = result
             future.release()
             if time.monotonic() - last >= flush_seconds or len(computed) == 1:
                 flush()
