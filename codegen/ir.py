@@ -13,7 +13,7 @@ order) and flat output expressions. Printers (numba now; cuda/C later) only read
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import sympy
 from sympy import QQ, Symbol
@@ -50,6 +50,19 @@ class Kernel:
         parts += [f"{s} = {sympy.srepr(e)}" for s, e in self.lets]
         parts += [sympy.srepr(e) for e in self.outputs]
         return "\n".join(parts)
+
+
+def renamed(kernel: Kernel, legal) -> Kernel:
+    """``kernel`` with every input, input symbol and let named ``legal(name)`` (a printer's legal,
+    unreserved identifier for it; the name itself when it is one): the same object when none changes."""
+    symbols = [s for i in kernel.inputs for s in i.symbols] + [s for s, _ in kernel.lets]
+    renames = {s: Symbol(legal(s.name), real=True) for s in symbols if legal(s.name) != s.name}
+    inputs = tuple(replace(i, name=legal(i.name), symbols=tuple(renames.get(s, s) for s in i.symbols))
+                   for i in kernel.inputs)
+    if not renames and all(i.name == j.name for i, j in zip(inputs, kernel.inputs)):
+        return kernel
+    return replace(kernel, inputs=inputs, lets=tuple((renames.get(s, s), e.xreplace(renames)) for s, e in kernel.lets),
+                   outputs=tuple(e.xreplace(renames) for e in kernel.outputs))
 
 
 class KernelBuilder:

@@ -23,13 +23,12 @@ where an input comes from.
 """
 from __future__ import annotations
 
-import dataclasses
 import re
 
 import sympy
 
 from ..expressions import Dialect, kernel_body
-from ..ir import CodegenError, Kernel
+from ..ir import CodegenError, Kernel, renamed
 from .glsl_math import DOUBLE_FUNCTIONS, FLOAT_FUNCTIONS, library
 
 #: GLSL keywords, reserved words and the built-in functions a kernel's local names must not shadow
@@ -60,15 +59,7 @@ def _glsl_name(name: str) -> str:
 def glsl_kernel(kernel: Kernel) -> Kernel:
     """``kernel`` with every input, input symbol and let renamed to a legal GLSL identifier (the
     built-in and README catalogues need none; a user's ``sample`` or ``input`` would)."""
-    symbols = [s for i in kernel.inputs for s in i.symbols] + [s for s, _ in kernel.lets]
-    renames = {s: sympy.Symbol(_glsl_name(s.name), real=True) for s in symbols if _glsl_name(s.name) != s.name}
-    inputs = tuple(dataclasses.replace(i, name=_glsl_name(i.name),
-                                       symbols=tuple(renames.get(s, s) for s in i.symbols)) for i in kernel.inputs)
-    if not renames and all(i.name == j.name for i, j in zip(inputs, kernel.inputs)):
-        return kernel
-    return dataclasses.replace(kernel, inputs=inputs,
-                               lets=tuple((renames.get(s, s), e.xreplace(renames)) for s, e in kernel.lets),
-                               outputs=tuple(e.xreplace(renames) for e in kernel.outputs))
+    return renamed(kernel, _glsl_name)
 
 
 def dialect(prefix: str, double: bool) -> Dialect:

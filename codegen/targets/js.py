@@ -19,14 +19,13 @@ NaN (no built-in kernel uses them).
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 
 import sympy
 
 from ..expressions import Dialect, kernel_body
-from ..ir import Kernel
+from ..ir import Kernel, renamed
 
 #: JavaScript's reserved words (ES2023, strict mode), globals a name must not shadow, and ``out``
 RESERVED = frozenset("""
@@ -71,20 +70,9 @@ def _js_name(name: str) -> str:
     return safe
 
 
-def js_kernel(kernel: Kernel) -> Kernel:
-    """``kernel`` with every input, input symbol and let renamed to a legal JavaScript identifier."""
-    symbols = [s for i in kernel.inputs for s in i.symbols] + [s for s, _ in kernel.lets]
-    renames = {s: sympy.Symbol(_js_name(s.name), real=True) for s in symbols if _js_name(s.name) != s.name}
-    inputs = tuple(dataclasses.replace(i, name=_js_name(i.name), symbols=tuple(renames.get(s, s) for s in i.symbols))
-                   for i in kernel.inputs)
-    return dataclasses.replace(kernel, inputs=inputs,
-                               lets=tuple((renames.get(s, s), e.xreplace(renames)) for s, e in kernel.lets),
-                               outputs=tuple(e.xreplace(renames) for e in kernel.outputs))
-
-
 def kernel_function(kernel: Kernel, prefix: str, uniform=()) -> str:
     """``export function <prefix>_<name>(inputs..., out = new Float64Array(N))`` with the kernel's body."""
-    kernel = js_kernel(kernel)
+    kernel = renamed(kernel, _js_name)
     n_out = len(kernel.outputs)
     lines = ["/**"] + [f" * {line}" if line else " *" for line in kernel.doc.strip().splitlines()]
     for i in kernel.inputs:

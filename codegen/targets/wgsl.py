@@ -32,12 +32,12 @@ The skinning file is self-contained (WGSL has no #include): it repeats the two k
 """
 from __future__ import annotations
 
-from dataclasses import replace
 
 import numpy as np
 import sympy
 
 from ..expressions import Dialect, kernel_body
+from ..ir import renamed
 from .wgsl_names import safe_name
 from .wgsl_skin import skin_shader
 
@@ -139,18 +139,7 @@ fn {prefix}_nan() -> f32 {{
 
 def safe_kernel(kernel):
     """``kernel`` with every input and symbol name that WGSL would not accept renamed."""
-    renames = {}
-    for inp in kernel.inputs:
-        renames.update({s: sympy.Symbol(safe_name(s.name), real=True) for s in inp.symbols})
-    renames.update({s: sympy.Symbol(safe_name(s.name), real=True) for s, _ in kernel.lets})
-    renames = {old: new for old, new in renames.items() if old.name != new.name}
-    inputs = tuple(replace(i, name=safe_name(i.name), symbols=tuple(renames.get(s, s) for s in i.symbols))
-                   for i in kernel.inputs)
-    if not renames:
-        return replace(kernel, inputs=inputs)
-    return replace(kernel, inputs=inputs,
-                   lets=tuple((renames.get(s, s), e.xreplace(renames)) for s, e in kernel.lets),
-                   outputs=tuple(e.xreplace(renames) for e in kernel.outputs))
+    return renamed(kernel, safe_name)
 
 
 def param_type(inp, real: str = "f32") -> str:
