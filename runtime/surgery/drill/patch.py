@@ -131,6 +131,15 @@ class Patch:
         self.n_points += 1
         return self.n_points - 1
 
+    def add_points(self, positions) -> int:
+        """New points at ``positions`` (k, 3); the id of the first (the others follow)."""
+        k = len(positions)
+        while self.n_points + k > len(self._points):
+            self._points = np.concatenate([self._points, np.empty_like(self._points)])
+        self._points[self.n_points:self.n_points + k] = positions
+        self.n_points += k
+        return self.n_points - k
+
     def face_points(self) -> np.ndarray:
         rp = np.asarray(self.row_point, np.int64)
         return rp[np.asarray(self.faces, np.int64).reshape(-1, 3)]

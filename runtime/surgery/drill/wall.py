@@ -68,14 +68,17 @@ class Frame:
 
     def point(self, theta: float, sigma: float) -> np.ndarray:
         """The surface point (3,) at (θ, σ)."""
-        around = math.cos(theta) * self.e1 + math.sin(theta) * self.e2
-        if sigma > self.length:
-            phi = min((sigma - self.length) / self.r, 0.5 * math.pi)
-            return self.end + self.r * (math.sin(phi) * self.u + math.cos(phi) * around)
-        if sigma < 0.0:
-            phi = min(-sigma / self.r, 0.5 * math.pi)
-            return self.start + self.r * (-math.sin(phi) * self.u + math.cos(phi) * around)
-        return self.start + sigma * self.u + self.r * around
+        return self.points(np.array([theta]), np.array([sigma]))[0]
+
+    def points(self, theta, sigma) -> np.ndarray:
+        """The surface points (k, 3) at angles θ (k,) and heights σ (k,): on the cylinder, or on a round
+        end beyond it (the angle φ up the end's quarter circle from the rim)."""
+        around = np.cos(theta)[:, None] * self.e1 + np.sin(theta)[:, None] * self.e2
+        phi = np.where(sigma > self.length, np.minimum((sigma - self.length) / self.r, 0.5 * math.pi),
+                       np.where(sigma < 0.0, -np.minimum(-sigma / self.r, 0.5 * math.pi), 0.0))
+        base = np.where((sigma > self.length)[:, None], self.end,
+                        np.where((sigma < 0.0)[:, None], self.start, self.start + np.clip(sigma, 0.0, None)[:, None] * self.u))
+        return base + self.r * (np.sin(phi)[:, None] * self.u + np.cos(phi)[:, None] * around)
 
     def axis_point(self, sigma: float) -> np.ndarray:
         """The point of the axis at the height of σ (inside the bit)."""
@@ -109,9 +112,10 @@ class Loop:
         t, s = self.theta[order], self.sigma[order]
         return np.interp(theta, np.concatenate([t - 2 * math.pi, t, t + 2 * math.pi]), np.tile(s, 3))
 
-    def nearest_row(self, theta: float) -> int:
-        gap = np.abs((self.theta - theta + math.pi) % (2 * math.pi) - math.pi)
-        return self.rows[int(np.argmin(gap))]
+    def nearest_rows(self, theta) -> np.ndarray:
+        """The loop's rows (k,) nearest in angle to each of θ (k,)."""
+        gap = np.abs((self.theta[None, :] - theta[:, None] + math.pi) % (2 * math.pi) - math.pi)
+        return np.asarray(self.rows)[np.argmin(gap, axis=1)]
 
 
 def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
@@ -159,13 +163,14 @@ def _rim_loops(patch: Patch, rim: list, frame: Frame) -> list:
     return out
 
 
-def _wall_row(patch: Patch, frame: Frame, theta: float, sigma: float, a: Loop, b: Loop | None,
-              weight: float) -> int:
-    """A new wall row at (θ, σ) between loop a and loop b (or the tip: None), its weights and attributes
-    blended from their rim rows nearest in angle (``weight``: b's share)."""
-    ra = a.nearest_row(theta)
-    rb = ra if b is None else b.nearest_row(theta)
-    return _surface_row(patch, frame.point(theta, sigma), ra, rb, 0.0 if b is None else weight)
+def _wall_rows(patch: Patch, frame: Frame, theta, sigma, a: Loop, b: Loop | None, weight: float) -> list:
+    """New wall rows at (θ, σ) (k,) between loop a and loop b (or the tip: None), their weights and
+    attributes blended from their rim rows nearest in angle (``weight``: b's share)."""
+    ra = a.nearest_rows(theta)
+    rb = ra if b is None else b.nearest_rows(theta)
+    first = patch.add_points(frame.points(theta, sigma))
+    t = 0.0 if b is None else weight
+    return [patch.new_row(first + i, x, y, t) for i, (x, y) in enumerate(zip(ra.tolist(), rb.tolist()))]
 
 
 def _pole_row(patch: Patch, frame: Frame, sigma: float, loop: Loop) -> int:
@@ -203,8 +208,7 @@ def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) ->
     rings = [_loop_ring(patch, a)]
     for k in range(1, rings_between):
         w = k / rings_between
-        rings.append(([_wall_row(patch, frame, float(t), float((1 - w) * lo + w * hi), a, b, w)
-                       for t, lo, hi in zip(columns, low, high)], columns))
+        rings.append((_wall_rows(patch, frame, columns, (1 - w) * low + w * high, a, b, w), columns))
     if b is not None:
         rings.append(_loop_ring(patch, b))
     for lower, upper in zip(rings[:-1], rings[1:]):
