@@ -14,7 +14,7 @@ LAYERS = [("cgaskin.errors", "cgaskin.tolerances", "cgaskin._shared", "cgaskin.g
           ("cgaskin.algebra",),
           ("cgaskin.animation",),
           ("cgaskin.rigs", "cgaskin.surgery"),
-          ("cgaskin.app", "cgaskin.batch", "cgaskin.view", "cgaskin.codegen"),
+          ("cgaskin.app", "cgaskin.batch", "cgaskin.view", "cgaskin.serve", "cgaskin.codegen"),
           ("cgaskin", "cgaskin.__main__")]
 MAX_LINES = 420
 

@@ -323,6 +323,15 @@ def _view(args) -> int:
     return 0
 
 
+def _serve(args) -> int:
+    from ..rigs import load
+    from ..serve import Server
+    rig = load(args.model)
+    server = Server(rig, host=args.host, port=args.port, clip=clip_of(rig, args))
+    server.run(announce=lambda url: print(f"cgaskin serve: {url} (Ctrl-C stops it)", flush=True))
+    return 0
+
+
 def register(sub) -> None:
     """Add the model subcommands to the argparse subparsers ``sub``."""
     p = sub.add_parser("demo", help="deform the built-in capsule arm; write pictures and a .glb (no files needed)")
@@ -387,6 +396,15 @@ def register(sub) -> None:
                         "(default) or three.js's bone matrices")
     p.add_argument("--out", required=True, metavar="PAGE.html")
     p.set_defaults(run=_view, check_options=_check_view)
+
+    p = sub.add_parser("serve", help="a local page where you tear (drag), cut and drill (click) the playing model; "
+                                     "Python does the surgery, one session per tab")
+    p.add_argument("model", metavar="MODEL", help="any model cgaskin.load reads (.glb, .gltf, .fbx, ...)")
+    p.add_argument("--port", type=int, default=8765, help="port (default 8765; 0: any free port)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1: this machine only; another only when given)")
+    p.add_argument("--clip", default=None, help="clip name or index to play (default: the first)")
+    p.set_defaults(run=_serve)
 
     from . import batch_command                       # cgaskin batch (a dataset on Dask)
     batch_command.register(sub)

@@ -31,7 +31,8 @@ THREE_FILES = {
 }
 
 #: the viewer's own modules (under assets/viewer/), in the order the import map lists them
-VIEWER_MODULES = ("ui.js", "cgaskin_skinning.js", "scene.js", "playback.js", "weights.js", "skeleton.js", "rims.js", "main.js")
+VIEWER_MODULES = ("ui.js", "cgaskin_skinning.js", "scene.js", "playback.js", "weights.js", "skeleton.js", "rims.js",
+                  "mesh_delta.js", "surgery.js", "main.js")
 
 
 def asset_text(relative: str) -> str:

@@ -105,7 +105,7 @@ def _json_text(value) -> str:
 
 
 def page_html(glb: bytes, *, name: str, rims, clip: str | None, play: bool = True, time: float = 0.0,
-              skinning: str = "three") -> str:
+              skinning: str = "three", serve: bool = False) -> str:
     """The page's HTML.
 
     glb : the model, a binary glTF (what ``cgaskin.save`` writes)
@@ -114,11 +114,13 @@ def page_html(glb: bytes, *, name: str, rims, clip: str | None, play: bool = Tru
     clip : the clip to show first (None: the rest pose)
     play : start playing it; time : where in it to start (seconds)
     skinning : one of ``SKINNING_MODES``
+    serve : the page of ``cgaskin serve`` (the surgery panel, talking to the server that sent it over
+        a WebSocket at its own address); False: the offline viewer
     """
     if skinning not in SKINNING_MODES:
         raise InvalidInputError(f"skinning {skinning!r}: the page knows {', '.join(SKINNING_MODES)}")
     data = {"name": name, "clip": clip, "play": bool(play), "time": float(time), "skinning": skinning,
-            "rims": [int(v) for v in rims], "three": THREE_VERSION}
+            "rims": [int(v) for v in rims], "three": THREE_VERSION, "serve": bool(serve)}
     blocks = [f'<script type="text/plain" data-module="{html.escape(module)}">\n{_script_text(module_text(module))}\n</script>'
               for module in MODULES]
     return "\n".join([
@@ -126,7 +128,7 @@ def page_html(glb: bytes, *, name: str, rims, clip: str | None, play: bool = Tru
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
         '<link rel="icon" href="data:,">',   # (no favicon request: the page makes none at all)
-        f"<title>{html.escape(name)}: cgaskin view</title>",
+        f"<title>{html.escape(name)}: cgaskin {'serve' if serve else 'view'}</title>",
         f"<style>\n{asset_text('viewer/viewer.css')}</style>",
         "</head><body>",
         '<div id="cgaskin-view"><canvas></canvas></div>',

@@ -14,6 +14,7 @@ import { Playback, dilatable } from 'cgaskin/playback.js';
 import { showWeights } from 'cgaskin/weights.js';
 import { SkeletonView, hoverNames } from 'cgaskin/skeleton.js';
 import { Rims } from 'cgaskin/rims.js';
+import { startSurgery } from 'cgaskin/surgery.js';
 
 function embedded() {
     const data = JSON.parse(document.getElementById('cgaskin-data').textContent);
@@ -31,13 +32,16 @@ function base64(array) {
     return btoa(text);
 }
 
+// The mesh's vertex count (cgaskin serve's buffers hold spare rows past it: mesh_delta.js).
+const vertexCount = (mesh) => mesh.geometry.userData.vertexCount ?? mesh.geometry.attributes.position.count;
+
 // World-space skinned positions of every vertex, meshes in file order: (n, 3) float64.
 function skinnedPositions(meshes) {
-    const n = meshes.reduce((sum, mesh) => sum + mesh.geometry.attributes.position.count, 0);
+    const n = meshes.reduce((sum, mesh) => sum + vertexCount(mesh), 0);
     const out = new Float64Array(n * 3), p = new THREE.Vector3();
     let k = 0;
     for (const mesh of meshes) {
-        for (let i = 0; i < mesh.geometry.attributes.position.count; i++) {
+        for (let i = 0; i < vertexCount(mesh); i++) {
             mesh.getVertexPosition(i, p).applyMatrix4(mesh.matrixWorld);
             out[k++] = p.x; out[k++] = p.y; out[k++] = p.z;
         }
@@ -213,6 +217,9 @@ async function start(container) {
     redraw();
     const clock = new THREE.Clock();
     view.renderer.setAnimationLoop(() => { pose(clock.getDelta()); render(); });
+    // cgaskin serve: the surgery panel, the pointer's scalpel and the session's WebSocket
+    if (data.serve) Object.assign(api, await startSurgery({container, canvas, view, meshes, playback, rims, panel,
+                                                           dilations, redraw}));
     showStatus(panel, `${data.name}: ${api.vertices} vertices, ${boneNames.length} joints, ` +
                       `${api.clips.length} clips; skinning: ${skinningMode}`);
     return api;

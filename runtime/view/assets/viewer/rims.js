@@ -14,20 +14,30 @@ export class Rims {
             this.offsets.push(offset);
             offset += mesh.geometry.attributes.position.count;
         }
-        for (const v of edges)
-            if (!(v >= 0 && v < offset)) throw new Error(`rim vertex ${v} outside the ${offset} vertices`);
-        this.edges = Int32Array.from(edges);
-        const geometry = new THREE.BufferGeometry();
-        geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(this.edges.length * 3), 3));
-        this.lines = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({color: 0xff2bd6}));
+        this.lines = new THREE.LineSegments(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({color: 0xff2bd6}));
         this.lines.frustumCulled = false;   // (its bounds change every frame)
-        this.lines.visible = this.edges.length > 0;
+        this.on = true;                     // (shown whenever there are some, unless turned off)
+        this.setEdges(edges);
         scene.add(this.lines);
+    }
+
+    // Show these edges (flat vertex pairs) instead: cgaskin serve's page after each operation.
+    setEdges(edges) {
+        const vertices = this.meshes.reduce((sum, mesh) => sum + (mesh.geometry.userData.vertexCount ??
+                                                                    mesh.geometry.attributes.position.count), 0);
+        for (const v of edges)
+            if (!(v >= 0 && v < vertices)) throw new Error(`rim vertex ${v} outside the ${vertices} vertices`);
+        this.edges = Int32Array.from(edges);
+        this.lines.geometry.dispose();
+        this.lines.geometry = new THREE.BufferGeometry();
+        this.lines.geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(this.edges.length * 3), 3));
+        this.visible = this.on;
+        this.update();
     }
 
     get count() { return this.edges.length / 2; }
     get visible() { return this.lines.visible; }
-    set visible(on) { this.lines.visible = Boolean(on) && this.count > 0; }
+    set visible(on) { this.on = Boolean(on); this.lines.visible = this.on && this.count > 0; }
 
     _locate(v) {   // (mesh, local index) of a rig vertex
         let m = this.offsets.length - 1;

@@ -2,7 +2,7 @@
 // handlers passed to buildPanel; main.js also drives the same state from window.cgaskinView (tests,
 // notebooks), and writes it back here with the set* functions so the panel always tells the truth.
 
-function element(tag, attributes = {}, children = []) {
+export function element(tag, attributes = {}, children = []) {
     const node = document.createElement(tag);
     for (const [key, value] of Object.entries(attributes)) {
         if (key === 'text') node.textContent = value;
@@ -12,7 +12,7 @@ function element(tag, attributes = {}, children = []) {
     return node;
 }
 
-function row(label, ...controls) {
+export function row(label, ...controls) {
     return element('div', {class: 'row'}, [element('span', {class: 'label', text: label}), ...controls]);
 }
 

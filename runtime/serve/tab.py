@@ -1,0 +1,108 @@
+"""One page's session in ``cgaskin serve``: its own ``Surgery`` on the model, what the page holds of
+it (``delta.Mirror``), and the answer to each of its messages.
+
+Every tab (every WebSocket connection) gets a ``Tab`` of its own, so tabs never see each other's
+edits. ``handle`` never raises: a message that is not a valid request, or an operation that fails
+(a scalpel that misses, a path the tear cannot follow, nothing to undo), gets an error reply and
+leaves the session as it was (``Surgery``'s operations change nothing when they raise).
+"""
+from __future__ import annotations
+
+import base64
+import re
+import sys
+import time
+import traceback
+
+from ..errors import CgaskinError
+from ..surgery.session import Surgery
+from ..view.model import rig_glb
+from . import protocol
+from .delta import Mirror, full_delta
+from .protocol import Cut, Drill, Hello, ProtocolError, Save, Tear, Undo
+
+
+def _three_name(name: str) -> str:
+    """A node name as three.js's PropertyBinding.sanitizeNodeName makes it (how the page names bones)."""
+    return re.sub(r"[\[\]\.:/]", "", re.sub(r"\s", "_", name))
+
+
+class Tab:
+    """The session of one page on ``rig`` (a ``cgaskin.Rig``, never modified)."""
+
+    def __init__(self, rig):
+        self.model = rig
+        self.surgery = Surgery(rig)
+        self.mirror = Mirror(rig)
+        self._joints = {name: name for name in rig.skeleton.names}
+        for name in rig.skeleton.names:
+            self._joints.setdefault(_three_name(name), name)
+        self._mesh_bytes = None
+
+    # ---- messages in, replies out ---------------------------------------------------------------------
+    def handle(self, text) -> str:
+        """The reply (JSON text) to one message."""
+        id = None
+        try:
+            request = protocol.parse(text)
+            id = request.id
+            return self._run(request)
+        except ProtocolError as exc:
+            return protocol.error_reply(exc.id if id is None else id, str(exc), "ProtocolError")
+        except CgaskinError as exc:
+            return protocol.error_reply(id, str(exc), type(exc).__name__)
+        except Exception as exc:            # (a bug: reported to the page and on stderr; the server goes on)
+            traceback.print_exc(file=sys.stderr)
+            return protocol.error_reply(id, f"internal error: {type(exc).__name__}: {exc}", "InternalError")
+
+    def _run(self, request) -> str:
+        if isinstance(request, Hello):
+            return protocol.reply(request.id, **self.summary())
+        if isinstance(request, Save):
+            glb = rig_glb(self.surgery.rig)
+            name = f"{self.model.name or 'model'}-edited.glb"
+            return protocol.reply(request.id, name=name, bytes=len(glb), glb=base64.b64encode(glb).decode("ascii"))
+        start = time.perf_counter()
+        if isinstance(request, Tear):
+            self.surgery.tear(request.scalpel_from, request.scalpel_to, pose=self.pose(request.pose),
+                              opening=request.opening)
+        elif isinstance(request, Cut):
+            self.surgery.cut(request.normal, request.point, pose=self.pose(request.pose), cap=request.cap)
+        elif isinstance(request, Drill):
+            self.surgery.drill(request.start, request.end, request.radius, pose=self.pose(request.pose),
+                               wall=request.wall)
+        elif isinstance(request, Undo):
+            self.surgery.undo()
+        else:                                # (parse returns only the types above)
+            raise TypeError(f"no handler for {type(request).__name__}")
+        seconds = time.perf_counter() - start
+        delta = self.mirror.update(self.surgery.rig)
+        return protocol.reply(request.id, delta=delta, seconds=round(seconds, 6),
+                              operations=self.surgery.n_operations)
+
+    # ---- helpers ------------------------------------------------------------------------------------
+    def pose(self, spec):
+        """The ``Pose`` a ``PoseSpec`` names (None: the stored mesh, when it names no clip and no dilation)."""
+        if spec.clip is None and not spec.dilations:
+            return None
+        rig = self.model
+        pose = rig.rest_pose() if spec.clip is None else rig.pose(spec.clip, spec.time)
+        for joint, factor in spec.dilations:
+            if joint not in self._joints:
+                raise ProtocolError(f"dilations: the model has no joint {joint!r}")
+            pose = pose.dilate(self._joints[joint], factor)
+        return pose
+
+    def mesh_bytes(self) -> int:
+        """The size of the whole original mesh as one delta message: what a delta is compared with."""
+        if self._mesh_bytes is None:
+            self._mesh_bytes = len(protocol.reply(0, delta=full_delta(self.model), seconds=0.0, operations=0))
+        return self._mesh_bytes
+
+    def summary(self) -> dict:
+        rig = self.surgery.rig
+        return {"model": self.model.name or "model", "n_vertices": rig.n_vertices, "n_faces": rig.n_faces,
+                "clips": [{"name": c.name, "duration": c.duration} for c in rig.clips],
+                "joints": list(rig.skeleton.names), "operations": self.surgery.n_operations,
+                "mesh_bytes": self.mesh_bytes(), "max_message": protocol.MAX_MESSAGE}
+
