@@ -56,7 +56,7 @@ def server(fox):
 
 STEPS = [
     [0, "call", "counts"], [0, "call", "setTool", "tear"],
-    [0, "drag", HIP, NECK, 12, 40],                                          # 2: across the playing body
+    [0, "drag", HIP, NECK, 12, 40, 10],                                      # 2: across the playing body
     [0, "call", "counts"], [0, "call", "serveStats"], [0, "call", "pause"], [0, "call", "getTime"],
     [0, "call", "positions"], [0, "call", "saveGlb"], [0, "call", "snapshot"],
     [1, "call", "counts"], [1, "call", "undo"], [1, "call", "serveStats"],   # 10: a second tab
@@ -80,11 +80,35 @@ def page(threejs, server, tmp_path_factory):
     record = json.loads((work / "out.json").read_text())
     shots = Path(os.environ.get("CGASKIN_VIEW_SCREENSHOTS") or work)
     shots.mkdir(parents=True, exist_ok=True)
-    snapshot = record["results"][9] if len(record["results"]) > 9 else None
-    if isinstance(snapshot, str) and snapshot.startswith("data:image/png;base64,"):
-        (shots / "serve_fox_tear.png").write_bytes(base64.b64decode(snapshot.split(",", 1)[1]))
+    drag = record["results"][2] if len(record["results"]) > 2 else None
+    if isinstance(drag, dict) and drag["frames"]:
+        _animation([_png(frame) for frame in drag["frames"]], shots / "serve_fox_tear.gif")
     SUMMARY.append(f"cgaskin serve: two tabs driven in one Chromium in {time.perf_counter() - start:.1f} s")
     return record
+
+
+def _png(data_url: str) -> bytes:
+    return base64.b64decode(data_url.split(",", 1)[1])
+
+
+def _animation(frames: list, path: Path) -> None:
+    """The frames (PNG bytes) as a looping GIF, cropped to the model, 360 pixels wide (Pillow: matplotlib's
+    dependency, installed with the [render] extra; without it the picture is not made)."""
+    try:
+        from PIL import Image
+    except ImportError:
+        return
+    import io
+    images = [Image.open(io.BytesIO(frame)).convert("RGB") for frame in frames]
+    # cropped to where the model goes in any frame (the background's colour is the top-left pixel's)
+    pixels = np.stack([np.asarray(image, np.int16) for image in images])
+    rows, columns = np.nonzero((np.abs(pixels - pixels[0, 0, 0]).max(axis=3) > 12).any(axis=0))
+    margin = 12
+    box = (max(columns.min() - margin, 0), max(rows.min() - margin, 0),
+           min(columns.max() + margin, images[0].width), min(rows.max() + margin, images[0].height))
+    size = (360, round(360 * (box[3] - box[1]) / (box[2] - box[0])))
+    images = [image.crop(box).resize(size, Image.LANCZOS).quantize(colors=64) for image in images]
+    images[0].save(path, save_all=True, append_images=images[1:], duration=120, loop=0, optimize=True)
 
 
 def test_the_page_loads_from_the_server_only_without_errors(page):
@@ -99,6 +123,8 @@ def test_a_drag_on_the_playing_fox_tears_one_more_slit(page, fox, tmp_path):
     before, after, stats = r[0], r[3], r[4]
     strokes = [reply for reply in stats["replies"] if reply["op"] == "tear"]
     assert len(strokes) >= 3 and sum(reply["ok"] for reply in strokes) >= 3, strokes
+    frames = r[2]["frames"]           # the canvas during and after the drag: the body walks on, torn
+    assert len(frames) == 12 + 10 and len({frame for frame in frames}) > len(frames) // 2
     assert after["n_vertices"] > before["n_vertices"] and after["n_rims"] > before["n_rims"] == len(rim_edges(rig))
     saved = tmp_path / "torn.glb"
     saved.write_bytes(base64.b64decode(r[8]))

@@ -2,8 +2,10 @@
 // opens the page of a running `cgaskin serve` in one or more tabs and runs the job's steps, each
 // [tab, kind, ...args] (tab: 0, 1, ...; a tab is opened by its first step):
 //   [t, "call", method, ...args]         the (awaited) result of window.cgaskinView[method](...args)
-//   [t, "drag", fromBone, toBone, n, ms]  press the mouse on fromBone's screen position, move in n steps
-//                                         to toBone's (ms between steps: the clip plays meanwhile), release
+//   [t, "drag", fromBone, toBone, n, ms, frames]  press the mouse on fromBone's screen position, move in
+//                                         n steps to toBone's (ms between steps: the clip plays meanwhile),
+//                                         release; {path, frames}: with frames = k > 0, the canvas (PNG
+//                                         data URL) after every step and at k more steps after the release
 //   [t, "click", bone, dx, dy]           click at the bone's screen position + (dx, dy)
 // Requests to anything but the server (and data:/blob:/about:) are aborted and reported, as are
 // console errors and uncaught exceptions.
@@ -56,7 +58,12 @@ try {
             record.results.push(await page.evaluate(
                 (method, args) => window.cgaskinView[method](...args), args[0], args.slice(1)));
         } else if (kind === 'drag') {
-            const [from, to, n, ms] = args;
+            const [from, to, n, ms, more] = args;
+            const frames = [];
+            const frame = async () => {
+                if (more) frames.push(await page.evaluate(
+                    () => document.querySelector('#cgaskin-view canvas').toDataURL('image/png')));
+            };
             const [x0, y0] = await bonePosition(page, from);
             await page.mouse.move(x0, y0);
             await page.mouse.down();
@@ -67,10 +74,15 @@ try {
                 const x = x0 + (x1 - x0) * i / n, y = y0 + (y1 - y0) * i / n;
                 await page.mouse.move(x, y);
                 path.push([x, y]);
+                await frame();
             }
             await page.mouse.up();
             await page.evaluate(() => window.cgaskinView.serveIdle());
-            record.results.push(path);
+            for (let i = 0; i < (more || 0); i++) {
+                await sleep(ms);
+                await frame();
+            }
+            record.results.push({path, frames});
         } else if (kind === 'click') {
             const [bone, dx, dy] = args;
             const [x, y] = await bonePosition(page, bone);
