@@ -29,6 +29,8 @@ TOLERANCE = 1e-4          # of the bounding box diagonal: three.js skins in floa
 BACKGROUND = np.array([0x1d, 0x20, 0x26])
 WALK_TIMES = (0.2, 0.6)
 HEAD, HIP, TAIL = "b_Head_05", "b_Hip_01", "b_Tail02_013"
+#: the shared models (besides Fox) whose page's shader skinning is read back, each in a bent, dilated pose
+SHADER_MODELS = ("Arm5.glb", "3Cylinder4bones.glb", "PlaneWith3Bones.glb", "simple_skin.gltf", "quad_skin.glb")
 
 
 def _image(result) -> np.ndarray:
@@ -67,8 +69,25 @@ def arm():
     return upper, pose
 
 
+def _bent(rig):
+    """A pose of ``rig`` that moves it: a middle bone turned, the last one dilated."""
+    bones = [rig.skeleton.names[i] for i in rig.skeleton.bone_nodes]
+    return rig.rest_pose().rotate(bones[len(bones) // 2], [0.3, 1.0, 0.2], 0.6).dilate(bones[-1], 1.3)
+
+
 @pytest.fixture(scope="module")
-def pages(threejs, fox, arm, tmp_path_factory):
+def shared(models_dir):
+    """{file: (rig, its bent pose)} of SHADER_MODELS that the shared models folder holds."""
+    out = {}
+    for name in SHADER_MODELS:
+        if (Path(models_dir) / name).is_file():
+            rig = cgaskin.load(Path(models_dir) / name)
+            out[name] = rig, _bent(rig)
+    return out
+
+
+@pytest.fixture(scope="module")
+def pages(threejs, fox, arm, shared, tmp_path_factory):
     """Every page written, opened and driven once: {"fox": record, "arm": record, ...}."""
     work = tmp_path_factory.mktemp("view")
     path, rig = fox
@@ -102,6 +121,11 @@ def pages(threejs, fox, arm, tmp_path_factory):
             ["call", "setClip", "wave"], ["call", "pause"], ["call", "setTime", 0.5], ["call", "positions"],
             ["call", "shaderPositions", "cgaskin"], ["call", "shaderPositions", "three"]]},
     ]
+    for name, (rig, pose) in shared.items():             # cgaskin's shader against three.js's, posed
+        page = work / f"{name}.html"
+        cgaskin.show(rig, pose=pose).save(page)
+        jobs.append({"name": name, "url": page.as_uri(), "steps": [
+            ["call", "skinning"], ["call", "shaderPositions", "cgaskin"], ["call", "shaderPositions", "three"]]})
     (work / "jobs.json").write_text(json.dumps(jobs))
     run = subprocess.run([threejs["node"], str(threejs["js"] / "view_page.mjs"), str(work / "jobs.json"),
                           str(work / "out.json")], capture_output=True, text=True, timeout=180,
@@ -195,6 +219,25 @@ def test_cgaskin_shader_skins_as_threejs_and_cgaskin_do(pages, fox, arm):
     ours, theirs = _positions(n[10], upper.n_vertices), _positions(n[11], upper.n_vertices)
     assert np.abs(ours - theirs).max() / arm_diagonal < TOLERANCE
     assert np.abs(ours - cgaskin.skin(upper, upper.pose("wave", 0.5))).max() / arm_diagonal < TOLERANCE
+
+
+@pytest.mark.parametrize("name", SHADER_MODELS)
+def test_cgaskin_shader_skins_the_shared_models_as_threejs_does(pages, shared, name):
+    """On every shared glTF model, bent and dilated (``_bent``): cgaskin's shader skinning read back from
+    the GPU equals three.js's read back the same way and cgaskin.skin, 1e-4 of the diagonal."""
+    if name not in shared:
+        pytest.skip(f"{name} is not in the shared models folder")
+    rig, pose = shared[name]
+    record = pages[name]
+    assert record["errors"] == [] and record["requests"] == [], record
+    r = record["results"]
+    assert r[0] == "cgaskin"
+    ours, theirs = _positions(r[1], rig.n_vertices), _positions(r[2], rig.n_vertices)
+    expected = cgaskin.skin(rig, pose)
+    diagonal = np.linalg.norm(np.ptp(expected, axis=0))
+    assert np.abs(ours - theirs).max() / diagonal < TOLERANCE
+    assert np.abs(ours - expected).max() / diagonal < TOLERANCE
+    assert np.abs(expected - cgaskin.skin(rig, rig.rest_pose())).max() / diagonal > 10 * TOLERANCE   # (it moved)
 
 
 def test_show_in_a_notebook_iframe_shows_the_pose_and_the_rims(pages, arm):
