@@ -27,6 +27,7 @@ THREE_FILES = {
     "addons/utils/BufferGeometryUtils.js": "examples/jsm/utils/BufferGeometryUtils.js",
     "addons/utils/SkeletonUtils.js": "examples/jsm/utils/SkeletonUtils.js",
     "addons/controls/OrbitControls.js": "examples/jsm/controls/OrbitControls.js",
+    "addons/controls/TransformControls.js": "examples/jsm/controls/TransformControls.js",
     "LICENSE": "LICENSE",
 }
 

@@ -1,7 +1,8 @@
 """`cgaskin serve` in headless Chromium and over raw WebSockets: a drag across the playing Fox tears it
-(each pointer step one stroke in the pose on screen), a click cuts or drills it, undo restores the
-counts, the saved .glb has the slit and skins as the page shows it, each stroke sends a small delta,
-two tabs keep their own sessions, and hostile messages get error replies while the server goes on.
+(each pointer step one stroke in the pose on screen), a click drills it or places a cutting plane that a
+gizmo turns before the cut, undo restores the counts, the saved .glb has the slit and skins as the page
+shows it, each stroke sends a small delta, two tabs keep their own sessions, and hostile messages get
+error replies while the server goes on.
 
 One server (a thread, port 0, 127.0.0.1) and one browser (tests/clients/js/serve_page.mjs) for the
 page tests; the screenshot goes to $CGASKIN_VIEW_SCREENSHOTS when set (how docs/view/ is made)."""
@@ -60,11 +61,12 @@ STEPS = [
     [0, "call", "counts"], [0, "call", "serveStats"], [0, "call", "pause"], [0, "call", "getTime"],
     [0, "call", "positions"], [0, "call", "saveGlb"], [0, "call", "snapshot"],
     [1, "call", "counts"], [1, "call", "undo"], [1, "call", "serveStats"],   # 10: a second tab
-    [0, "call", "setTool", "cut"], [0, "click", TAIL, 0, 0], [0, "call", "counts"],
-    [0, "call", "undo"], [0, "call", "counts"],                              # 16
+    [0, "call", "setTool", "cut"], [0, "click", TAIL, 0, 0], [0, "call", "cuttingPlane"],   # 13: the plane
+    [0, "call", "turnPlane", [0, 1, 0], 0.4], [0, "call", "cutWithPlane"], [0, "call", "counts"],   # 16: the gizmo's turn
+    [0, "call", "undo"], [0, "call", "counts"],                              # 19
     [0, "call", "setTool", "drill"], [0, "click", SPINE, 0, 0], [0, "call", "counts"],
-    [0, "call", "undo"], [0, "call", "counts"], [0, "call", "serveStats"],   # 21
-    [1, "call", "counts"],                                                   # 24
+    [0, "call", "undo"], [0, "call", "counts"], [0, "call", "serveStats"],   # 24
+    [1, "call", "counts"], [0, "call", "cuttingPlane"],                      # 27
 ]
 
 
@@ -147,21 +149,26 @@ def test_a_drag_on_the_playing_fox_tears_one_more_slit(page, fox, tmp_path):
 
 def test_cut_and_drill_from_the_page_change_the_mesh_and_undo_restores_it(page):
     r = page["results"]
-    torn, cut, after_cut_undo, drilled, after_drill_undo = r[3], r[15], r[17], r[20], r[22]
+    torn, cut, after_cut_undo, drilled, after_drill_undo = r[3], r[18], r[20], r[23], r[25]
     key = lambda c: (c["n_vertices"], c["n_faces"], c["n_rims"])       # noqa: E731
-    assert key(cut) != key(torn) and cut["n_rims"] > torn["n_rims"]        # the cut's rims
+    # the click placed the plane at the tail facing across the screen; the gizmo turned it 0.4 rad
+    placed, turned = r[15], np.asarray(r[16])
+    assert placed is not None and abs(np.linalg.norm(turned) - 1) < 1e-9
+    assert np.degrees(np.arccos(np.clip(np.dot(placed["normal"], turned), -1, 1))) > 5
+    assert r[17] is True and key(cut) != key(torn) and cut["n_rims"] > torn["n_rims"]   # the cut's rims
     assert drilled["n_faces"] > torn["n_faces"]                            # the hole's wall
-    assert r[16] is True and r[21] is True
+    assert r[19] is True and r[24] is True
     assert key(after_cut_undo) == key(torn) and key(after_drill_undo) == key(torn)
-    ops = [reply["op"] for reply in r[23]["replies"] if reply["ok"]]
+    ops = [reply["op"] for reply in r[26]["replies"] if reply["ok"]]
     assert "cut" in ops and "drill" in ops
+    assert r[28] is None                       # another tool put the plane away
 
 
 def test_two_tabs_do_not_affect_each_other(page, fox):
     _, rig = fox
     r = page["results"]
     original = {"n_vertices": rig.n_vertices, "n_faces": rig.n_faces, "n_rims": len(rim_edges(rig))}
-    for counts in (r[10], r[24]):              # before and after the first tab's tears, cut and drill
+    for counts in (r[10], r[27]):              # before and after the first tab's tears, cut and drill
         assert {k: counts[k] for k in original} == original
     assert r[11] is False                      # nothing to undo in the second tab
     assert "nothing to undo" in r[12]["replies"][-1]["error"]

@@ -10,10 +10,12 @@
 // with the skin while the clip plays). One stroke is in flight at a time: moves that arrive meanwhile
 // are merged into the next stroke, which starts from the last one sent.
 // A click in drill mode drills along the view ray at the hit (radius: the slider, a fraction of the
-// model's size; depth: four radii past the skin). A click in cut mode cuts with the plane through the
-// hit whose normal is chosen in the panel: the screen's horizontal (a vertical cut on screen, the
-// default), its vertical, or the view direction.
+// model's size; depth: four radii past the skin). In cut mode a click places the cutting plane at the
+// hit, facing the way chosen in the panel (its normal the screen's horizontal: a vertical cut on
+// screen, the default; its vertical; or the view direction); three.js's TransformControls gizmo then
+// turns it (or moves it: the panel's gizmo mode), and the "cut" button cuts there, in the pose shown.
 import * as THREE from 'three';
+import { TransformControls } from 'three/addons/controls/TransformControls.js';
 import { element, row, showStatus } from 'cgaskin/ui.js';
 import { showWeights } from 'cgaskin/weights.js';
 import { GrowableMesh, RimSlots } from 'cgaskin/mesh_delta.js';
@@ -121,7 +123,7 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
     };
     let down = null;
     canvas.addEventListener('pointerdown', (event) => {
-        if (tool === 'orbit' || event.button !== 0) return;
+        if (tool === 'orbit' || event.button !== 0 || (tool === 'cut' && gizmo.axis !== null)) return;   // (the gizmo's)
         down = local(event);
         if (tool === 'tear') {
             const hit = hitAt(...down);
@@ -145,22 +147,52 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
         down = null;
     });
 
+    // ---- the cutting plane: a translucent square (its normal: local +z) and a gizmo on it ---------
+    const plane = new THREE.Mesh(new THREE.PlaneGeometry(1, 1), new THREE.MeshBasicMaterial(
+        {color: 0x4fc3f7, transparent: true, opacity: 0.35, side: THREE.DoubleSide, depthWrite: false}));
+    plane.scale.setScalar(0.7 * diagonal);
+    plane.visible = false;
+    view.scene.add(plane);
+    const gizmo = new TransformControls(view.camera, canvas);
+    gizmo.setMode('rotate');
+    gizmo.setSize(0.8);
+    const gizmoHelper = gizmo.getHelper();
+    gizmoHelper.visible = false;
+    view.scene.add(gizmoHelper);
+    gizmo.addEventListener('dragging-changed', (event) => { view.controls.enabled = !event.value && tool === 'orbit'; });
+    gizmo.addEventListener('change', () => redraw());
+    const showPlane = (on) => {
+        plane.visible = gizmoHelper.visible = on;
+        if (on) gizmo.attach(plane); else gizmo.detach();
+        gizmo.enabled = on;
+    };
+    const placePlane = (hit) => {        // at the hit, facing the way the panel says
+        const normal = new THREE.Vector3(), axis = controls.cutNormal.value;
+        if (axis === 'view') normal.copy(hit.direction);
+        else normal.setFromMatrixColumn(view.camera.matrixWorld, axis === 'vertical' ? 1 : 0);
+        plane.position.copy(hit.point);
+        plane.quaternion.setFromUnitVectors(new THREE.Vector3(0, 0, 1), normal.normalize());
+        plane.updateMatrixWorld(true);
+        showPlane(true);
+        redraw();
+    };
+    const cutWithPlane = () => {
+        if (!plane.visible) { showStatus(panel, 'cut: click on the model to place the plane first'); return null; }
+        const normal = new THREE.Vector3(0, 0, 1).applyQuaternion(plane.quaternion);
+        const result = request('cut', {normal: normal.toArray(), point: plane.position.toArray(), ...poseFields()});
+        busy = result.then(() => { busy = null; });
+        return result;
+    };
+
     // ---- cut and drill: a click ---------------------------------------------------------------------
     const clickTool = (x, y) => {
         const hit = hitAt(x, y);
         if (!hit) { showStatus(panel, `${tool}: the click is not on the model`); return null; }
-        let result;
-        if (tool === 'drill') {
-            const radius = Number(controls.radius.value) * diagonal, d = hit.direction;
-            result = request('drill', {start: hit.point.clone().addScaledVector(d, -(2 * radius + BLADE * diagonal)).toArray(),
-                                       end: hit.point.clone().addScaledVector(d, 4 * radius).toArray(), radius,
-                                       ...poseFields()});
-        } else {
-            const normal = new THREE.Vector3(), axis = controls.cutNormal.value;
-            if (axis === 'view') normal.copy(hit.direction);
-            else normal.setFromMatrixColumn(view.camera.matrixWorld, axis === 'vertical' ? 1 : 0);
-            result = request('cut', {normal: normal.toArray(), point: hit.point.toArray(), ...poseFields()});
-        }
+        if (tool === 'cut') { placePlane(hit); return Promise.resolve({ok: true}); }
+        const radius = Number(controls.radius.value) * diagonal, d = hit.direction;
+        const result = request('drill', {start: hit.point.clone().addScaledVector(d, -(2 * radius + BLADE * diagonal)).toArray(),
+                                         end: hit.point.clone().addScaledVector(d, 4 * radius).toArray(), radius,
+                                         ...poseFields()});
         busy = result.then(() => { busy = null; });
         return result;
     };
@@ -170,17 +202,22 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
         tool: element('select', {id: 'tool', title: 'what a drag or click on the model does'}),
         radius: element('input', {id: 'drill-radius', type: 'range', min: '0.003', max: '0.05', step: '0.001',
                                   value: '0.015', title: 'drill radius, of the model\'s size'}),
-        cutNormal: element('select', {id: 'cut-normal', title: 'the cutting plane\'s normal'}),
+        cutNormal: element('select', {id: 'cut-normal', title: 'which way a placed cutting plane faces'}),
+        gizmoMode: element('select', {id: 'gizmo-mode', title: 'what the gizmo does to the plane'}),
+        cut: element('button', {id: 'cut', type: 'button', text: 'cut'}),
         undo: element('button', {id: 'undo', type: 'button', text: 'undo'}),
         save: element('button', {id: 'save-glb', type: 'button', text: 'save .glb'}),
     };
     for (const name of TOOLS) controls.tool.appendChild(element('option', {value: name, text: name}));
     for (const [value, text] of [['horizontal', 'across the screen'], ['vertical', 'up the screen'], ['view', 'the view direction']])
         controls.cutNormal.appendChild(element('option', {value, text}));
+    for (const [value, text] of [['rotate', 'turn'], ['translate', 'move']])
+        controls.gizmoMode.appendChild(element('option', {value, text}));
     const setTool = (name) => {
         if (!TOOLS.includes(name)) throw new Error(`tool ${JSON.stringify(name)}: one of ${TOOLS.join(', ')}`);
         tool = name;
         controls.tool.value = name;
+        if (name !== 'cut') showPlane(false);
         view.controls.enabled = name === 'orbit';          // (a drag is the scalpel's, not the camera's)
         return name;
     };
@@ -192,6 +229,8 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
         return reply;
     };
     controls.tool.addEventListener('change', () => setTool(controls.tool.value));
+    controls.gizmoMode.addEventListener('change', () => gizmo.setMode(controls.gizmoMode.value));
+    controls.cut.addEventListener('click', () => cutWithPlane());
     controls.undo.addEventListener('click', () => undo());
     controls.save.addEventListener('click', async () => {
         const reply = await save();
@@ -205,7 +244,7 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
     panel.status.before(element('div', {class: 'surgery'}, [
         row('tool', controls.tool, controls.undo, controls.save),
         row('drill r', controls.radius),
-        row('cut ⟂', controls.cutNormal),
+        row('cut', controls.cutNormal, controls.gizmoMode, controls.cut),
     ]));
     showStatus(panel, `cgaskin serve: ${hello.model}, ${hello.n_vertices} vertices; pick a tool, then drag ` +
                       `(tear) or click (cut, drill) on the model`);
@@ -222,5 +261,14 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
         undo: async () => (await undo()).ok,
         saveGlb: async () => { const reply = await save(); return reply ? reply.glb : null; },
         clickTool: async (x, y) => { const r = clickTool(x, y); return r ? (await r).ok : null; },
+        // the plane placed (null: none), and a turn of it about an axis (radians), as the gizmo does
+        cuttingPlane: () => (plane.visible ? {point: plane.position.toArray(),
+                                              normal: new THREE.Vector3(0, 0, 1).applyQuaternion(plane.quaternion).toArray()} : null),
+        turnPlane: (axis, angle) => {
+            plane.rotateOnWorldAxis(new THREE.Vector3(...axis).normalize(), angle);
+            redraw();
+            return new THREE.Vector3(0, 0, 1).applyQuaternion(plane.quaternion).toArray();
+        },
+        cutWithPlane: async () => { await idle(); const r = cutWithPlane(); return r ? (await r).ok : null; },
     };
 }
