@@ -30,6 +30,15 @@ class TearPathError(CgaskinError, ValueError):
     different pieces of it, or a boundary of the mesh is in the way)."""
 
 
+class ProtocolError(InvalidInputError):
+    """A message to ``cgaskin serve`` that is not a valid request; ``id`` is its id when that much could
+    be read (the reply names it)."""
+
+    def __init__(self, message: str, id=None):
+        super().__init__(message)
+        self.id = id
+
+
 class InternalError(CgaskinError, RuntimeError):
     """A bug in cgaskin, not bad input: please report it with the inputs (the model and the call)."""
 

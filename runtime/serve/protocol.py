@@ -26,6 +26,8 @@ from typing import NamedTuple, Union
 
 import numpy as np
 
+from ..errors import ProtocolError
+
 #: the longest message text that is parsed (bytes of UTF-8); websockets closes on frames over its
 #: own ``max_size`` before this is reached (server.MAX_FRAME)
 MAX_MESSAGE = 16 * 1024
@@ -40,14 +42,6 @@ MAX_COORDINATE = 1e12
 DILATION_RANGE = (1e-3, 1e3)
 
 OPS = ("hello", "tear", "cut", "drill", "undo", "save")
-
-
-class ProtocolError(ValueError):
-    """A message that is not a valid request; ``id`` is its id when that much could be read."""
-
-    def __init__(self, message: str, id=None):
-        super().__init__(message)
-        self.id = id
 
 
 class PoseSpec(NamedTuple):

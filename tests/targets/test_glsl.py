@@ -226,7 +226,7 @@ def test_render_contract(catalogues):
     kernels, _, files = catalogues[BUILTIN]
     assert sorted(files) == sorted(["cgaskin.glsl", "cgaskin_f32.glsl", "cgaskin_skin_bones.comp",
                                     "cgaskin_skin.comp", "cgaskin_skin_bones_f32.comp",
-                                    "cgaskin_skin_f32.comp", "cgaskin_skin.vert"])
+                                    "cgaskin_skin_f32.comp", "cgaskin_skin.vert", "cgaskin_skin_webgl.glsl"])
     for k in kernels:
         assert f"void cgaskin_{k.name}(in double " in files["cgaskin.glsl"]
         assert f"void cgaskin_{k.name}(in float " in files["cgaskin_f32.glsl"]
