@@ -23,7 +23,10 @@ WORKLOAD = textwrap.dedent("""
     import cgaskin
     from cgaskin.app.precompile import precompile
 
-    assert precompile() > 0                       # an empty cache: it compiles
+    if sys.argv[2] == "empty":
+        assert precompile() > 0                   # an empty cache: it compiles
+    else:                                         # the session's cache, as its precompile left it
+        assert precompile() == 0
     # a fused kernel loaded its callees from the cache: no callee was compiled for other types too
     # (numba's cache index of a kernel holds one entry per compiled signature)
     pc = sys.modules["cgaskin.app.precompile"]
@@ -48,7 +51,7 @@ WORKLOAD = textwrap.dedent("""
     event.register("numba:compile", Recorder())
     # (rig, joint, a scalpel stroke in three positions across its surface)
     cases = [(cgaskin.capsule_arm(), 1, [([x, 0.05, 1.0], [x, 0.05, 0.0]) for x in (0.6, 1.2, 1.8)])]
-    if len(sys.argv) > 1:
+    if sys.argv[1]:
         cases.append((cgaskin.load(sys.argv[1]), "b_Spine01_02", [([0, 120, z], [0, 40, z]) for z in (0, 10, 20)]))
     for rig, joint, blade in cases:
         posed = rig.rest_pose().rotate(joint, [1, 0, 0], 0.1).translate(joint, [0.01, 0, 0]).dilate(joint, 1.05)
@@ -84,11 +87,13 @@ WORKLOAD = textwrap.dedent("""
 """)
 
 
-def test_after_precompile_nothing_compiles(models_dir, tmp_path):
-    # an empty cache of its own (NUMBA_CACHE_DIR), so that nothing compiled earlier can stand in for a
-    # kernel missing from the list; the worker processes inherit it
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
-    done = subprocess.run([sys.executable, "-c", WORKLOAD, str(models_dir / "Fox.glb")], capture_output=True,
+def test_after_precompile_nothing_compiles(models_dir, tmp_path, precompiled_cache):
+    # a cache that precompile alone filled, so that nothing compiled earlier can stand in for a kernel
+    # missing from the list: the session's (tests/conftest.py runs this test first, on the cache its
+    # precompile made from empty), else an empty one of its own; the worker processes inherit it
+    cache, state = (precompiled_cache, "precompiled") if precompiled_cache else (str(tmp_path), "empty")
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    done = subprocess.run([sys.executable, "-c", WORKLOAD, str(models_dir / "Fox.glb"), state], capture_output=True,
                           text=True, timeout=900, env=env)
     assert done.returncode == 0, done.stderr
     compiled = done.stdout.split()
