@@ -9,7 +9,7 @@ from hypothesis import settings
 # The session's numba cache: an empty folder of its own, unless NUMBA_CACHE_DIR is set (subprocesses,
 # Dask workers and the CLI inherit it). The session's precompile fills it before anything else runs, and
 # tests/app/test_precompile.py's completeness check (run first) works on that cache: after precompile,
-# nothing compiles. (It used to compile everything a second time into another empty cache: minutes.)
+# nothing compiles, without compiling every kernel a second time into another empty cache (minutes).
 # numba is imported before this file (pytest resolves numba.NumbaWarning in filterwarnings): its
 # configuration reads the variable again; cgaskin's kernels, imported later, find their cache there.
 SESSION_CACHE = None
