@@ -89,10 +89,10 @@ WORKLOAD = textwrap.dedent("""
 
 def test_after_precompile_nothing_compiles(models_dir, tmp_path, precompiled_cache):
     # a cache that precompile alone filled, so that nothing compiled earlier can stand in for a kernel
-    # missing from the list: the session's (tests/conftest.py runs this test first, on the cache its
-    # precompile made from empty), else an empty one of its own; the worker processes inherit it
-    cache, state = (precompiled_cache, "precompiled") if precompiled_cache else (str(tmp_path), "empty")
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    # missing from the list: the session's when its precompile started from empty (tests/conftest.py
+    # runs this test first), else an empty one of its own (NUMBA_CACHE_DIR); the workers inherit it
+    state = "precompiled" if precompiled_cache else "empty"
+    env = {**os.environ, **({} if precompiled_cache else {"NUMBA_CACHE_DIR": str(tmp_path)})}
     done = subprocess.run([sys.executable, "-c", WORKLOAD, str(models_dir / "Fox.glb"), state], capture_output=True,
                           text=True, timeout=900, env=env)
     assert done.returncode == 0, done.stderr
