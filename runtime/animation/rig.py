@@ -20,17 +20,19 @@ mesh, make a new rig: ``rig.with_mesh(edited copies...)``.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
 
-from .._shared.checks import float_array, item_index
+from .._shared.checks import float_array, item_index, real_number
 from .._shared.frozen import FrozenDict, frozen
 from ..errors import InvalidInputError
 from .clip import CHANNEL_PATHS, INTERPOLATIONS, Channel, Clip
 from .pose import Pose
 from .poses import Poses
+from .sampling import frame_sampler, sample_frame
 from .skeleton import Skeleton
 from .validate import check_mesh
 
@@ -125,7 +127,20 @@ class Rig:
         linear blend (``"linear"``); a time before the first key or after the last clamps to that key
         (no error). InvalidInputError for an unknown clip (the message lists the rig's clips) and a
         time that is not a finite real number."""
-        return Pose.from_clip(self.skeleton, self.clips[self.clip_index(clip)], time, rotation_blend)
+        chosen = self.clips[self.clip_index(clip)]
+        key = (chosen, rotation_blend) if type(rotation_blend) is str else None
+        sampler = self._samplers.get(key)
+        if sampler is None:             # (the clip's first frame, checked and made ready)
+            sampler = frame_sampler(self.skeleton, chosen, rotation_blend)
+            self._samplers[key] = sampler
+        t = time if type(time) is float and math.isfinite(time) else real_number(time, "time")
+        return Pose._of_fields(self.skeleton, *sample_frame(sampler, t))
+
+    @cached_property
+    def _samplers(self) -> dict:
+        """(clip, rotation blend) -> the clip made ready to sample on the rig's skeleton: a frame's call
+        then pays one lookup."""
+        return {}
 
     def poses(self, clip=0, times=(0.0,), rotation_blend: str = "slerp") -> Poses:
         """The poses of a clip at each of ``times`` ((T,) finite seconds, any order, clamped like

@@ -1,9 +1,10 @@
 """Clip sampling in compiled code: a clip at a time (or at many times) straight into a pose's fields.
 
 One kernel call does a whole frame: for every channel of the clip (``Clip.packed``: flat arrays and
-integer codes, built once per clip) it finds the key interval by binary search (in a batch, a forward
-cursor first: playback rarely leaves the interval it was in), interpolates with glTF 2.0 semantics
-into the node's TRS, and then composes each animated node's TRS into the pose's fields:
+integer codes, built once per clip) it finds the key interval (the clip's cursor first: the interval
+of the channel's last frame, then the next one, as a playback rarely leaves them; else a binary
+search), interpolates with glTF 2.0 semantics into the node's TRS, and then composes each animated
+node's TRS into the pose's fields:
 
 * STEP holds the key's value; LINEAR blends translation and scale componentwise and rotations by
   glTF's slerp along the shorter arc (``rotation_blend="linear"``: the normalised linear blend);
@@ -17,9 +18,9 @@ into the node's TRS, and then composes each animated node's TRS into the pose's 
   every node also gets its exact matrix T @ R @ S — the fields that ``Pose.from_trs`` makes of the
   same TRS (equal to rounding; tests/animation/test_sampling.py checks 1e-12).
 
-Measured on Fox (25 nodes, 21 channels; 2-core machine): about 4 µs per frame inside the kernel
-(the channels' key search and blends, then the animated nodes' products), about 8-10 µs for ``rig.pose``
-end to end (argument checks, three output arrays, the Pose, numba's dispatch of 13 arguments);
+Measured on Fox (25 nodes, 21 channels; 2-core machine): about 2 µs per frame inside the kernel
+(the channels' key search and blends, then the animated nodes' products), about 6 µs for ``rig.pose``
+end to end (numba's dispatch of 15 arguments about 0.9 µs, the three output arrays 0.5 µs, the Pose);
 ``benchmarks/bench_animation.py`` prints the table. The channels and the nodes are each one loop typed
 into the frame's kernel (``inlined``), not a call each: a compiled call that takes arrays pays their
 reference counts (atomic operations), which was a fifth of a frame as a call per channel and per node,
@@ -32,6 +33,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from typing import NamedTuple
 
 import numpy as np
 
@@ -102,8 +104,12 @@ def _blend_rotation(values, a, b, u, blend, out, node, at):
         chord_d, chord_s = math.sqrt(d2), math.sqrt(s2)
         theta = 2.0 * math.atan2(chord_d, chord_s)
         if theta > 0.0:
-            inv_sin = 2.0 / (chord_d * chord_s)          # sin θ = 2 sin(θ/2) cos(θ/2)
-            wa, wb = math.sin((1.0 - u) * theta) * inv_sin, math.sin(u * theta) * inv_sin
+            # wb = sin uθ / sin θ, wa = sin (1-u)θ / sin θ = cos uθ - cos θ wb: the sine and cosine of
+            # one angle (one sincos call), and sin θ = 2 sin(θ/2) cos(θ/2), cos θ = cos²(θ/2) - sin²(θ/2)
+            # from the chords (θ <= π/2 on the shorter arc: sin θ is not small unless θ is, and then
+            # wb -> u, wa -> 1 - u with absolute errors of a few ulps)
+            wb = math.sin(u * theta) * 2.0 / (chord_d * chord_s)
+            wa = math.cos(u * theta) - 0.25 * (s2 - d2) * wb
     wb *= sign
     q0 = wa * values[a] + wb * values[b]
     q1 = wa * values[a + 1] + wb * values[b + 1]
@@ -225,32 +231,24 @@ def _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_ma
     return _compose_nodes(trs, nodes, versors, matrices, similar)
 
 
-@helper
-def _scratch(channels, nodes, rest_trs):
-    """A kernel's working arrays: the TRS rows (j, 10), each channel's key interval of the previous
-    frame (c,), and whether each node is animated (j,)."""
-    animated = np.zeros(rest_trs.shape[0], dtype=np.bool_)
-    for a in range(nodes.shape[0]):
-        animated[nodes[a]] = True
-    return np.empty((rest_trs.shape[0], TRS_SIZE)), np.zeros(channels.shape[0], dtype=np.int64), animated
-
-
-@kernel((I2, F1, F1, I1, F2, F2, F3, B1, f8, i8, F2, F3, B1), cost=0.8, fused=True)
+@kernel((I2, F1, F1, I1, F2, F2, F3, B1, B1, I1, f8, i8, F2, F3, B1), cost=0.8, fused=True)
 def _sample_pose(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
-                 t, blend, versors, matrices, similar):
-    """One frame of a clip into versors (j, 12), matrices (j, 4, 4), similar (j,); (status, node)."""
-    trs, hints, animated = _scratch(channels, nodes, rest_trs)
+                 animated, hints, t, blend, versors, matrices, similar):
+    """One frame of a clip into versors (j, 12), matrices (j, 4, 4), similar (j,); (status, node).
+    ``animated`` (j,): the nodes a channel animates; ``hints`` (c,): each channel's key interval of the
+    clip's last frame, updated (a cursor: the next frame of a playback rarely leaves it)."""
+    trs = np.empty((rest_trs.shape[0], TRS_SIZE))
     return _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
                         t, blend, hints, trs, animated, versors, matrices, similar)
 
 
-@kernel((I2, F1, F1, I1, F2, F2, F3, B1, F1, i8, F3, F4, B2), cost=0.7, fused=True)
+@kernel((I2, F1, F1, I1, F2, F2, F3, B1, B1, I1, F1, i8, F3, F4, B2), cost=0.7, fused=True)
 def _sample_poses(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
-                  frame_times, blend, versors, matrices, similar):
+                  animated, hints, frame_times, blend, versors, matrices, similar):
     """Frames at frame_times (T,) into versors (T, j, 12), matrices (T, j, 4, 4), similar (T, j);
     returns (status, node, frame) of the first failure (status OK: none). Each channel's key interval
     of the previous frame is tried first: increasing times search only when they cross a key."""
-    trs, hints, animated = _scratch(channels, nodes, rest_trs)
+    trs = np.empty((rest_trs.shape[0], TRS_SIZE))
     for f in range(frame_times.shape[0]):
         status, node = _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices,
                                     rest_similar, frame_times[f], blend, hints, trs, animated, versors[f],
@@ -291,7 +289,8 @@ def _rest(skeleton) -> tuple:
         computed = np.array([i for i in range(j) if exact[i] is None], dtype=np.int64)
         out = (np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=bool))
         status, node = _sample_pose(_EMPTY.channels, _EMPTY.times, _EMPTY.values, computed, trs, versors,
-                                    matrices, similar, 0.0, 0, *out)
+                                    matrices, similar, np.zeros(j, dtype=bool), np.zeros(0, dtype=np.int64),
+                                    0.0, 0, *out)
         _check(status, node, "the rest pose", skeleton)
         rest = _REST[skeleton] = (trs, *out)
     return rest
@@ -307,47 +306,63 @@ def _check(status, node, what: str, skeleton) -> None:
                                 f"(a zero-length rotation, or values that overflow float64)")
 
 
-def _arguments(skeleton, clip, rotation_blend: str) -> tuple:
-    """The sampling kernels' arguments before the time (the packed clip's arrays, the skeleton's rest
-    arrays) and the blend code, after the checks that do not depend on the time. Kept with the clip
-    for the last skeleton it was sampled on: a frame's call then pays one lookup."""
+class FrameSampler(NamedTuple):
+    """A clip made ready to sample on a skeleton: the kernels' arguments before the time (the packed
+    clip's arrays, the skeleton's rest arrays, the animated nodes, the channels' cursor) and the
+    rotation blend's code, after every check that does not depend on the time."""
+
+    skeleton: object
+    clip: object
+    arguments: tuple
+    blend: int
+
+
+def frame_sampler(skeleton, clip, rotation_blend: str = "slerp") -> FrameSampler:
+    """``clip`` made ready to sample on ``skeleton``; InvalidInputError for an unknown
+    ``rotation_blend`` or a clip that animates nodes the skeleton lacks. The arguments are kept with
+    the clip for the last skeleton it was sampled on. The cursor (each channel's last key interval)
+    is shared by the clip's calls: the kernel only tries it before searching, so calls in other
+    threads or out of order stay exact."""
     blend = _BLEND_CODES.get(rotation_blend) if isinstance(rotation_blend, str) else None
     if blend is None:
         raise InvalidInputError(f"rotation_blend must be one of {ROTATION_BLENDS}, got {rotation_blend!r}")
     kept = _ARGUMENTS.get(clip)
-    if kept is not None and kept[0] is skeleton:
-        return kept[1], blend
-    packed = clip.packed
-    if packed.last_node >= skeleton.n_nodes:
-        raise InvalidInputError(f"clip {clip.name!r} animates node {packed.last_node}, but the skeleton "
-                                f"has {skeleton.n_nodes} nodes")
-    arguments = (packed.channels, packed.times, packed.values, packed.nodes, *_rest(skeleton))
-    _ARGUMENTS[clip] = (skeleton, arguments)
-    return arguments, blend
+    if kept is None or kept[0] is not skeleton:
+        packed = clip.packed
+        if packed.last_node >= skeleton.n_nodes:
+            raise InvalidInputError(f"clip {clip.name!r} animates node {packed.last_node}, but the skeleton "
+                                    f"has {skeleton.n_nodes} nodes")
+        animated = np.zeros(skeleton.n_nodes, dtype=bool)
+        animated[packed.nodes] = True
+        cursor = np.zeros(len(packed.channels), dtype=np.int64)
+        kept = _ARGUMENTS[clip] = (skeleton, (packed.channels, packed.times, packed.values, packed.nodes,
+                                              *_rest(skeleton), animated, cursor))
+    return FrameSampler(skeleton, clip, kept[1], blend)
+
+
+def sample_frame(sampler: FrameSampler, t: float) -> tuple:
+    """The fields of the sampler's clip at ``t`` (a finite float, seconds; times outside the keys clamp,
+    as glTF says): versors (j, 12) float64, matrices (j, 4, 4) float64, similar (j,) bool, as ``Pose``
+    holds them, in one compiled call."""
+    j = sampler.skeleton.n_nodes
+    versors, matrices, similar = np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=np.bool_)
+    status, node = _sample_pose(*sampler.arguments, t, sampler.blend, versors, matrices, similar)
+    if status != OK:
+        _check(status, node, f"clip {sampler.clip.name!r} at t={t}", sampler.skeleton)
+    return versors, matrices, similar
 
 
 def sample_pose(skeleton, clip, time, rotation_blend: str = "slerp") -> tuple:
-    """The fields of ``clip``'s pose at ``time`` seconds (times outside the keys clamp, as glTF says).
-
-    Returns versors (j, 12) float64, matrices (j, 4, 4) float64, similar (j,) bool, as ``Pose`` holds
-    them. InvalidInputError for a time that is not a finite real number, an unknown
-    ``rotation_blend``, or a clip that does not fit the skeleton.
-    """
-    t = real_number(time, "time")
-    arguments, blend = _arguments(skeleton, clip, rotation_blend)
-    j = skeleton.n_nodes
-    versors, matrices, similar = np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=np.bool_)
-    status, node = _sample_pose(*arguments, t, blend, versors, matrices, similar)
-    if status != OK:
-        _check(status, node, f"clip {clip.name!r} at t={t}", skeleton)
-    return versors, matrices, similar
+    """``sample_frame`` of ``clip`` on ``skeleton`` at ``time``; InvalidInputError for a time that is
+    not a finite real number, an unknown ``rotation_blend``, or a clip that does not fit the skeleton."""
+    return sample_frame(frame_sampler(skeleton, clip, rotation_blend), real_number(time, "time"))
 
 
 def sample_poses(skeleton, clip, times, rotation_blend: str = "slerp") -> tuple:
     """``sample_pose`` at each of ``times`` ((T,) finite seconds, any order): versors (T, j, 12),
     matrices (T, j, 4, 4), similar (T, j), in one compiled call."""
     times = np.array(float_array(times, "times", ndim=1), order="C")      # the caller's array stays theirs
-    arguments, blend = _arguments(skeleton, clip, rotation_blend)
+    _, _, arguments, blend = frame_sampler(skeleton, clip, rotation_blend)
     n, j = len(times), skeleton.n_nodes
     versors, matrices, similar = np.empty((n, j, 12)), np.empty((n, j, 4, 4)), np.empty((n, j), dtype=np.bool_)
     status, node, frame = _sample_poses(*arguments, times, blend, versors, matrices, similar)

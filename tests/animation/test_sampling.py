@@ -143,6 +143,30 @@ def test_batches_equal_single_frames_exactly(clip_models, specs, blend):
                 assert np.array_equal(vertices[i], cgaskin.skin(rig, pose))
 
 
+def test_the_clips_cursor_never_changes_a_frame(clip_models):
+    """The cursor (each channel's last key interval) is shared by every call on a clip: frames asked
+    forward, backward, shuffled and from four threads at once equal each frame asked alone first."""
+    from concurrent.futures import ThreadPoolExecutor
+    rng = np.random.default_rng(7)
+
+    def fields(pose):
+        return np.concatenate([pose.versors.ravel(), pose.matrices.ravel()])
+
+    for rig in clip_models.values():
+        for clip in rig.clips:
+            times = np.concatenate([np.linspace(-0.1, clip.duration + 0.1, 61), clip.channels[0].times[:40]])
+            alone = {t: fields(rig.with_clips(Clip("alone", clip.channels)).pose("alone", t))   # a new cursor
+                     for t in times}
+            asked = np.concatenate([times, times[::-1], rng.permutation(times)])
+            for t in asked:
+                assert np.array_equal(fields(rig.pose(clip.name, t)), alone[t]), (clip.name, t)
+            asked = np.tile(rng.permutation(times), 4)
+            with ThreadPoolExecutor(4) as pool:
+                threaded = list(pool.map(lambda t: fields(rig.pose(clip.name, t)), asked))
+            for t, got in zip(asked, threaded):
+                assert np.array_equal(got, alone[t]), (clip.name, t)
+
+
 def test_poses_frames_and_slices(clip_models):
     rig = clip_models["Fox.glb"]
     times = np.linspace(-1.0, 2.0, 7)
