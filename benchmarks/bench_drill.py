@@ -10,7 +10,7 @@ Rows (medians; ratios within this run):
   cut);
 * the capsule arm of the playing-model issue (``capsule_arm(rings_per_segment=410, segments_around=512)``,
   about 1.5M faces): a hole in a ``Surgery`` (the bar: 20 ms, and growing with the faces near the bit,
-  not with the mesh), the functional ``drill`` of the rig, and manifold3d's difference of the welded
+  not with the mesh: the same holes in a capsule a third as long, as finely meshed), the functional ``drill`` of the rig, and manifold3d's difference of the welded
   mesh and a 64-sided bit (the mesh converted to a Manifold and back, as a user of it would), when
   manifold3d is installed (``pip install manifold3d``).
 """
@@ -58,8 +58,20 @@ def _manifold_difference(vertices, faces, start, end, radius):
     return (mesh - bit).to_mesh()
 
 
+def _session_hole_ms(rig, places, travel, radius, repeat: int) -> float:
+    """Median ms of a walled hole in a ``Surgery`` of ``rig`` then its undo, at each of ``places``."""
+    session = cgaskin.Surgery(rig)
+
+    def holes():
+        for p in places:
+            session.drill(p, p + travel, radius)
+            session.undo()
+    return median_seconds(holes, max(1, repeat // 3), warmup=1) * 1e3 / len(places)
+
+
 def large_rows(rings: int, around: int, repeat: int) -> list:
-    """The large capsule: holes across it at several places, in a session (undone after each) and as a
+    """The large capsule: holes across it at several places, in a session (undone after each), the same
+    holes in a capsule a third as long (the same faces near the bit, a third of the mesh), as a
     functional drill, and manifold3d's boolean when it installs."""
     from cgaskin.surgery.topology import topology
     rig = cgaskin.capsule_arm(rings_per_segment=rings, segments_around=around)
@@ -67,16 +79,16 @@ def large_rows(rings: int, around: int, repeat: int) -> list:
     radius, travel = 0.05, np.array([0.0, 0.0, 2.0])
     rows = []
     start = time.perf_counter()
-    session = cgaskin.Surgery(rig)
+    cgaskin.Surgery(rig)
     rows.append([f"capsule_arm({rings}, {around})", rig.n_faces, "Surgery(rig) (once)",
                  (time.perf_counter() - start) * 1e3, ""])
-
-    def session_hole():
-        for p in places:
-            session.drill(p, p + travel, radius)
-            session.undo()
-    session_ms = median_seconds(session_hole, max(1, repeat // 3), warmup=1) * 1e3 / len(places)
-    rows.append([f"capsule_arm({rings}, {around})", rig.n_faces, "Surgery.drill (a walled hole)", session_ms, 1.0])
+    session_ms = _session_hole_ms(rig, places, travel, radius, repeat)
+    rows.append([f"capsule_arm({rings}, {around})", rig.n_faces, "Surgery.drill, a walled hole, then undo", session_ms,
+                 1.0])
+    short = cgaskin.capsule_arm(n_joints=1, length=1.0, rings_per_segment=rings, segments_around=around)
+    short_ms = _session_hole_ms(short, [p * [1.0 / 3.0, 1.0, 1.0] for p in places], travel, radius, repeat)
+    rows.append([f"capsule_arm(1 joint, length 1, {rings}, {around})", short.n_faces,
+                 "the same holes, a third of the mesh", short_ms, short_ms / session_ms])
     functional_ms = median_seconds(lambda: cgaskin.drill(rig, places[0], places[0] + travel, radius),
                                    max(1, repeat // 3), warmup=1) * 1e3
     rows.append([f"capsule_arm({rings}, {around})", rig.n_faces, "cgaskin.drill (functional)", functional_ms,

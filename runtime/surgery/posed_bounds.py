@@ -32,11 +32,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._shared.jit import F1, F2, I1, I2, helper, kernel, record
+from .._shared.jit import F1, F2, I1, I2, f8, helper, kernel, record
 from .._shared.memory import sparse_zeros
 from ..generated.skinning import skin_blend
 from .bone_influences import INFLUENCES, TABLE, WEIGHT_STEPS
-from .bvh import _near_box, _push_children
+from .bvh import BVH_ARRAYS, _near_box, _push_children
 from .bvh_build import N1
 
 __all__ = ["Posing", "POSING", "PosedScratch", "no_posing", "pose_region"]
@@ -216,9 +216,9 @@ def _pose_region(bvh, posing, query, a, b, reach):
             positions[todo[i], k] = skinned[i, k]
 
 
-@kernel()
+@kernel((BVH_ARRAYS, POSING, F1, F1, F1, f8), cost=1.0)
 def pose_region(bvh, posing, query, a, b, reach):
-    """``_pose_region`` from Python (tests check the bounds with it)."""
+    """``_pose_region`` from Python (a session's drill poses its region with it; tests check the bounds)."""
     _pose_region(bvh, posing, query, a, b, reach)
 
 

@@ -39,12 +39,14 @@ from .._shared.jit import F2, I1, i8, kernel
 from .._shared.memory import minor_page_faults, release_free_memory
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
-from .drill import drill_details
+from .drill.api import checked_wall
+from .drill.bit import bit as checked_bit
 from .dynamic_bvh import DynamicBVH
 from .bone_influences import weight_summary
 from .posed_bounds import PosedScratch, no_posing
 from .posed_source import PosedSource, SessionInfluences, bone_affines_of
 from .rows import Rows
+from .session_drill import session_drill
 from .session_write import _write_splice
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
@@ -207,15 +209,18 @@ class Surgery:
             self._history.append(previous)
 
     def drill(self, start, end, radius, pose=None, wall: bool = True):
-        """Drill a hole (``cgaskin.drill_details`` in ``pose``, None: the session's pose; the same
-        arguments but the rig, the same errors); returns its ``DrillResult``. Like ``cut``, it works on
-        the whole mesh and builds the session's state again. A drill that raises changes nothing."""
+        """Drill a hole (``cgaskin.drill`` in ``pose``, None: the session's pose; the same arguments but
+        the rig, the same errors) on the faces around the bit (``session_drill.py``); returns the
+        ``DrillResult`` of that region (its ``rig`` the region drilled, ``replaced`` and ``sources`` in
+        its numbering; ``rig`` of the session is the whole mesh). The session's mesh is the functional
+        drill's, but for the rows inside the bit, which it keeps unused. A drill that raises changes
+        nothing."""
         with self._costed("drill"):
-            result = drill_details(self.rig, start, end, radius, pose=self._pose if pose is None else pose,
-                                   wall=wall)
-            previous = self._state()
-            self._reset(replace(result.rig, name=self._template.name))
-            self._history.append(previous)
+            the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
+            posed = None if pose is None and self._pose is None else self._posed(pose)
+            result, splice = session_drill(self, the_bit, wall, None if posed is None else posed.affines, posed)
+            self._history.append(self._apply(splice))
+            self._snapshot = None
         return result
 
     def undo(self) -> None:

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import cgaskin
+from cgaskin.errors import InternalError
 from cgaskin.surgery.drill import RIM_STEP
 from cgaskin.surgery.topology import topology
 
@@ -152,16 +153,14 @@ def test_a_walled_hole_saves_loads_and_plays(capsule, tmp_path):
 
 
 def test_session_drill_equals_the_functional_drill_and_undoes(capsule):
-    """A session's drill is the functional drill of its mesh; undo gives the mesh back bit for bit; a
-    tear after the drill works on the drilled mesh."""
+    """A session's drill is the functional drill of its mesh (tests/surgery/test_session_drill.py: the
+    session keeps the rows inside the bit unused); undo gives the mesh back bit for bit; a tear after
+    the drill works on the drilled mesh."""
+    from tests.surgery.test_session_drill import assert_same_mesh
     session = cgaskin.Surgery(capsule)
     before = session.rig
-    result = session.drill(*CASES["through"])
-    functional = cgaskin.drill(before, *CASES["through"])
-    np.testing.assert_array_equal(session.rig.faces, functional.faces)
-    np.testing.assert_array_equal(session.rig.vertices, functional.vertices)
-    np.testing.assert_array_equal(session.rig.weights, functional.weights)
-    assert result.rig.n_faces == session.n_faces
+    session.drill(*CASES["through"])
+    assert_same_mesh(session.rig, cgaskin.drill(before, *CASES["through"]))
     assert session.last_cost.operation == "drill"
     session.tear([[2.0, 0.3, 0.0], [2.0, 0.1, 0.0]], [[2.3, 0.3, 0.0], [2.3, 0.1, 0.0]])
     session.undo()
@@ -171,6 +170,14 @@ def test_session_drill_equals_the_functional_drill_and_undoes(capsule):
     with pytest.raises(cgaskin.InvalidInputError):
         session.drill([1.0, 0.0, -1.0], [1.0, 0.0, -1.0], 0.1)
     assert session.n_operations == 0
+
+
+@pytest.mark.xfail(raises=InternalError, strict=True,
+                   reason="known: a blind hole whose bit starts at the capsule's pole (many faces meet there) "
+                          "gets a wall whose fill never becomes finer than the rim step (found by "
+                          "test_session_drill's random bits); fix wall.py's fill, then this passes")
+def test_a_walled_blind_hole_from_the_pole(capsule):
+    cgaskin.drill(capsule, [-0.25, 0.0, 0.0], [-0.25, 0.0, 0.5], 0.0625)
 
 
 def test_rim_step_bounds_the_walls_edges_across_the_bit(capsule):

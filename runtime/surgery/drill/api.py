@@ -64,6 +64,8 @@ class DrillResult:
     rim : (r,) int64, the output vertices on the bit's surface
     new_positions : (k, 3) float64, the new vertices in the space that was drilled (rest, or posed)
     removed_faces : int, input faces (after refinement) taken away or cut by the bit
+    replaced : (t,) int64, the input faces the drill replaced (ascending): the result's faces are the
+        other input faces, in their order, then the faces made in their place
     wall_faces : int, the walls' faces: the last ``wall_faces`` rows of ``rig.faces``
     bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
         |skinned new vertex - where it was made| (0 for a drill at rest)
@@ -76,6 +78,7 @@ class DrillResult:
     rim: np.ndarray
     new_positions: np.ndarray
     removed_faces: int
+    replaced: np.ndarray
     wall_faces: int
     bit: Bit
     tolerance: float
@@ -85,17 +88,30 @@ class DrillResult:
 def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> DrillResult:
     """``drill`` with its bookkeeping (``DrillResult``); same arguments as ``drill``."""
     vertices, faces, joints, weights = mesh_arrays(rig)
-    the_bit = checked_bit(start, end, radius)
-    if not isinstance(wall, (bool, np.bool_)):
-        raise InvalidInputError(f"wall must be True or False, got {wall!r}")
+    the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
     affines = None if pose is None else check_pose(rig, pose).bone_affines()
     positions = vertices if affines is None else skin_affine(vertices, joints, weights, affines)
     diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0))) if len(positions) else 0.0
+    return drill_region(rig, the_bit, wall, affines, positions, diagonal,
+                        lambda p: winding_number(positions, faces, p) > 0.5)
+
+
+def checked_wall(wall) -> bool:
+    if not isinstance(wall, (bool, np.bool_)):
+        raise InvalidInputError(f"wall must be True or False, got {wall!r}")
+    return bool(wall)
+
+
+def drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagonal: float, inside) -> DrillResult:
+    """The drill of ``rig`` (checked arguments): ``positions`` (n, 3) its vertices in the space drilled
+    (rest, or skinned by ``affines``), ``diagonal`` the size of the whole model there (the tolerances'
+    scale), ``inside(point (3,)) -> bool`` whether a point is inside the whole model. ``rig`` may be a
+    region of a larger mesh (an editing session's): the drill reads and changes only the faces it
+    takes (``DrillResult.replaced``), and their neighbours across the edges it splits."""
+    faces = mesh_arrays(rig).faces
     step = RIM_STEP * the_bit.radius
     patch = Patch(positions, faces, rig_topology(rig))
-    reach = the_bit.radius + step               # the faces whose box meets the bit's, widened by a step
-    patch.take_all(_faces_near(positions, faces, np.minimum(the_bit.start, the_bit.end) - reach,
-                               np.maximum(the_bit.start, the_bit.end) + reach))
+    patch.take_all(faces_near_bit(positions, faces, the_bit))
     tolerance = tol.on_plane * max(diagonal, the_bit.radius)
     if patch.faces:
         refine(patch, the_bit, step)
@@ -103,11 +119,27 @@ def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) ->
     else:
         rim, opened = [], 0
     if opened == 0:
-        raise MissesMeshError(f"the bit (radius {the_bit.radius:g} around {the_bit.start.tolist()} -> "
-                              f"{the_bit.end.tolist()}) does not reach into the mesh of {rig.name!r}")
-    walls = build_walls(patch, rim, the_bit, step, lambda p: winding_number(positions, faces, p) > 0.5) \
-        if wall else 0
+        raise missed(the_bit, rig.name)
+    walls = build_walls(patch, rim, the_bit, step, inside) if wall else 0
     return _assemble(rig, patch, rim, opened, walls, the_bit, tolerance, affines, diagonal)
+
+
+def missed(the_bit: Bit, name: str) -> MissesMeshError:
+    """The error of a bit that does not reach into the mesh of the rig named ``name``."""
+    return MissesMeshError(f"the bit (radius {the_bit.radius:g} around {the_bit.start.tolist()} -> "
+                           f"{the_bit.end.tolist()}) does not reach into the mesh of {name!r}")
+
+
+def bit_reach(the_bit: Bit) -> tuple:
+    """(lo, hi) (3,): the box that holds every face a drill takes first (the bit's box widened by the
+    rim step and the radius)."""
+    reach = the_bit.radius + RIM_STEP * the_bit.radius
+    return np.minimum(the_bit.start, the_bit.end) - reach, np.maximum(the_bit.start, the_bit.end) + reach
+
+
+def faces_near_bit(positions, faces, the_bit: Bit) -> np.ndarray:
+    """The faces (k,) whose box meets ``bit_reach``: the faces the drill takes first."""
+    return _faces_near(positions, faces, *bit_reach(the_bit))
 
 
 def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
@@ -208,8 +240,8 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
                              attributes, f"{rig.name}_drilled")
     sources = np.concatenate([kept_input, np.full(len(new_rows), NEW_VERTEX, np.int64)])
     rim_ids = renumber[row_ids[np.asarray(rim, np.int64)]] if rim else np.empty(0, np.int64)
-    return DrillResult(result, sources, new, len(kept_input), np.sort(rim_ids), new_positions, opened, walls,
-                       the_bit, tolerance, residual)
+    return DrillResult(result, sources, new, len(kept_input), np.sort(rim_ids), new_positions, opened,
+                       np.flatnonzero(~kept_faces), walls, the_bit, tolerance, residual)
 
 
 def _wall_normals(normals, first_new: int, new_rows, patch: Patch, the_bit: Bit, new_joints, new_weights, affines):

@@ -1,0 +1,162 @@
+"""A session's drill on the region of its mesh around the bit, spliced back into the session's rows.
+
+The drill (``drill/api.py``) changes only the faces it takes into its patch and splits edges only of
+faces it takes: so it is run on a region, a rig of the session's faces whose (posed) boxes meet the
+bit's reach widened by a margin, and it is exact there when it took no *border* face of the region (a
+face with a corner where a face outside the region has one: across it, the drill could have wanted to
+split an edge whose other faces it cannot see). The first margin is the largest face in the bit's reach
+(about a ring of faces); while the drill takes a border face, the margin doubles and the region is
+drilled again, and after ``MAX_TRIES`` the region is the whole mesh, which has no border. In a region the drill is the functional drill
+of the session's mesh (``cgaskin.drill_details(session.rig, ...)``), which sees the same faces in the
+same order: its faces and new vertices are the same; the session keeps the vertices inside the bit as
+rows that no face uses.
+
+The region's result is then a splice, as a tear stroke's (``tear/splice.py``): the region's replaced
+faces go, the faces made in their place and the new vertices are appended, and undo takes them back.
+A hole costs the faces near the bit (the BVH's box query, in a pose through the bone-carried bounds of
+``posed_bounds.py``), plus, for a blind hole only, the winding number of the whole mesh at its tip.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..animation.rig import Rig
+from ..animation.skinning import skin_affine
+from .drill.api import DrillResult, bit_reach, drill_region, missed
+from .drill.inside import winding_number
+from .dynamic_bvh import dyn_faces_near_plane
+from .posed_bounds import pose_region
+from .surface import TEAR_LABEL, _labels, mesh_arrays
+from .topology import boundary_flags
+
+#: how many times the margin doubles before the region is the whole mesh
+MAX_TRIES = 5
+
+
+class DrillSplice(NamedTuple):
+    """A drill's changes as ``Surgery._apply`` takes a stroke's splice (no row of the session rewritten):
+    new rows (vertices (v, 3), labels (v,), joints (v, 4), weights (v, 4), attributes {name: (v, c)}),
+    ``removed`` (r,) the faces replaced, ``pieces`` (k, 3) the faces made (session rows), ``parents`` (k,)
+    -1 (each found from the BVH's root), ``boundary_rows`` (b,) with their ``boundary_flags`` (b,)."""
+
+    rows: np.ndarray
+    changed: np.ndarray
+    vertices: np.ndarray
+    labels: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+    attributes: dict
+    boundary_rows: np.ndarray
+    boundary_flags: np.ndarray
+    removed: np.ndarray
+    kept: np.ndarray
+    kept_corners: np.ndarray
+    pieces: np.ndarray
+    parents: np.ndarray
+
+
+def session_drill(session, the_bit, wall: bool, affines, posed) -> tuple:
+    """(DrillResult of the region, DrillSplice) of a drill of ``session`` (checked arguments; ``posed``
+    the session's ``PosedSource`` in the drill's pose, None at rest)."""
+    faces = session.faces
+    lo, hi = bit_reach(the_bit)
+    diagonal = session.diagonal if posed is None else posed.diagonal
+    inside = _inside(session, affines)
+    reached = _faces_in(session, posed, lo, hi)
+    if len(reached) == 0:
+        raise missed(the_bit, session._template.name)
+    margin = _largest_face(session, posed, reached)
+    for attempt in range(MAX_TRIES + 1):
+        whole = attempt == MAX_TRIES
+        region = np.flatnonzero(session._alive.view) if whole else _faces_in(session, posed, lo - margin, hi + margin)
+        rows = np.unique(faces[region])
+        rig = _region_rig(session, region, rows)
+        mesh = mesh_arrays(rig)        # (the kernels' arrays: writable buffers, as the functional drill's)
+        positions = mesh.vertices if affines is None else skin_affine(mesh.vertices, mesh.joints, mesh.weights, affines)
+        result = drill_region(rig, the_bit, wall, affines, positions, diagonal, inside)
+        if whole or not _border(session, region, rows)[result.replaced].any():
+            return result, _splice(session, result, region, rows)
+        margin *= 2.0
+
+
+def _largest_face(session, posed, faces) -> float:
+    """The largest side of the (posed) boxes of ``faces`` (k,): a margin that holds a ring of faces."""
+    positions = session.vertices if posed is None else posed.positions
+    corners = positions[session.faces[faces]]
+    return float((corners.max(axis=1) - corners.min(axis=1)).max())
+
+
+def _faces_in(session, posed, lo, hi) -> np.ndarray:
+    """Sorted live faces whose (posed) box meets [lo, hi]."""
+    if posed is None:
+        return session._bvh.faces_in_box(lo, hi)
+    none = np.zeros(3)
+    pose_region(posed.bvh_arrays, posed.posing, np.zeros(4), lo, hi, 0.0)      # what the box reaches, posed
+    return np.sort(dyn_faces_near_plane(posed.bvh_arrays, lo, hi, none, 0.0, 0.0))
+
+
+def _region_rig(session, region, rows) -> Rig:
+    """The faces ``region`` (r,) with their vertices ``rows`` (v,) (ascending) as a rig, with the
+    session's attributes and, once it has slits, its tear labels (as its ``rig`` has them)."""
+    n = len(rows)
+    attributes = {name: values[rows].reshape((n,) + tail) for name, (values, tail) in session.attributes.items()}
+    if session._labelled:
+        attributes[TEAR_LABEL] = session.labels[rows][:, None].astype(np.float64)
+    template = session._template
+    return Rig._of_checked(session.vertices[rows], np.searchsorted(rows, session.faces[region]),
+                           session.joints[rows], session.weights[rows], template.skeleton, template.clips,
+                           attributes, template.name)
+
+
+def _border(session, region, rows) -> np.ndarray:
+    """(r,) bool: the region's faces with a corner at a point (rest position) where a live face outside
+    the region has a corner."""
+    vertices, faces = session.vertices, session.faces
+    corners = vertices[rows]
+    outside = np.setdiff1d(session._bvh.faces_in_box(corners.min(axis=0), corners.max(axis=0)), region,
+                           assume_unique=True)
+    at_border = np.isin(_point_keys(corners), _point_keys(vertices[np.unique(faces[outside])]))
+    return at_border[np.searchsorted(rows, faces[region])].any(axis=1)
+
+
+def _point_keys(points) -> np.ndarray:
+    """(k,) one comparable key per point (-0.0 as 0.0, as the weld takes them)."""
+    points = np.ascontiguousarray(points + 0.0)
+    return points.view(np.dtype((np.void, 24))).ravel()
+
+
+def _inside(session, affines):
+    """``inside(point)`` for the walls: the winding number of the session's whole live mesh (skinned by
+    ``affines`` when posed), its arrays made on the first call (a blind hole's only)."""
+    surface = []
+
+    def inside(point) -> bool:
+        if not surface:
+            positions = session.vertices if affines is None else \
+                skin_affine(session.vertices, session.joints, session.weights, affines)
+            surface.extend((positions, session.faces[session._alive.view]))
+        return winding_number(*surface, point) > 0.5
+    return inside
+
+
+def _splice(session, result: DrillResult, region, rows) -> DrillSplice:
+    """The region's drill in the session's rows: the new vertices after its ``n`` rows, the pieces'
+    corners as session rows."""
+    out, n, first = mesh_arrays(result.rig), session.n_vertices, result.first_new
+    n_new = len(out.vertices) - first
+    n_kept = len(region) - len(result.replaced)
+    row_of = np.concatenate([rows[result.sources[:first]], n + np.arange(n_new)])
+    pieces = row_of[out.faces[n_kept:]]
+    labels = _labels(result.rig)
+    flags = boundary_flags(out.vertices, out.faces, labels)
+    touched = np.unique(out.faces[n_kept:])
+    attributes = {name: np.array(result.rig.attributes[name][first:], np.float64).reshape(n_new, -1)
+                  for name in session.attributes}
+    none = np.empty(0, np.int64)
+    return DrillSplice(rows=none, changed=none, vertices=out.vertices[first:], labels=labels[first:],
+                       joints=out.joints[first:], weights=out.weights[first:], attributes=attributes,
+                       boundary_rows=row_of[touched], boundary_flags=flags[touched], removed=region[result.replaced],
+                       kept=none, kept_corners=np.empty((0, 3), np.int64), pieces=pieces,
+                       parents=np.full(len(pieces), -1, np.int64))
