@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install what the tests need beyond pip: the assimp command line (FBX/DAE), the real clients that
 # tests/clients open cgaskin's files in: three.js in headless Chromium (Debian chromium, npm three +
-# puppeteer-core, no browser download) and Blender as a module (bpy, Python 3.11 only), and what
+# puppeteer-core, no browser download) and Blender as a module (bpy, Python 3.11 only, in a virtual
+# environment of its own: \$CGASKIN_BLENDER_VENV, default ~/.cache/cgaskin/bpy-5.0.1), and what
 # tests/targets runs the generated C, GLSL and WGSL with, all on the CPU: a C compiler, glslang's
 # validator, Mesa's EGL/llvmpipe OpenGL 4.5 (GLSL compute with fp64) and lavapipe Vulkan (WebGPU).
 # Idempotent: when everything is there it only checks (a few seconds).
@@ -44,11 +45,15 @@ if ! (cd "$JS" && node -e '
     (cd "$JS" && npm ci --no-audit --no-fund --loglevel=error)
 fi
 
-# --- Blender as a Python module ---------------------------------------------------------------------
+# --- Blender as a Python module, in a virtual environment of its own -----------------------------------
+# (bpy 5.0.1 requires NumPy < 2, the newest pyarrow NumPy >= 2: one environment cannot hold both; the
+# Blender tests run bpy in a subprocess of this environment's Python, tests/clients/conftest.py)
+BLENDER_VENV="${CGASKIN_BLENDER_VENV:-$HOME/.cache/cgaskin/bpy-5.0.1}"
 if "$PYTHON" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
-    if ! "$PYTHON" -c 'import importlib.metadata as m, sys; sys.exit(m.version("bpy") != "5.0.1")' 2>/dev/null; then
-        echo "install-test-deps: pip install bpy==5.0.1 (about 375 MB)"
-        "$PYTHON" -m pip install -q bpy==5.0.1
+    if ! "$BLENDER_VENV/bin/python" -c 'import importlib.metadata as m, sys; sys.exit(m.version("bpy") != "5.0.1")' 2>/dev/null; then
+        echo "install-test-deps: bpy==5.0.1 into $BLENDER_VENV (about 375 MB)"
+        "$PYTHON" -m venv --clear "$BLENDER_VENV"
+        "$BLENDER_VENV/bin/python" -m pip install -q bpy==5.0.1
     fi
 else
     echo "install-test-deps: bpy 5.0.1 needs Python 3.11, this is $("$PYTHON" -V 2>&1):" \

@@ -32,7 +32,7 @@ def float_array(value, name: str, last: int | None = None, ndim: int | None = No
     # finite values reaches the elementwise test without a culprit
     if not math.isfinite(arr.sum()) and not np.isfinite(arr).all():
         bad = np.argwhere(~np.isfinite(arr))[0]
-        raise InvalidInputError(f"{name} holds a non-finite value (NaN or inf) at index {tuple(bad)}")
+        raise InvalidInputError(f"{name} holds a non-finite value (NaN or inf) at index {tuple(bad.tolist())}")
     return arr
 
 

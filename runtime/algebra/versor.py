@@ -133,7 +133,7 @@ def dilator(scale) -> np.ndarray:
     outside = (scale < low) | (scale > high)
     if np.any(outside):
         raise InvalidInputError(f"scale must lie in [{low:g}, {high:g}] (a dilation float64 can hold), "
-                                f"got {scale[outside].flat[0]!r}")
+                                f"got {float(scale[outside].flat[0])!r}")
     return _rows(K.versor_dilator_batch, VERSOR_SIZE, (scale, False))
 
 

@@ -32,7 +32,7 @@ def _labels(rig) -> np.ndarray:
     bad = np.flatnonzero((labels != values) | (np.abs(labels) >= 2.0 ** 53))
     if len(bad):
         raise InvalidInputError(f"attribute {TEAR_LABEL} must hold whole numbers (labels of slit sides), "
-                                f"got {values[bad[0]]!r} at vertex {bad[0]}")
+                                f"got {float(values[bad[0]])!r} at vertex {bad[0]}")
     return labels.astype(np.int64)
 
 

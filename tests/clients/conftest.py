@@ -1,9 +1,9 @@
 """Real clients (three.js in headless Chromium, Blender as a module): what they need, and the files
 they open. A missing client skips with the command that installs it; under CGASKIN_CI=1 it fails,
 so that CI never passes without having opened the files."""
-import importlib.util
 import os
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -40,11 +40,17 @@ def threejs() -> dict:
 
 @pytest.fixture(scope="session")
 def blender() -> str:
-    """The Python that imports bpy (Blender 5.0 as a module: Python 3.11 only)."""
+    """The Python that imports bpy (Blender 5.0 as a module: Python 3.11 only), in the virtual environment
+    that scripts/install-test-deps.sh makes for it (bpy requires NumPy < 2, cgaskin's batch extra >= 2)."""
     if sys.version_info[:2] != (3, 11):
         require([f"Python 3.11 (bpy 5.0.1 has no wheel for {sys.version.split()[0]})"], "the Blender test")
-    require([] if importlib.util.find_spec("bpy") else ["bpy 5.0.1"], "the Blender test")
-    return sys.executable
+    venv = Path(os.environ.get("CGASKIN_BLENDER_VENV", Path.home() / ".cache" / "cgaskin" / "bpy-5.0.1"))
+    python = venv / "bin" / "python"
+    found = python.is_file() and subprocess.run(
+        [str(python), "-c", "import importlib.util, sys; sys.exit(importlib.util.find_spec('bpy') is None)"],
+        capture_output=True).returncode == 0
+    require([] if found else [f"bpy 5.0.1 in {venv} (bash scripts/install-test-deps.sh)"], "the Blender test")
+    return str(python)
 
 
 @pytest.fixture(scope="session")
