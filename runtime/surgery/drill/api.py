@@ -97,6 +97,7 @@ def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) ->
 
 
 def checked_wall(wall) -> bool:
+    """``wall`` as a bool; InvalidInputError for anything but True or False."""
     if not isinstance(wall, (bool, np.bool_)):
         raise InvalidInputError(f"wall must be True or False, got {wall!r}")
     return bool(wall)
