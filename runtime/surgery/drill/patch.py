@@ -61,12 +61,24 @@ class Patch:
         return r
 
     def take_all(self, faces) -> None:
-        """Add the input faces ``faces`` (k,) to the patch (none taken yet: the first ones)."""
+        """Add the input faces ``faces`` (k,) to the empty patch: what ``take`` of each would make (rows
+        in ascending vertex order, points in the order their first vertex comes), in whole arrays."""
+        assert not self.row_point, "take_all starts a patch"
         corners = self.mesh_faces[faces]
-        for v in np.unique(corners).tolist():
-            self.row(v)
-        row_of = self.row_of
-        self.faces.extend([[row_of[a], row_of[b], row_of[c]] for a, b, c in corners.tolist()])
+        vertices = np.unique(corners)
+        welded, first, point = np.unique(self.topology.welded[vertices], return_index=True, return_inverse=True)
+        order = np.argsort(first)                   # the points by their first vertex
+        renumber = np.empty(len(order), np.int64)
+        renumber[order] = np.arange(len(order))
+        point = renumber[point.ravel()]
+        self.add_points(self.positions[vertices[first[order]]])
+        welded = welded[order].tolist()
+        self.point_of, self.point_welded = dict(zip(welded, range(len(welded)))), dict(enumerate(welded))
+        rows = list(range(len(vertices)))
+        self.row_of = dict(zip(vertices.tolist(), rows))
+        self.row_point, self.row_vertex, self.input_rows = point.tolist(), vertices.tolist(), rows[:]
+        self.row_parents = [(r, r, 0.0) for r in rows]
+        self.faces.extend(np.searchsorted(vertices, corners).tolist())
         self.face_source.extend(faces.tolist())
         self.taken.update(faces.tolist())
 
