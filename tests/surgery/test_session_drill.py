@@ -43,8 +43,7 @@ def _assert_unchanged(session, before):
 
 def _drill_both(session, start, end, radius, **options):
     """The session's drill and the functional drill of its mesh before it; where the functional drill
-    raises (a bit that misses; a wall it cannot build, test_drill_wall's known failure), the session
-    raises the same error and is unchanged (None)."""
+    raises (a bit that misses), the session raises the same error and is unchanged (None)."""
     before = session.rig
     functional = {"pose": session.pose, **options}        # (a session in a pose drills in it)
     try:

@@ -308,9 +308,10 @@ def _area(xy) -> float:
 def _curved_extent(frame: Frame, a, b) -> float:
     """How far an edge between surface points (θ, σ) a and b runs across the surface's curvature: its
     angle times the radius on the cylinder (which is straight along the axis: an edge along it lies on
-    it), its length where it reaches onto a round end."""
+    it), its chord where it reaches onto a round end (a sphere: near its pole an angle spans little, and
+    a measure in (θ, σ) would never shrink under the bisection of the longest edges in space)."""
     if min(a[1], b[1]) < 0.0 or max(a[1], b[1]) > frame.length:
-        return float(np.hypot(frame.r * (a[0] - b[0]), a[1] - b[1]))
+        return float(np.linalg.norm(frame.point(*a) - frame.point(*b)))
     return frame.r * abs(float(a[0] - b[0]))
 
 
