@@ -39,7 +39,8 @@ class DrillSplice(NamedTuple):
     """A drill's changes as ``Surgery._apply`` takes a stroke's splice (no row of the session rewritten):
     new rows (vertices (v, 3), labels (v,), joints (v, 4), weights (v, 4), attributes {name: (v, c)}),
     ``removed`` (r,) the faces replaced, ``pieces`` (k, 3) the faces made (session rows), ``parents`` (k,)
-    -1 (each found from the BVH's root), ``boundary_rows`` (b,) with their ``boundary_flags`` (b,)."""
+    the replaced face each lies in, whose BVH leaf takes it (-1, a wall's: found from the root),
+    ``boundary_rows`` (b,) with their ``boundary_flags`` (b,)."""
 
     rows: np.ndarray
     changed: np.ndarray
@@ -159,4 +160,4 @@ def _splice(session, result: DrillResult, region, rows) -> DrillSplice:
                        joints=out.joints[first:], weights=out.weights[first:], attributes=attributes,
                        boundary_rows=row_of[touched], boundary_flags=flags[touched], removed=region[result.replaced],
                        kept=none, kept_corners=np.empty((0, 3), np.int64), pieces=pieces,
-                       parents=np.full(len(pieces), -1, np.int64))
+                       parents=np.where(result.made_in >= 0, region[result.made_in], -1))

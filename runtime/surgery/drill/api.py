@@ -66,6 +66,8 @@ class DrillResult:
     removed_faces : int, input faces (after refinement) taken away or cut by the bit
     replaced : (t,) int64, the input faces the drill replaced (ascending): the result's faces are the
         other input faces, in their order, then the faces made in their place
+    made_in : (k,) int64, for each face made (the last k of the result's), the input face it lies in
+        (-1: a wall's)
     wall_faces : int, the walls' faces: the last ``wall_faces`` rows of ``rig.faces``
     bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
         |skinned new vertex - where it was made| (0 for a drill at rest)
@@ -79,6 +81,7 @@ class DrillResult:
     new_positions: np.ndarray
     removed_faces: int
     replaced: np.ndarray
+    made_in: np.ndarray
     wall_faces: int
     bit: Bit
     tolerance: float
@@ -241,8 +244,9 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
                              attributes, f"{rig.name}_drilled")
     sources = np.concatenate([kept_input, np.full(len(new_rows), NEW_VERTEX, np.int64)])
     rim_ids = renumber[row_ids[np.asarray(rim, np.int64)]] if rim else np.empty(0, np.int64)
+    made_in = np.maximum(np.asarray(patch.face_source, np.int64), -1)        # (wall and fill: -1)
     return DrillResult(result, sources, new, len(kept_input), np.sort(rim_ids), new_positions, opened,
-                       np.flatnonzero(~kept_faces), walls, the_bit, tolerance, residual)
+                       np.flatnonzero(~kept_faces), made_in, walls, the_bit, tolerance, residual)
 
 
 def _wall_normals(normals, first_new: int, new_rows, patch: Patch, the_bit: Bit, new_joints, new_weights, affines):
