@@ -18,7 +18,7 @@ manifold3d = pytest.importorskip("manifold3d", reason="manifold3d (pip, in the t
 
 #: bits through the built-in capsule arm (radius 0.25 around the x axis from x = -0.25 to 3.25): a hole
 #: through it, a blind one, one along its axis from its end, one grazing its side, one oblique, one from
-#: its pole along its surface
+#: its pole along its surface, one grazing it lengthwise
 CASES = {
     "through": ([1.0, 0.0, -1.0], [1.0, 0.0, 1.0], 0.1),
     "blind": ([1.0, 0.0, -1.0], [1.0, 0.0, 0.05], 0.1),
@@ -28,6 +28,8 @@ CASES = {
     # the bit's start on the capsule's pole, travelling along its surface: the fill on the bit's round
     # start reaches that end's pole (found by test_session_drill's random bits; the fill did not converge)
     "from the pole": ([-0.25, 0.0, 0.0], [-0.25, 0.0, 0.5], 0.0625),
+    # the axis on the surface along the capsule: a fill longer along the bit than across it
+    "grazing lengthwise": ([0.8, 0.25, 0.0], [2.2, 0.25, 0.0], 0.1),
 }
 
 
@@ -216,3 +218,15 @@ def test_drills_across_a_slit_and_a_cut_and_a_tear_from_a_rim(capsule):
     holed = cgaskin.drill(capsule, [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], 0.08)
     from_rim = cgaskin.tear(holed, ([1.09, 0.0, 1.0], [1.09, 0.0, 0.0]), ([1.5, 0.0, 1.0], [1.5, 0.0, 0.0]))
     assert from_rim.n_faces > holed.n_faces
+
+
+def test_a_lengthwise_fill_has_about_as_many_faces_as_its_area_needs(capsule):
+    """A bit grazing the capsule lengthwise: its fill is meshed in chains about a rim step apart, not
+    zipped across and bisected into slivers (which made 36,732 wall faces, 26 per step-sized triangle
+    of area; now about 4)."""
+    result = cgaskin.drill_details(capsule, *CASES["grazing lengthwise"])
+    faces, vertices = result.rig.faces[-result.wall_faces:], result.rig.vertices
+    area = 0.5 * np.linalg.norm(np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]],
+                                         vertices[faces[:, 2]] - vertices[faces[:, 0]]), axis=1).sum()
+    step = RIM_STEP * CASES["grazing lengthwise"][2]
+    assert result.wall_faces <= 8.0 * area / (0.5 * step ** 2)

@@ -136,7 +136,7 @@ def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
             _tunnel(patch, frame, a, b, step)           # a blind hole (or a surface facing the wrong way)
     fills = [loop for loop in loops if loop.winding == 0]
     for loop in fills:
-        _fill(patch, frame, loop)
+        _fill(patch, frame, loop, step)
     if fills:
         _refine_fills(patch, frame, step)
     return len(patch.faces) - before
@@ -255,35 +255,75 @@ def _add(patch: Patch, rows) -> None:
     patch.face_source.append(WALL)
 
 
-def _fill(patch: Patch, frame: Frame, loop: Loop) -> None:
+def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
     """The surface a loop that does not wind around the axis encloses. Split at its least and greatest
     angle, a loop is usually two chains along which the angle only grows: they are zipped by angle,
-    faces narrow across the curvature and long along the straight axis; a rim that runs along the axis
-    (a bit grazing lengthwise) is split and zipped by height instead. Otherwise the loop is ear-clipped
-    in (r θ, σ). Edges that then span the curvature are bisected (``_refine_fills``)."""
+    faces narrow across the curvature and long along the straight axis. A loop longer along the axis
+    than across it (a bit grazing lengthwise), or one whose angle chains do not only grow, is split at
+    its least and greatest height instead, with chains between them about a ``step`` apart across the
+    curvature (``_chains_between``), each zipped to the next by height. Otherwise the loop is
+    ear-clipped in (r θ, σ). Edges that then span the curvature are bisected (``_refine_fills``)."""
     for point, theta, sigma in zip(loop.points, loop.unwrapped, loop.sigma):
         patch.fill_params[int(point)] = np.array([theta, sigma])     # (the fill's refinement halves them)
     rows = _loop_rows(patch, loop)
     n, triangles = len(rows), None
-    for key in (loop.unwrapped, loop.sigma):     # across the axis, else along it (a bit grazing lengthwise)
+    theta, sigma = loop.unwrapped, loop.sigma
+    keys = (loop.unwrapped, loop.sigma)          # across the axis, else along it (a bit grazing lengthwise)
+    if np.ptp(loop.sigma) > frame.r * np.ptp(loop.unwrapped):
+        keys = keys[::-1]                        # (a loop longer along the axis than across: along it first)
+    for key in keys:
         first, last = int(np.argmin(key)), int(np.argmax(key))
         chains = [[(first + i) % n for i in range((last - first) % n + 1)],
                   [(first - i) % n for i in range((first - last) % n + 1)]]
-        if all(np.all(np.diff(key[chain]) > 0.0) for chain in chains):
-            triangles = _zip_chains(key, *chains)
+        steps = [np.diff(key[chain]) for chain in chains]
+        # (along the axis a chain may step across at one height: the rim crossing a ring of edges)
+        if all(np.all(d >= 0.0) if key is loop.sigma else np.all(d > 0.0) for d in steps):
+            if key is loop.unwrapped:
+                triangles = _zip_chains(key, *chains)
+            else:
+                chains, theta, sigma = _chains_between(patch, frame, loop, rows, chains, step)
+                triangles = [tri for lower, upper in zip(chains, chains[1:]) for tri in _zip_chains(sigma, lower, upper)]
             break
     if triangles is None:
         xy = np.column_stack([frame.r * loop.unwrapped, loop.sigma])
         order = np.arange(n) if _area(xy) > 0.0 else np.arange(n)[::-1]
         triangles = order[_ear_clip(np.ascontiguousarray(xy[order]), order.astype(np.int64), tol.min_sine)]
     triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
-    x, y = frame.r * loop.unwrapped[triangles], loop.sigma[triangles]
+    x, y = frame.r * theta[triangles], sigma[triangles]
     turn = (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (y[:, 1] - y[:, 0]) * (x[:, 2] - x[:, 0])
     # counter-clockwise in (r θ, σ) faces away from the axis (∂θ × ∂σ is the outward radial): reversed
     triangles[turn > 0.0] = triangles[turn > 0.0][:, [0, 2, 1]]
     for tri in triangles.tolist():
         patch.faces.append([rows[i] for i in tri])
         patch.face_source.append(WALL_FILL)
+
+
+def _chains_between(patch: Patch, frame: Frame, loop: Loop, rows: list, chains: list, step: float) -> tuple:
+    """Chains between a lengthwise fill's two chains (corner indices from its least to its greatest
+    height), at the first chain's heights and angles evenly between the two chains' there, so that no
+    edge across spans more than ``step`` of the curvature; their rows blend the first chain's row and
+    the other chain's row nearest in height. Appends the new rows to ``rows``; returns (the chains from
+    the first to the other, θ and σ of every index)."""
+    lower, upper = chains
+    theta, sigma = loop.unwrapped, loop.sigma
+    across = np.interp(sigma[lower], sigma[upper], theta[upper]) - theta[lower]
+    count = max(1, int(math.ceil(frame.r * float(np.abs(across).max()) / step)))
+    inner = lower[1:-1]                                   # (the two chains share their first and last corner)
+    nearest = np.asarray(upper)[np.abs(sigma[upper][None, :] - sigma[inner][:, None]).argmin(axis=1)]
+    out, thetas, sigmas = [lower], [theta], [sigma]
+    for j in range(1, count):
+        t = j / count
+        ring_theta, ring_sigma = theta[inner] + t * across[1:-1], sigma[inner]
+        first = patch.add_points(frame.points(ring_theta, ring_sigma))
+        start = len(rows)
+        for i, (a, b) in enumerate(zip(inner, nearest.tolist())):
+            rows.append(patch.new_row(first + i, rows[a], rows[b], t))
+            patch.fill_params[first + i] = np.array([ring_theta[i], ring_sigma[i]])
+        out.append([lower[0]] + list(range(start, len(rows))) + [lower[-1]])
+        thetas.append(ring_theta)
+        sigmas.append(ring_sigma)
+    out.append(upper)
+    return out, np.concatenate(thetas), np.concatenate(sigmas)
 
 
 def _zip_chains(key, lower: list, upper: list) -> list:
