@@ -66,6 +66,7 @@ def _close(patch: Patch, marked) -> np.ndarray:
     is added; input faces beyond the patch on a marked input edge join it first."""
     topology, welded = patch.topology, patch.point_welded
     seen = set()
+    codes = None
     while True:
         grown = False
         for a, b in _edge_pairs(marked):
@@ -75,9 +76,10 @@ def _close(patch: Patch, marked) -> np.ndarray:
             if a in welded and b in welded:
                 for face in _input_faces(topology, welded[a], welded[b]):
                     grown |= patch.take(int(face))
-        points, face_points = patch.point_array(), patch.face_points()
-        codes = _edge_codes(face_points)
-        k, _ = _longest(points, face_points)
+        if grown or codes is None:          # (the faces' edges and longest edges, again when faces came in)
+            points, face_points = patch.point_array(), patch.face_points()
+            codes = _edge_codes(face_points)
+            k, _ = _longest(points, face_points)
         has = np.isin(codes, marked).any(axis=1)
         added = np.setdiff1d(codes[has, k[has]], marked)
         if not len(added) and not grown:
