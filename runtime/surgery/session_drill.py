@@ -6,10 +6,10 @@ bit's reach widened by a margin, and it is exact there when it took no *border* 
 face with a corner where a face outside the region has one: across it, the drill could have wanted to
 split an edge whose other faces it cannot see). The first margin is the largest face in the bit's reach
 (about a ring of faces); while the drill takes a border face, the margin doubles and the region is
-drilled again, and after ``MAX_TRIES`` the region is the whole mesh, which has no border. In a region the drill is the functional drill
-of the session's mesh (``cgaskin.drill_details(session.rig, ...)``), which sees the same faces in the
-same order: its faces and new vertices are the same; the session keeps the vertices inside the bit as
-rows that no face uses.
+drilled again, and after ``MAX_TRIES`` the region is the whole mesh, which has no border. In a region
+the drill is the functional drill of the session's mesh (``cgaskin.drill_details(session.rig, ...)``),
+which sees the same faces in the same order: its faces and new vertices are the same; the session keeps
+the vertices inside the bit as rows that no face uses.
 
 The region's result is then a splice, as a tear stroke's (``tear/splice.py``): the region's replaced
 faces go, the faces made in their place and the new vertices are appended, and undo takes them back.

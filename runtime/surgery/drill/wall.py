@@ -282,7 +282,8 @@ def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
                 triangles = _zip_chains(key, *chains)
             else:
                 chains, theta, sigma = _chains_between(patch, frame, loop, rows, chains, step)
-                triangles = [tri for lower, upper in zip(chains, chains[1:]) for tri in _zip_chains(sigma, lower, upper)]
+                triangles = [tri for lower, upper in zip(chains, chains[1:])
+                             for tri in _zip_chains(sigma, lower, upper)]
             break
     if triangles is None:
         xy = np.column_stack([frame.r * loop.unwrapped, loop.sigma])
