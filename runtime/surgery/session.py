@@ -218,7 +218,7 @@ class Surgery:
         with self._costed("drill"):
             the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
             posed = None if pose is None and self._pose is None else self._posed(pose)
-            result, splice = session_drill(self, the_bit, wall, None if posed is None else posed.affines, posed)
+            result, splice = session_drill(self, the_bit, wall, posed)
             self._history.append(self._apply(splice))
             self._snapshot = None
         return result

@@ -58,10 +58,10 @@ class DrillSplice(NamedTuple):
     parents: np.ndarray
 
 
-def session_drill(session, the_bit, wall: bool, affines, posed) -> tuple:
+def session_drill(session, the_bit, wall: bool, posed) -> tuple:
     """(DrillResult of the region, DrillSplice) of a drill of ``session`` (checked arguments; ``posed``
     the session's ``PosedSource`` in the drill's pose, None at rest)."""
-    faces = session.faces
+    faces, affines = session.faces, None if posed is None else posed.affines
     lo, hi = bit_reach(the_bit)
     diagonal = session.diagonal if posed is None else posed.diagonal
     inside = _inside(session, affines)
