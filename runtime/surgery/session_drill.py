@@ -30,6 +30,7 @@ from .dynamic_bvh import dyn_faces_near_plane
 from .posed_bounds import pose_region
 from .surface import TEAR_LABEL, _labels, mesh_arrays
 from .topology import boundary_flags
+from .weld import _weld
 
 #: how many times the margin doubles before the region is the whole mesh
 MAX_TRIES = 5
@@ -118,14 +119,9 @@ def _border(session, region, rows) -> np.ndarray:
     corners = vertices[rows]
     outside = np.setdiff1d(session._bvh.faces_in_box(corners.min(axis=0), corners.max(axis=0)), region,
                            assume_unique=True)
-    at_border = np.isin(_point_keys(corners), _point_keys(vertices[np.unique(faces[outside])]))
+    welded, _ = _weld(np.concatenate((corners, vertices[np.unique(faces[outside])])), None)   # as the drill welds
+    at_border = np.isin(welded[:len(rows)], welded[len(rows):])
     return at_border[np.searchsorted(rows, faces[region])].any(axis=1)
-
-
-def _point_keys(points) -> np.ndarray:
-    """(k,) one comparable key per point (-0.0 as 0.0, as the weld takes them)."""
-    points = np.ascontiguousarray(points + 0.0)
-    return points.view(np.dtype((np.void, 24))).ravel()
 
 
 def _inside(session, affines):
