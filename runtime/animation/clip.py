@@ -29,6 +29,10 @@ SLERP, NLERP = 0, 1
 
 #: columns of ``ClipArrays.channels``
 NODE, PATH, INTERPOLATION, FIRST_KEY, KEYS, FIRST_VALUE = range(6)
+#: a STEP or LINEAR rotation key in ``ClipArrays.values``: the unit quaternion (x, y, z, w), then the
+#: arc to the next key that slerp needs (the sign that puts the next key on the shorter arc, the angle
+#: θ between them, 1 / sin θ and cos θ; zeros after the last key), so that a frame pays one sincos
+ARC_SIGN, ARC_ANGLE, ARC_INV_SIN, ARC_COS, ROTATION_KEY = 4, 5, 6, 7, 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,8 +69,8 @@ class ClipArrays(NamedTuple):
     channels : (c, 6) int64 rows (node, path code, interpolation code, first key, key count,
         first value), columns named by ``NODE``, ``PATH``, ... ; codes as ``TRANSLATION``, ``STEP``, ...
     times : (K,) float64, the key times of every channel one after the other
-    values : (V,) float64, the values of every channel flattened in their (k, c) or (k, 3, c) order
-        (STEP and LINEAR rotation keys as unit quaternions)
+    values : (V,) float64, the values of every channel flattened in their (k, c) or (k, 3, c) order;
+        STEP and LINEAR rotation keys as (k, ``ROTATION_KEY``) rows: a unit quaternion and its arc
     nodes : (a,) int64, the animated nodes, ascending
     last_node : int, the largest animated node (-1: none)
     """
@@ -104,6 +108,26 @@ class Clip:
         return pack_channels(self.name, self.channels)
 
 
+def _with_arcs(keys):
+    """(k, ``ROTATION_KEY``) of unit quaternion keys (k, 4): each with the arc to the next key. The
+    angle comes from the chords |qa - qb| = 2 sin(θ/2) and |qa + qb| = 2 cos(θ/2) (accurate at small
+    angles, where acos of the dot product loses half the digits); sin θ = 2 sin(θ/2) cos(θ/2) and
+    cos θ = cos²(θ/2) - sin²(θ/2) from the same chords."""
+    rows = np.zeros((len(keys), ROTATION_KEY))
+    rows[:, :4] = keys
+    a, b = keys[:-1], keys[1:]
+    sign = np.where(np.einsum("ij,ij->i", a, b) < 0.0, -1.0, 1.0)   # q and -q are one rotation
+    d2 = ((a - sign[:, None] * b) ** 2).sum(axis=1)
+    s2 = ((a + sign[:, None] * b) ** 2).sum(axis=1)
+    chord_d, chord_s = np.sqrt(d2), np.sqrt(s2)
+    rows[:-1, ARC_SIGN] = sign
+    rows[:-1, ARC_ANGLE] = 2.0 * np.arctan2(chord_d, chord_s)
+    with np.errstate(divide="ignore"):        # θ = 0: slerp is the linear blend, 1 / sin θ unused
+        rows[:-1, ARC_INV_SIN] = 2.0 / (chord_d * chord_s)
+    rows[:-1, ARC_COS] = 0.25 * (s2 - d2)
+    return rows
+
+
 def pack_channels(name: str, channels) -> ClipArrays:
     """``ClipArrays`` of ``channels``; InvalidInputError names the clip and channel that is malformed
     (unknown path or interpolation, times not finite and strictly increasing, values of the wrong
@@ -136,7 +160,7 @@ def pack_channels(name: str, channels) -> ClipArrays:
             norm = np.linalg.norm(v, axis=1, keepdims=True)
             if not (norm > 0).all():
                 raise InvalidInputError(f"{where}: rotation key {int(np.argmin(norm))} has zero length")
-            v = v / norm
+            v = _with_arcs(v / norm)
         rows.append((channel.node, list(CHANNEL_PATHS).index(channel.path),
                      INTERPOLATIONS.index(channel.interpolation), n_keys, len(t), n_values))
         times.append(t)

@@ -36,6 +36,8 @@ from .sampling import frame_sampler, sample_frame
 from .skeleton import Skeleton
 from .validate import check_mesh
 
+_CLIP_KEYS = (str, int)       # (not bool: True would find the sampler of clip 1)
+
 #: the whole data model in one import
 __all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATHS"]
 
@@ -127,19 +129,21 @@ class Rig:
         linear blend (``"linear"``); a time before the first key or after the last clamps to that key
         (no error). InvalidInputError for an unknown clip (the message lists the rig's clips) and a
         time that is not a finite real number."""
-        chosen = self.clips[self.clip_index(clip)]
-        key = (chosen, rotation_blend) if type(rotation_blend) is str else None
-        sampler = self._samplers.get(key)
-        if sampler is None:             # (the clip's first frame, checked and made ready)
-            sampler = frame_sampler(self.skeleton, chosen, rotation_blend)
-            self._samplers[key] = sampler
+        key = (clip, rotation_blend) if type(clip) in _CLIP_KEYS and type(rotation_blend) is str else None
+        kept = self._samplers.get(key)
+        # (``clips`` is a list: the clip kept for this name or index must still be the rig's)
+        if kept is None or not (kept[0] < len(self.clips) and self.clips[kept[0]] is kept[1].clip):
+            index = self.clip_index(clip)       # (the clip's first frame: checked and made ready)
+            kept = (index, frame_sampler(self.skeleton, self.clips[index], rotation_blend))
+            if key is not None:
+                self._samplers[key] = kept
         t = time if type(time) is float and math.isfinite(time) else real_number(time, "time")
-        return Pose._of_fields(self.skeleton, *sample_frame(sampler, t))
+        return Pose._of_fields(self.skeleton, *sample_frame(kept[1], t))
 
     @cached_property
     def _samplers(self) -> dict:
-        """(clip, rotation blend) -> the clip made ready to sample on the rig's skeleton: a frame's call
-        then pays one lookup."""
+        """(clip name or index as the caller gave it, rotation blend) -> (clip index, the clip made
+        ready to sample on the rig's skeleton): a frame's call then pays one lookup."""
         return {}
 
     def poses(self, clip=0, times=(0.0,), rotation_blend: str = "slerp") -> Poses:

@@ -18,13 +18,17 @@ node's TRS into the pose's fields:
   every node also gets its exact matrix T @ R @ S — the fields that ``Pose.from_trs`` makes of the
   same TRS (equal to rounding; tests/animation/test_sampling.py checks 1e-12).
 
-Measured on Fox (25 nodes, 21 channels; 2-core machine): about 2 µs per frame inside the kernel
-(the channels' key search and blends, then the animated nodes' products), about 6 µs for ``rig.pose``
-end to end (numba's dispatch of 15 arguments about 0.9 µs, the three output arrays 0.5 µs, the Pose);
-``benchmarks/bench_animation.py`` prints the table. The channels and the nodes are each one loop typed
-into the frame's kernel (``inlined``), not a call each: a compiled call that takes arrays pays their
-reference counts (atomic operations), which was a fifth of a frame as a call per channel and per node,
-and a tenth as one call for each loop.
+A frame starts as copies of the rest pose's fields (the nodes no channel animates keep them), and the
+kernel writes the animated nodes. Slerp reads the angle between two keys, kept beside the first of them
+(``clip.ROTATION_KEY`` rows), so a frame pays one sincos per rotation channel.
+
+Measured on Fox (25 nodes, 21 channels; 2-core machine): about 1.8 µs per frame inside the kernel
+(the channels' key search and blends, then the animated nodes' products), about 4.5 µs for
+``rig.pose`` end to end (numba's dispatch of 11 arguments about 0.7 µs, the three fields copied from
+the rest 0.7 µs, the Pose 0.3 µs); ``benchmarks/bench_animation.py`` prints the table. The frame, its
+channels and its nodes are each typed into the kernels (``inlined``), not called: a compiled call
+that takes arrays pays their reference counts (atomic operations), which was a fifth of a frame as a
+call per channel and per node, and 0.3 µs as one call for the frame.
 
 The rest of the skeleton (TRS rows, and the rest pose's fields that unanimated nodes keep) is
 prepared once per skeleton, by the same kernel with no channels.
@@ -38,15 +42,16 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.checks import float_array, real_number
-from .._shared.jit import B1, B2, F1, F2, F3, F4, I1, I2, callee, f8, helper, i8, inlined, kernel
+from .._shared.jit import B1, B2, F1, F2, F3, F4, I1, I2, f8, helper, i8, inlined, kernel
 from ..algebra.transforms import trs_matrix
 from ..algebra.versor import SCALE_RANGE
 from ..errors import InvalidInputError
 from ..generated.kernels import (gp_motor_motor, gp_versor_versor, versor_dilator, versor_rotor_quaternion,
                                  versor_translator)
 from ..tolerances import tol
-from .clip import (CUBICSPLINE, FIRST_KEY, FIRST_VALUE, INTERPOLATION, KEYS, NLERP, NODE, PATH, ROTATION,
-                   ROTATION_BLENDS, SCALE, SLERP, STEP, pack_channels)
+from .clip import (ARC_ANGLE, ARC_COS, ARC_INV_SIN, ARC_SIGN, CUBICSPLINE, FIRST_KEY, FIRST_VALUE, INTERPOLATION,
+                   KEYS, NLERP, NODE, PATH, ROTATION, ROTATION_BLENDS, ROTATION_KEY, SCALE, SLERP, STEP,
+                   pack_channels)
 
 #: a node's TRS row in the kernels' scratch: translation, rotation (x, y, z, w), scale
 TRS_T, TRS_Q, TRS_S, TRS_SIZE = 0, 3, 7, 10
@@ -85,32 +90,20 @@ def _key(times, first, count, t, hint):
 
 
 @helper
-def _blend_rotation(values, a, b, u, blend, out, node, at):
-    """out[node, at:at+4] = the unit quaternion between the unit keys values[a:a+4] and values[b:b+4]
-    at u, on the shorter arc: slerp (glTF), or with blend NLERP the normalised linear blend."""
-    dot = 0.0
-    for c in range(4):
-        dot += values[a + c] * values[b + c]
-    sign = -1.0 if dot < 0.0 else 1.0           # q and -q are one rotation: take the nearer one
+def _blend_rotation(values, a, u, blend, out, node, at):
+    """out[node, at:at+4] = the unit quaternion between the rotation key at values[a] and the next
+    one (each a ``ROTATION_KEY`` row: the key, then its arc to the next) at u, on the shorter arc:
+    slerp (glTF), or with blend NLERP the normalised linear blend."""
+    b = a + ROTATION_KEY
     wa, wb = 1.0 - u, u
-    if blend != NLERP:
-        # the angle θ between the keys from the chords |qa - qb| = 2 sin(θ/2), |qa + qb| = 2 cos(θ/2)
-        # (accurate at small angles, where acos of the dot product loses half the digits)
-        d2 = s2 = 0.0
-        for c in range(4):
-            qa, qb = values[a + c], sign * values[b + c]
-            d2 += (qa - qb) * (qa - qb)
-            s2 += (qa + qb) * (qa + qb)
-        chord_d, chord_s = math.sqrt(d2), math.sqrt(s2)
-        theta = 2.0 * math.atan2(chord_d, chord_s)
-        if theta > 0.0:
-            # wb = sin uθ / sin θ, wa = sin (1-u)θ / sin θ = cos uθ - cos θ wb: the sine and cosine of
-            # one angle (one sincos call), and sin θ = 2 sin(θ/2) cos(θ/2), cos θ = cos²(θ/2) - sin²(θ/2)
-            # from the chords (θ <= π/2 on the shorter arc: sin θ is not small unless θ is, and then
-            # wb -> u, wa -> 1 - u with absolute errors of a few ulps)
-            wb = math.sin(u * theta) * 2.0 / (chord_d * chord_s)
-            wa = math.cos(u * theta) - 0.25 * (s2 - d2) * wb
-    wb *= sign
+    theta = values[a + ARC_ANGLE]
+    if blend != NLERP and theta > 0.0:
+        # wb = sin uθ / sin θ, wa = sin (1-u)θ / sin θ = cos uθ - cos θ wb: one angle's sine and cosine
+        # (one sincos call; θ <= π/2 on the shorter arc, so sin θ is not small unless θ is, and then
+        # wb -> u, wa -> 1 - u with absolute errors of a few ulps)
+        wb = math.sin(u * theta) * values[a + ARC_INV_SIN]
+        wa = math.cos(u * theta) - values[a + ARC_COS] * wb
+    wb *= values[a + ARC_SIGN]
     q0 = wa * values[a] + wb * values[b]
     q1 = wa * values[a + 1] + wb * values[b + 1]
     q2 = wa * values[a + 2] + wb * values[b + 2]
@@ -132,8 +125,10 @@ def _sample_channels(channels, times, values, t, blend, hints, trs):
         at = TRS_Q if path == ROTATION else (TRS_S if path == SCALE else TRS_T)
         k, u, dt = _key(times, channels[c, FIRST_KEY], channels[c, KEYS], t, hints[c])
         hints[c] = k
-        stride = 3 * width if interpolation == CUBICSPLINE else width
-        middle = width if interpolation == CUBICSPLINE else 0    # a cubic key is (in-tangent, value, out)
+        if interpolation == CUBICSPLINE:
+            stride, middle = 3 * width, width   # a cubic key is (in-tangent, value, out-tangent)
+        else:
+            stride, middle = (ROTATION_KEY if path == ROTATION else width), 0
         here = channels[c, FIRST_VALUE] + k * stride + middle
         if u == 0.0 or interpolation == STEP:
             for i in range(width):
@@ -148,7 +143,7 @@ def _sample_channels(channels, times, values, t, blend, hints, trs):
                                      + (-2 * u3 + 3 * u2) * values[there + i]
                                      + (u3 - u2) * dt * values[there - width + i])
         elif path == ROTATION:
-            _blend_rotation(values, here, here + stride, u, blend, trs, node, at)
+            _blend_rotation(values, here, u, blend, trs, node, at)
             continue
         else:
             for i in range(width):
@@ -208,22 +203,11 @@ def _compose_nodes(trs, nodes, versors, matrices, similar):
     return OK, -1
 
 
-# compiled ahead on its own (it holds all the arithmetic), then loaded by the two kernels that call it
-@callee((I2, F1, F1, I1, F2, F2, F3, B1, f8, i8, I1, F2, B1, F2, F3, B1), cost=5.5)
-def _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
-                 t, blend, hints, trs, animated, versors, matrices, similar):
-    """One frame: the rest fields for the nodes that are not ``animated``, the clip's channels at t
-    into the animated nodes' TRS rows (from their rest TRS), composed. Returns (status, the first
-    node that failed)."""
-    for i in range(rest_versors.shape[0]):
-        if animated[i]:
-            continue
-        for c in range(12):
-            versors[i, c] = rest_versors[i, c]
-        for r in range(4):
-            for c in range(4):
-                matrices[i, r, c] = rest_matrices[i, r, c]
-        similar[i] = rest_similar[i]
+@inlined
+def _sample_into(channels, times, values, nodes, rest_trs, t, blend, hints, trs, versors, matrices, similar):
+    """One frame: the clip's channels at t into the animated nodes' TRS rows (from their rest TRS),
+    composed into their fields (the other nodes' fields hold the rest's already). Returns (status,
+    the first node that failed)."""
     for a in range(nodes.shape[0]):
         for c in range(TRS_SIZE):
             trs[nodes[a], c] = rest_trs[nodes[a], c]
@@ -231,28 +215,28 @@ def _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_ma
     return _compose_nodes(trs, nodes, versors, matrices, similar)
 
 
-@kernel((I2, F1, F1, I1, F2, F2, F3, B1, B1, I1, f8, i8, F2, F3, B1), cost=0.8, fused=True)
-def _sample_pose(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
-                 animated, hints, t, blend, versors, matrices, similar):
-    """One frame of a clip into versors (j, 12), matrices (j, 4, 4), similar (j,); (status, node).
-    ``animated`` (j,): the nodes a channel animates; ``hints`` (c,): each channel's key interval of the
-    clip's last frame, updated (a cursor: the next frame of a playback rarely leaves it)."""
+@kernel((I2, F1, F1, I1, F2, I1, f8, i8, F2, F3, B1), cost=2.0)
+def _sample_pose(channels, times, values, nodes, rest_trs, hints, t, blend, versors, matrices, similar):
+    """One frame of a clip into versors (j, 12), matrices (j, 4, 4), similar (j,), which hold the rest
+    pose's fields (the nodes no channel animates keep them); returns (status, node). ``hints`` (c,):
+    each channel's key interval of the clip's last frame, updated (a cursor: the next frame of a
+    playback rarely leaves it)."""
     trs = np.empty((rest_trs.shape[0], TRS_SIZE))
-    return _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
-                        t, blend, hints, trs, animated, versors, matrices, similar)
+    return _sample_into(channels, times, values, nodes, rest_trs, t, blend, hints, trs, versors, matrices,
+                        similar)
 
 
-@kernel((I2, F1, F1, I1, F2, F2, F3, B1, B1, I1, F1, i8, F3, F4, B2), cost=0.7, fused=True)
-def _sample_poses(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices, rest_similar,
-                  animated, hints, frame_times, blend, versors, matrices, similar):
-    """Frames at frame_times (T,) into versors (T, j, 12), matrices (T, j, 4, 4), similar (T, j);
-    returns (status, node, frame) of the first failure (status OK: none). Each channel's key interval
-    of the previous frame is tried first: increasing times search only when they cross a key."""
+@kernel((I2, F1, F1, I1, F2, I1, F1, i8, F3, F4, B2), cost=1.6)
+def _sample_poses(channels, times, values, nodes, rest_trs, hints, frame_times, blend, versors, matrices,
+                  similar):
+    """Frames at frame_times (T,) into versors (T, j, 12), matrices (T, j, 4, 4), similar (T, j), each
+    frame holding the rest pose's fields; returns (status, node, frame) of the first failure (status
+    OK: none). Each channel's key interval of the previous frame is tried first: increasing times
+    search only when they cross a key."""
     trs = np.empty((rest_trs.shape[0], TRS_SIZE))
     for f in range(frame_times.shape[0]):
-        status, node = _sample_into(channels, times, values, nodes, rest_trs, rest_versors, rest_matrices,
-                                    rest_similar, frame_times[f], blend, hints, trs, animated, versors[f],
-                                    matrices[f], similar[f])
+        status, node = _sample_into(channels, times, values, nodes, rest_trs, frame_times[f], blend, hints,
+                                    trs, versors[f], matrices[f], similar[f])
         if status != OK:
             return status, node, f
     return OK, -1, -1
@@ -272,10 +256,20 @@ def shear_nodes(skeleton) -> list:
     return out
 
 
-def _rest(skeleton) -> tuple:
-    """(trs (j, 10), versors (j, 12), matrices (j, 4, 4), similar (j,)) of the skeleton's rest: the TRS
-    rows every animated node starts from, and the fields that unanimated nodes keep (those of
-    ``Pose.rest``), made by the sampling kernel itself, with no channels."""
+class RestFields(NamedTuple):
+    """A skeleton's rest made ready for sampling: the TRS rows (j, 10) every animated node starts
+    from, and the fields of ``Pose.rest`` (versors (j, 12), matrices (j, 4, 4), similar (j,)), which
+    every frame starts as (the nodes no channel animates keep them)."""
+
+    trs: np.ndarray
+    versors: np.ndarray
+    matrices: np.ndarray
+    similar: np.ndarray
+
+
+def _rest(skeleton) -> RestFields:
+    """The skeleton's ``RestFields``, made by the sampling kernel itself with no channels: every node
+    whose TRS reproduces its rest matrix composed from it, the others (shear) kept as their matrix."""
     rest = _REST.get(skeleton)
     if rest is None:
         j = skeleton.n_nodes
@@ -287,12 +281,10 @@ def _rest(skeleton) -> tuple:
         matrices = np.array(skeleton.rest_matrices, dtype=np.float64, order="C")   # writable C: one kernel type
         similar = np.zeros(j, dtype=bool)
         computed = np.array([i for i in range(j) if exact[i] is None], dtype=np.int64)
-        out = (np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=bool))
-        status, node = _sample_pose(_EMPTY.channels, _EMPTY.times, _EMPTY.values, computed, trs, versors,
-                                    matrices, similar, np.zeros(j, dtype=bool), np.zeros(0, dtype=np.int64),
-                                    0.0, 0, *out)
+        status, node = _sample_pose(_EMPTY.channels, _EMPTY.times, _EMPTY.values, computed, trs,
+                                    np.zeros(0, dtype=np.int64), 0.0, 0, versors, matrices, similar)
         _check(status, node, "the rest pose", skeleton)
-        rest = _REST[skeleton] = (trs, *out)
+        rest = _REST[skeleton] = RestFields(trs, versors, matrices, similar)
     return rest
 
 
@@ -307,14 +299,15 @@ def _check(status, node, what: str, skeleton) -> None:
 
 
 class FrameSampler(NamedTuple):
-    """A clip made ready to sample on a skeleton: the kernels' arguments before the time (the packed
-    clip's arrays, the skeleton's rest arrays, the animated nodes, the channels' cursor) and the
-    rotation blend's code, after every check that does not depend on the time."""
+    """A clip made ready to sample on a skeleton, after every check that does not depend on the time:
+    the kernels' arguments before the time (the packed clip's arrays, the rest TRS rows, the
+    channels' cursor), the rotation blend's code, and the rest fields a frame starts as."""
 
     skeleton: object
     clip: object
     arguments: tuple
     blend: int
+    rest: RestFields
 
 
 def frame_sampler(skeleton, clip, rotation_blend: str = "slerp") -> FrameSampler:
@@ -332,20 +325,19 @@ def frame_sampler(skeleton, clip, rotation_blend: str = "slerp") -> FrameSampler
         if packed.last_node >= skeleton.n_nodes:
             raise InvalidInputError(f"clip {clip.name!r} animates node {packed.last_node}, but the skeleton "
                                     f"has {skeleton.n_nodes} nodes")
-        animated = np.zeros(skeleton.n_nodes, dtype=bool)
-        animated[packed.nodes] = True
+        rest = _rest(skeleton)
         cursor = np.zeros(len(packed.channels), dtype=np.int64)
         kept = _ARGUMENTS[clip] = (skeleton, (packed.channels, packed.times, packed.values, packed.nodes,
-                                              *_rest(skeleton), animated, cursor))
-    return FrameSampler(skeleton, clip, kept[1], blend)
+                                              rest.trs, cursor), rest)
+    return FrameSampler(skeleton, clip, kept[1], blend, kept[2])
 
 
 def sample_frame(sampler: FrameSampler, t: float) -> tuple:
     """The fields of the sampler's clip at ``t`` (a finite float, seconds; times outside the keys clamp,
     as glTF says): versors (j, 12) float64, matrices (j, 4, 4) float64, similar (j,) bool, as ``Pose``
     holds them, in one compiled call."""
-    j = sampler.skeleton.n_nodes
-    versors, matrices, similar = np.empty((j, 12)), np.empty((j, 4, 4)), np.empty(j, dtype=np.bool_)
+    rest = sampler.rest
+    versors, matrices, similar = rest.versors.copy(), rest.matrices.copy(), rest.similar.copy()
     status, node = _sample_pose(*sampler.arguments, t, sampler.blend, versors, matrices, similar)
     if status != OK:
         _check(status, node, f"clip {sampler.clip.name!r} at t={t}", sampler.skeleton)
@@ -362,9 +354,8 @@ def sample_poses(skeleton, clip, times, rotation_blend: str = "slerp") -> tuple:
     """``sample_pose`` at each of ``times`` ((T,) finite seconds, any order): versors (T, j, 12),
     matrices (T, j, 4, 4), similar (T, j), in one compiled call."""
     times = np.array(float_array(times, "times", ndim=1), order="C")      # the caller's array stays theirs
-    _, _, arguments, blend = frame_sampler(skeleton, clip, rotation_blend)
-    n, j = len(times), skeleton.n_nodes
-    versors, matrices, similar = np.empty((n, j, 12)), np.empty((n, j, 4, 4)), np.empty((n, j), dtype=np.bool_)
+    _, _, arguments, blend, rest = frame_sampler(skeleton, clip, rotation_blend)
+    versors, matrices, similar = (np.repeat(field[None], len(times), axis=0) for field in rest[1:])
     status, node, frame = _sample_poses(*arguments, times, blend, versors, matrices, similar)
     if status != OK:
         _check(status, node, f"clip {clip.name!r} at t={times[frame]} (times[{frame}])", skeleton)
