@@ -40,7 +40,7 @@ from .._shared.checks import float_array, index_array, real_number
 from ..errors import InvalidInputError
 from .bvh import BOX_PADDING, TriangleBVH, _all_hits, _faces_near_plane, _first_hit
 from .bvh_build import _build
-from .dynamic_bvh_edits import LEAF_MAX, _adopt, _change
+from .dynamic_bvh_edits import LEAF_MAX, LIVE, NODES, SAH, SLOTS, TreeState, _adopt, _change
 
 __all__ = ["DynamicBVH", "dyn_first_hit", "dyn_faces_near_plane", "LEAF_MAX", "REBUILD_AT"]
 
@@ -54,12 +54,12 @@ LEAF_SIZE = LEAF_MAX // 2
 REBUILD_AT = 3.0
 
 
-def _cost(st) -> float:
+def _cost(st: TreeState) -> float:
     """The SAH cost: the SAH sum over the root's area (0 for an empty tree; ``_change`` returns it)."""
-    (x0, y0, z0), (x1, y1, z1) = st[0][0].tolist(), st[1][0].tolist()
+    (x0, y0, z0), (x1, y1, z1) = st.lo[0].tolist(), st.hi[0].tolist()
     dx, dy, dz = x1 - x0, y1 - y0, z1 - z0
     area = 2.0 * (dx * dy + dy * dz + dz * dx) if dx >= 0.0 else 0.0
-    return float(st[14][0]) / area if area > 0.0 else 0.0
+    return float(st.sums[SAH]) / area if area > 0.0 else 0.0
 
 
 # ---- queries: kernels that Python and other kernels call with ``DynamicBVH.arrays`` --------------
@@ -140,30 +140,28 @@ class DynamicBVH:
                                                                  BOX_PADDING, spare // 2 + 16)
         parent, cap, slot_leaf, face_slot, sah = _adopt(left, right, start, count, lo, hi, slot_face, n_nodes,
                                                         int(ids.max()) + 1 + spare)
-        # st: lo, hi, left, right, parent, start, count, capacity (nodes); face, leaf (slots); positions,
-        # faces (the caller's); slot of each face id; [nodes, slots, dead slots, live faces]; [SAH sum, padding]
-        self._st = (lo, hi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces,
-                    face_slot, np.array([n_nodes, k, 0, k]), np.array([sah, pad]))
+        self._st = TreeState(lo, hi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions,
+                             faces, face_slot, counts=np.array([n_nodes, k, 0, k]), sums=np.array([sah, pad]))
         self._sah0 = _cost(self._st)
 
     @property
     def n_faces(self) -> int:
-        return int(self._st[13][3])
+        return int(self._st.counts[LIVE])
 
     @property
     def n_nodes(self) -> int:
         """Node rows in use (the arrays' rows past them are spare)."""
-        return int(self._st[13][0])
+        return int(self._st.counts[NODES])
 
     @property
     def parents(self) -> np.ndarray:
         """(N,) int32 parent of each node row (-1 for the root)."""
-        return self._st[4]
+        return self._st.parent
 
     def leaves(self, face_ids) -> np.ndarray:
         """(k,) int64 the leaf that holds each of the live faces ``face_ids`` (k,) int64 (unchecked)."""
         st = self._st
-        return st[9][st[12][face_ids]].astype(np.int64)
+        return st.slot_leaf[st.face_slot[face_ids]].astype(np.int64)
 
     @property
     def degradation(self) -> float:
@@ -173,15 +171,18 @@ class DynamicBVH:
     def nbytes(self) -> int:
         """Bytes of the BVH's own arrays in use (the rows allocated past them are unwritten, so not
         resident; the positions and faces are the caller's)."""
-        st, (nodes, slots) = self._st, self._st[13][:2]
-        return int(sum(x[:nodes].nbytes for x in st[:8]) + sum(x[:slots].nbytes for x in st[8:10]) + st[12].nbytes)
+        st = self._st
+        nodes, slots = st.counts[NODES], st.counts[SLOTS]
+        return int(sum(x[:nodes].nbytes for x in (st.lo, st.hi, st.left, st.right, st.parent, st.start, st.count,
+                                                  st.capacity))
+                   + st.slot_face[:slots].nbytes + st.slot_leaf[:slots].nbytes + st.face_slot.nbytes)
 
     @property
     def arrays(self) -> tuple:
         """(lo, hi, left, right, start, count, slot_face, positions, faces): the tree as compiled queries
         take it (``bvh.BVHArrays``)."""
         st = self._st
-        return (st[0], st[1], st[2], st[3], st[5], st[6], st[8], st[10], st[11])
+        return (st.lo, st.hi, st.left, st.right, st.start, st.count, st.slot_face, st.positions, st.faces)
 
     def _ids(self, face_ids, name, live):
         """Distinct face ids (k,) int64, all live (``live``) or none live."""
@@ -189,7 +190,7 @@ class DynamicBVH:
         ids = np.ascontiguousarray(index_array(face_ids, name, 2 ** 31), dtype=np.int64)
         if ids.ndim != 1 or len(np.unique(ids)) != len(ids):
             raise InvalidInputError(f"{name} must be distinct face ids, shape (k,), got {ids[:8].tolist()}")
-        face_slot = self._st[12]
+        face_slot = self._st.face_slot
         wrong = ids[((ids < len(face_slot)) & (face_slot[np.minimum(ids, len(face_slot) - 1)] >= 0)) != live]
         if len(wrong):
             raise InvalidInputError(f"{name} holds {'faces that are not live' if live else 'live faces'}: "
@@ -199,7 +200,7 @@ class DynamicBVH:
     def triangle(self, face) -> np.ndarray:
         """(3, 3) corners of live ``face`` as the BVH reads them."""
         st = self._st
-        return st[10][st[11][self._ids([face], "face", True)[0]]]
+        return st.positions[st.faces[self._ids([face], "face", True)[0]]]
 
     def remove(self, face_ids):
         """Remove live faces (k,): they are never hit again."""
@@ -211,8 +212,8 @@ class DynamicBVH:
         """Live faces (k,) whose corners moved: they now are positions[faces[f]] (positions (n, 3),
         faces (F, 3), the arrays the BVH reads from now on)."""
         ids = self._ids(face_ids, "face_ids", True)
-        geometry, none = _geometry(ids, positions, faces), np.empty(0, np.int64)
-        self._st = self._st[:10] + geometry + self._st[12:]
+        (positions, faces), none = _geometry(ids, positions, faces), np.empty(0, np.int64)
+        self._st = self._st._replace(positions=positions, faces=faces)
         self._edit_tree(none, none, none, ids)
 
     def insert(self, face_ids, positions, faces, near=None):
@@ -222,11 +223,11 @@ class DynamicBVH:
         ids = self._ids(face_ids, "face_ids", False)
         k = len(ids)
         near = np.full(k, -1, np.int64) if near is None else np.ascontiguousarray(near, dtype=np.int64)
-        given, face_slot = near[near >= 0], self._st[12]
+        given, face_slot = near[near >= 0], self._st.face_slot
         if near.shape != (k,) or (given >= len(face_slot)).any() or (face_slot[given] < 0).any():
             raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
-        geometry = _geometry(ids, positions, faces)
-        self._st = self._st[:10] + geometry + self._st[12:]
+        positions, faces = _geometry(ids, positions, faces)
+        self._st = self._st._replace(positions=positions, faces=faces)
         if k:
             self._edit_tree(ids, near, np.empty(0, np.int64), np.empty(0, np.int64))
 
@@ -234,28 +235,28 @@ class DynamicBVH:
         """Read the triangles from ``positions`` (n, 3) float64 and ``faces`` (F, 3) int64, C-contiguous,
         from now on: arrays that hold every live face's triangle as the last ones did (a copy that the
         caller goes on to edit). Unchecked, like ``edit``."""
-        self._st = self._st[:10] + (positions, faces) + self._st[12:]
+        self._st = self._st._replace(positions=positions, faces=faces)
 
     def _edit_tree(self, inserted, near, removed, moved) -> None:
         """``_change`` with room made first where it lacks it, then a rebuild if the tree degraded."""
-        done, cost, dead, live = _change(self._st, inserted, near, removed, moved)
+        done, cost, dead, live = _change(tuple(self._st), inserted, near, removed, moved)
         if not done:
             self._make_room(len(inserted), int(inserted.max()))
-            done, cost, dead, live = _change(self._st, inserted, near, removed, moved)
+            done, cost, dead, live = _change(tuple(self._st), inserted, near, removed, moved)
         if (cost / self._sah0 if self._sah0 > 0 else 1.0) > REBUILD_AT or dead > max(live, 1024):
             self.rebuild()
 
     def _make_room(self, k: int, top_id: int) -> None:
         """Room for inserting k faces, ids up to ``top_id``: the worst case, per face two nodes and a
         new block of LEAF_MAX slots (arrays grow by doubling)."""
-        nodes, slots = self._st[13][:2].tolist()
-        st = list(self._st)
-        st[12] = _grown(st[12], top_id + 1, len(st[12]), -1)
-        for j in range(8):
-            st[j] = _grown(st[j], nodes + 2 * k, nodes)
-        for j in (8, 9):
-            st[j] = _grown(st[j], slots + LEAF_MAX * k, slots)
-        self._st = tuple(st)
+        st = self._st
+        nodes, slots = int(st.counts[NODES]), int(st.counts[SLOTS])
+        per_node = ("lo", "hi", "left", "right", "parent", "start", "count", "capacity")
+        grown = {name: _grown(getattr(st, name), nodes + 2 * k, nodes) for name in per_node}
+        for name in ("slot_face", "slot_leaf"):
+            grown[name] = _grown(getattr(st, name), slots + LEAF_MAX * k, slots)
+        grown["face_slot"] = _grown(st.face_slot, top_id + 1, len(st.face_slot), -1)
+        self._st = st._replace(**grown)
 
     def edit(self, removed, inserted, near, moved, positions, faces) -> None:
         """One stroke's changes at once, WITHOUT the checks of ``remove``/``insert``/``update`` (whose
@@ -265,19 +266,19 @@ class DynamicBVH:
         new ids go in first, each into the leaf of the live face near (k,) (-1: descend), then
         removed (r,) live faces out, then moved (u,) live faces, whose corners changed, are refitted.
         Ids int64, C-contiguous."""
-        self._st = self._st[:10] + (positions, faces) + self._st[12:]
+        self._st = self._st._replace(positions=positions, faces=faces)
         self._edit_tree(inserted, near, removed, moved)
 
     def rebuild(self):
         """Build afresh from the live faces, keeping their face ids, reading their triangles from the
         arrays last given."""
         st = self._st
-        live = st[8][:st[13][1]]
+        live = st.slot_face[:st.counts[SLOTS]]
         live = live[live >= 0]
         self.rebuilds += 1
         if len(live):           # with no face left, the empty tree answers every query
             self._spare = max(self._spare, len(live) // 16 + 64)
-            positions, faces = st[10], st[11]
+            positions, faces = st.positions, st.faces
             self._st = st = None        # the old tree goes before the new one is built (a lower peak)
             self._load(positions, faces, live)
 

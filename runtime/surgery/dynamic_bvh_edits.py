@@ -1,9 +1,12 @@
 """The edits of ``dynamic_bvh.DynamicBVH`` in compiled code (the design is in dynamic_bvh.py): insert
 beside a face or by least-growth descent, remove by moving a leaf's last face into the hole, refit
 up to the first unchanged box (after a face's corners moved), split a full leaf at its median
-centroid; and the adoption of a built tree. ``st`` is the tuple ``DynamicBVH._st`` (its fields are
-listed there); the tree reads a face's corners as positions[faces[face]] from its fields 10 and 11.
+centroid; and the adoption of a built tree. ``st`` is a ``TreeState`` as a plain tuple (the kernels
+unpack it in field order); the tree reads a face's corners as positions[faces[face]] from its
+``positions`` and ``faces``.
 """
+from typing import NamedTuple
+
 import numpy as np
 
 from .._shared.jit import F1, F2, I1, I2, helper, i8, kernel, record
@@ -11,7 +14,41 @@ from .bvh_build import N1
 
 #: a leaf that would hold more live faces than this is split
 LEAF_MAX = 16
-#: the numba type of ``DynamicBVH._st`` (for precompile signatures)
+#: the entries of ``TreeState.counts``: node rows and slots in use, dead slots, live faces
+NODES, SLOTS, DEAD, LIVE = 0, 1, 2, 3
+#: the entries of ``TreeState.sums``: the SAH sum (inner nodes weigh 1, leaves their count), the padding
+SAH, PADDING = 0, 1
+
+
+class TreeState(NamedTuple):
+    """A ``DynamicBVH``'s arrays (compiled code takes ``tuple(state)``).
+
+    lo, hi : (N, 3) float64 node boxes ; left, right, parent, start, count, capacity : (N,) int32 per
+    node row (children or -1, parent or -1, a leaf's block of slots and its live faces)
+    slot_face, slot_leaf : (S,) int32 the face id and the leaf of each slot
+    positions : (n, 3) float64, faces : (F, 3) int64 the caller's arrays the corners are read from
+    face_slot : (I,) int32 the slot of each face id (-1: none)
+    counts : (4,) int64 (``NODES``, ``SLOTS``, ``DEAD``, ``LIVE``) ; sums : (2,) float64 (``SAH``, ``PADDING``)
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    parent: np.ndarray
+    start: np.ndarray
+    count: np.ndarray
+    capacity: np.ndarray
+    slot_face: np.ndarray
+    slot_leaf: np.ndarray
+    positions: np.ndarray
+    faces: np.ndarray
+    face_slot: np.ndarray
+    counts: np.ndarray
+    sums: np.ndarray
+
+
+#: the numba type of a ``TreeState`` as kernels take it (for precompile signatures)
 STATE = record(F2, F2, N1, N1, N1, N1, N1, N1, N1, N1, F2, I2, N1, I1, F1)
 
 
@@ -64,8 +101,8 @@ def _adopt(left, right, start, count, lo, hi, slot_face, n_nodes, n_ids):
 def _refit(st, node, n):
     """Give leaf ``node`` the live count n, recompute its box and its ancestors' up to the first
     that does not change; keeps the SAH sum (inner nodes weigh 1, leaves their count)."""
-    nlo, nhi, left, right, parent, start, count, _, slot_face, _, positions, faces, _, _, sah = st
-    sah[0] += (n - count[node]) * _area(nlo, nhi, node)
+    nlo, nhi, left, right, parent, start, count, _, slot_face, _, positions, faces, _, _, sums = st
+    sums[SAH] += (n - count[node]) * _area(nlo, nhi, node)
     count[node] = n
     box = np.empty((2, 3))
     while node >= 0:
@@ -79,8 +116,8 @@ def _refit(st, node, n):
                         box[0, k] = min(box[0, k], positions[v, k])
                         box[1, k] = max(box[1, k], positions[v, k])
             if count[node] > 0:
-                box[0] -= sah[1]        # the padding, as bvh._build pads
-                box[1] += sah[1]
+                box[0] -= sums[PADDING]        # the padding, as bvh._build pads
+                box[1] += sums[PADDING]
         else:
             for k in range(3):
                 box[0, k] = min(nlo[left[node], k], nlo[right[node], k])
@@ -91,10 +128,10 @@ def _refit(st, node, n):
         if same:
             return
         w = 1.0 if left[node] >= 0 else float(count[node])
-        sah[0] -= w * _area(nlo, nhi, node)
+        sums[SAH] -= w * _area(nlo, nhi, node)
         for k in range(3):
             nlo[node, k], nhi[node, k] = box[0, k], box[1, k]
-        sah[0] += w * _area(nlo, nhi, node)
+        sums[SAH] += w * _area(nlo, nhi, node)
         node = parent[node]
 
 
@@ -108,29 +145,31 @@ def _change(st, inserted, near, removed, moved):
     over the root's area, 0 for an empty tree), the dead slots and the live faces (what the caller's
     rebuild test reads: from Python, each of them cost a numpy call)
     """
-    meta = st[13]
+    nlo, nhi, _, _, _, _, _, _, slot_face, _, _, _, face_slot, counts, sums = st
     top = -1
     for f in inserted:
         top = max(top, f)
     k = inserted.shape[0]
-    if top >= st[12].shape[0] or meta[0] + 2 * k > st[0].shape[0] or meta[1] + LEAF_MAX * k > st[8].shape[0]:
-        return False, 0.0, meta[2], meta[3]
+    if (top >= face_slot.shape[0] or counts[NODES] + 2 * k > nlo.shape[0]
+            or counts[SLOTS] + LEAF_MAX * k > slot_face.shape[0]):
+        return False, 0.0, counts[DEAD], counts[LIVE]
     _insert(st, inserted, near)
     _edit(st, removed, True)
     _edit(st, moved, False)
-    area = _area(st[0], st[1], 0)
-    return True, st[14][0] / area if area > 0.0 else 0.0, meta[2], meta[3]
+    area = _area(nlo, nhi, 0)
+    return True, sums[SAH] / area if area > 0.0 else 0.0, counts[DEAD], counts[LIVE]
 
 
 @helper
 def _put(st, s, leaf, face):
-    st[8][s], st[9][s], st[12][face] = face, leaf, s
+    _, _, _, _, _, _, _, _, slot_face, slot_leaf, _, _, face_slot, _, _ = st
+    slot_face[s], slot_leaf[s], face_slot[face] = face, leaf, s
 
 
 @helper
 def _edit(st, faces, remove):
     """Remove ``faces`` (``remove``) or refit their leaves to their corners now."""
-    start, count, slot_face, slot_leaf, face_slot = st[5], st[6], st[8], st[9], st[12]
+    _, _, _, _, _, start, count, _, slot_face, slot_leaf, _, _, face_slot, counts, _ = st
     for i in range(faces.shape[0]):
         s = face_slot[faces[i]]
         leaf = slot_leaf[s]
@@ -139,7 +178,7 @@ def _edit(st, faces, remove):
             if s != last:    # keep the leaf's live faces first: its last one fills the hole
                 _put(st, s, leaf, slot_face[last])
             slot_face[last] = face_slot[faces[i]] = -1
-            st[13][3] -= 1
+            counts[LIVE] -= 1
         _refit(st, leaf, count[leaf] - 1 if remove else count[leaf])
 
 
@@ -156,10 +195,11 @@ def _face_box(positions, faces, f, pad, box):
 def _insert(st, inserted, near):
     """Insert the faces ``inserted``, each into the leaf of the live face ``near[i]`` (a piece of it:
     no descent) or, where near[i] is -1, into the leaf the least-growth descent finds."""
-    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces, face_slot, meta, sah = st
+    (nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces, face_slot, counts,
+     sums) = st
     box = np.empty((2, 3))
     for i in range(inserted.shape[0]):
-        _face_box(positions, faces, inserted[i], sah[1], box)
+        _face_box(positions, faces, inserted[i], sums[PADDING], box)
         node = 0 if near[i] < 0 else slot_leaf[face_slot[near[i]]]
         while left[node] >= 0:
             gl, al = _growth(nlo, nhi, left[node], box)
@@ -171,24 +211,25 @@ def _insert(st, inserted, near):
         else:
             if n == cap[node]:
                 # move the full block to the end with twice the room (amortised O(1) per face); the
-                # room past the live faces holds no face (-1: slots past meta[1] are unwritten)
+                # room past the live faces holds no face (-1: slots past counts[SLOTS] are unwritten)
                 room = min(max(2 * cap[node], 2), LEAF_MAX)
                 for j in range(n):
-                    _put(st, meta[1] + j, node, slot_face[start[node] + j])
+                    _put(st, counts[SLOTS] + j, node, slot_face[start[node] + j])
                     slot_face[start[node] + j] = -1
-                slot_face[meta[1] + n:meta[1] + room] = -1
-                meta[2] += cap[node]
-                start[node], cap[node] = meta[1], room
-                meta[1] += room
+                slot_face[counts[SLOTS] + n:counts[SLOTS] + room] = -1
+                counts[DEAD] += cap[node]
+                start[node], cap[node] = counts[SLOTS], room
+                counts[SLOTS] += room
             _put(st, start[node] + n, node, inserted[i])
             _refit(st, node, n + 1)
-        meta[3] += 1
+        counts[LIVE] += 1
 
 
 @helper
 def _split(st, leaf, face):
     """Split a full leaf plus one new face into two new leaves at the median centroid."""
-    nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces, face_slot, meta, sah = st
+    (nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces, face_slot, counts,
+     sums) = st
     n, at = count[leaf] + 1, start[leaf]
     ids = np.empty(n, np.int64)
     for j in range(n - 1):
@@ -217,9 +258,9 @@ def _split(st, leaf, face):
             order[i] = order[i - 1]
             i -= 1
         order[i] = o
-    sah[0] += (1 - count[leaf]) * _area(nlo, nhi, leaf)    # an inner node weighs 1, a leaf its count
-    a, new = meta[0], meta[1]
-    meta[0], meta[1] = a + 2, new + LEAF_MAX
+    sums[SAH] += (1 - count[leaf]) * _area(nlo, nhi, leaf)    # an inner node weighs 1, a leaf its count
+    a, new = counts[NODES], counts[SLOTS]
+    counts[NODES], counts[SLOTS] = a + 2, new + LEAF_MAX
     left[leaf], right[leaf], count[leaf] = a, a + 1, 0
     nlo[a:a + 2], nhi[a:a + 2] = np.inf, -np.inf     # empty until filled: the first refit sees no junk
     for c in range(2):

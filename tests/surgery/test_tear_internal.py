@@ -11,7 +11,8 @@ from numba import njit
 from cgaskin import capsule_arm, tear_stroke
 from cgaskin.errors import CgaskinError, InternalError
 from cgaskin.surgery.tear import splice
-from cgaskin.surgery.tear.guess import FOUND, _guess
+from cgaskin.surgery.tear.guess import _guess
+from cgaskin.surgery.tear.records import OK
 from cgaskin.surgery.tear.rig_source import RigSource
 from cgaskin.surgery.tear.settle import _settle
 from cgaskin.surgery.tear.walk import _walk_within
@@ -29,7 +30,7 @@ def _walks(bvh, boundary, vertices, positions, labels, faces, blades, diagonal, 
     status, plane, margin, hit_faces = _guess(bvh, boundary, blades, snap, min_sine)
     out = [(False, np.empty((0, 4), np.int64), np.empty((0, 4)))]
     out.clear()
-    if status != FOUND:
+    if status != OK:
         return out
     (settled, face_ids, rows, patch_faces, patch_positions, welded, mesh, patch_boundary, patch_vertices,
      patch_labels, tree, ends) = _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane,

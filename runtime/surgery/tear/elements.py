@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import helper
+from ..._shared.jit import helper, inlined
 from ...generated.kernels import segment_plane
-from .records import EDGE, EDGE_CARRIER, VERTEX
+from .records import CARRIER, CARRIER_KIND, EDGE, EDGE_CARRIER, EDGE_T, ID, KIND, LENGTH, PARENT, POINT, VERTEX
 from .region import _outside
 
 
@@ -27,13 +27,19 @@ def _elements(g, wfaces, face_edges, cls, kinds, ids):
     return count
 
 
+@inlined
+def _step(nf, parent, x, y, z):
+    """The distance from the walk's node ``parent`` to (x, y, z)."""
+    return math.sqrt((x - nf[parent, POINT]) ** 2 + (y - nf[parent, POINT + 1]) ** 2 + (z - nf[parent, POINT + 2]) ** 2)
+
+
 @helper
 def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target):
     """Append a node of the search tree; its length is its parent's plus the step."""
-    ni[n, 0], ni[n, 1], ni[n, 2], ni[n, 3], ni[n, 4] = kind, ident, parent, carrier_kind, carrier
-    nf[n, 0], nf[n, 1], nf[n, 2], nf[n, 3] = t, x, y, z
-    step = math.sqrt((x - nf[parent, 1]) ** 2 + (y - nf[parent, 2]) ** 2 + (z - nf[parent, 3]) ** 2)
-    nf[n, 4] = nf[parent, 4] + step
+    ni[n, KIND], ni[n, ID], ni[n, PARENT] = kind, ident, parent
+    ni[n, CARRIER_KIND], ni[n, CARRIER] = carrier_kind, carrier
+    nf[n, EDGE_T], nf[n, POINT], nf[n, POINT + 1], nf[n, POINT + 2] = t, x, y, z
+    nf[n, LENGTH] = nf[parent, LENGTH] + _step(nf, parent, x, y, z)
     target[n] = is_target
     return n + 1
 
@@ -61,18 +67,16 @@ def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier,
     is_target = t_kind == kind and ident == t_id
     t, x, y, z = _element_point(kind, ident, plane, wpos, edges)
     if kind == VERTEX and not is_target:
-        length = nf[parent, 4] + math.sqrt((x - nf[parent, 1]) ** 2 + (y - nf[parent, 2]) ** 2
-                                           + (z - nf[parent, 3]) ** 2)
+        length = nf[parent, LENGTH] + _step(nf, parent, x, y, z)
         if not length < vertex_used[ident]:
             return n
     if not is_target:
         # within the margin of S_i (the root: in the hull) is within the region; else measure
-        near = (x - nf[0, 1]) ** 2 + (y - nf[0, 2]) ** 2 + (z - nf[0, 3]) ** 2 <= margin * margin
+        near = (x - nf[0, POINT]) ** 2 + (y - nf[0, POINT + 1]) ** 2 + (z - nf[0, POINT + 2]) ** 2 <= margin * margin
         if not near and _outside((x, y, z), region) > margin:
             return n
     if kind == VERTEX:
-        vertex_used[ident] = min(vertex_used[ident], nf[parent, 4] + math.sqrt(
-            (x - nf[parent, 1]) ** 2 + (y - nf[parent, 2]) ** 2 + (z - nf[parent, 3]) ** 2))   # as _push
+        vertex_used[ident] = min(vertex_used[ident], nf[parent, LENGTH] + _step(nf, parent, x, y, z))  # as _push
     return _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
 
 

@@ -7,9 +7,7 @@ import numpy as np
 from ..._shared.jit import B1, F2, callee, f8, helper
 from ...generated.kernels import plane_from_points
 from ..bvh import BVH_ARRAYS, _first_hit, _near_box, _push_children
-
-#: what ``_guess`` found: both points, or which scalpel position missed the surface
-FOUND, FROM_MISSES, TO_MISSES = 0, 1, 2
+from .records import FROM_MISSES, OK
 
 
 @helper
@@ -62,8 +60,9 @@ def _guess(bvh, boundary, blades, snap, min_sine):
 
     bvh : BVHArrays (as a tuple) of the whole surface ; boundary : (n,) bool the boundary flags of
     its vertices ; blades : (4, 3) handle and tip at t_i, then at t_(i+1) ; snap : absolute distance
-    returns status (FOUND, or which position missed), plane (4,) (zeros when the points and the blade
-    are aligned: no plane), margin, hit faces (2,) (-1 where a boundary vertex was met instead)
+    returns status (``records.OK``, or which position missed: FROM_MISSES, TO_MISSES), plane (4,) (zeros
+    when the points and the blade are aligned: no plane), margin, hit faces (2,) (-1 where a boundary
+    vertex was met instead)
     """
     positions, faces = bvh[7], bvh[8]
     points = np.empty((2, 3))
@@ -94,4 +93,4 @@ def _guess(bvh, boundary, blades, snap, min_sine):
     plane = np.zeros(4)
     if lu > snap and lv > snap and math.sqrt(n0 * n0 + n1 * n1 + n2 * n2) > min_sine * lu * lv:
         plane[0], plane[1], plane[2], plane[3] = plane_from_points(points[0], blades[2], blades[3])
-    return FOUND, plane, 1.25 * (_distance(points[0], points[1]) + longest) + 4.0 * snap, hit_faces
+    return OK, plane, 1.25 * (_distance(points[0], points[1]) + longest) + 4.0 * snap, hit_faces

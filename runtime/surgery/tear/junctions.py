@@ -7,7 +7,7 @@ from ..._shared.jit import helper
 from ...algebra.vec3 import _dot, _norm, _sub
 from ..bvh import _first_hit
 from .elements import _element_point, _elements, _push_element
-from .records import EDGE, JUMP_CARRIER, VERTEX
+from .records import EDGE, ID, JUMP_CARRIER, KIND, PARENT, POINT, VERTEX
 from .region import _outside
 
 @helper
@@ -108,15 +108,15 @@ def _jumps(node, ni, nf, target, n, openings, jumped, bvh, mesh, cls, plane, t_k
     to that ``_jump`` allows (at most one node per opening: the walk makes room for them first);
     returns the new node count."""
     wpos, edges = mesh[0], mesh[3]
-    kind, ident = ni[node, 0], ni[node, 1]
-    came_from = nf[max(ni[node, 2], 0), 1:4]
+    kind, ident = ni[node, KIND], ni[node, ID]
+    came_from = nf[max(ni[node, PARENT], 0), POINT:POINT + 3]
     to = np.empty(3)
     for c in range(openings.shape[0]):
         ok, oid = openings[c, 0], openings[c, 1]
         if jumped[c] or (ok == kind and oid == ident):
             continue
         _, to[0], to[1], to[2] = _element_point(ok, oid, plane, wpos, edges)
-        if _jump(bvh, mesh, cls, plane, kind, ident, nf[node, 1:4], came_from, ok, oid, to, snap):
+        if _jump(bvh, mesh, cls, plane, kind, ident, nf[node, POINT:POINT + 3], came_from, ok, oid, to, snap):
             jumped[c] = True
             n = _push_element(ni, nf, target, n, ok, oid, node, JUMP_CARRIER, np.int64(-1), plane, wpos, edges,
                               t_kind, t_id, vertex_used, region, margin)

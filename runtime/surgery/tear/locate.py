@@ -9,13 +9,7 @@ from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
 from ...tolerances import tol
 from ..bvh import _first_hit
-from .records import EDGE, FACE, VERTEX, Ends
-
-
-# status codes of ``_ends``
-OK, FROM_MISSES, TO_MISSES, NO_MOTION, NO_PLANE = 0, 1, 2, 3, 4
-
-
+from .records import EDGE, FACE, FROM_MISSES, NO_MOTION, NO_PLANE, OK, VERTEX, Ends
 
 
 @helper

@@ -20,6 +20,7 @@ node with too little room on both sides) the sides are still ``opening`` apart.
 import numpy as np
 
 from ..._shared.jit import helper
+from .records import MOVED_NODE, MOVED_SIDE, MOVED_VERTEX, TWIN_NODE, TWIN_OF
 
 #: an opening moves a side of the slit at most until a face around it has lost this share of its area
 OPENING_SHARE = 0.5
@@ -62,9 +63,9 @@ def _constraints(faces, candidates, positions, new_positions, plane, slit, openi
     node = np.zeros(n + v + t, np.int64)
     source = np.arange(n + v + t)
     for i in range(moved.shape[0]):
-        sign[moved[i, 0]], node[moved[i, 0]] = moved[i, 1], moved[i, 3]
+        sign[moved[i, MOVED_VERTEX]], node[moved[i, MOVED_VERTEX]] = moved[i, MOVED_SIDE], moved[i, MOVED_NODE]
     for i in range(t):
-        sign[n + v + i], node[n + v + i], source[n + v + i] = -1, twins[i, 2], twins[i, 0]
+        sign[n + v + i], node[n + v + i], source[n + v + i] = -1, twins[i, TWIN_NODE], twins[i, TWIN_OF]
     nodes = np.full((candidates.shape[0], 3), -1, np.int64)
     rates = np.zeros((candidates.shape[0], 3))
     bounds = np.empty(candidates.shape[0])

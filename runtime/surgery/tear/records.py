@@ -18,6 +18,23 @@ VERTEX, EDGE, FACE = np.int64(0), np.int64(1), np.int64(2)
 # through an opening of the surface (a jump across an existing slit or hole, between boundary points)
 NO_CARRIER, FACE_CARRIER, EDGE_CARRIER, JUMP_CARRIER = np.int64(-1), np.int64(0), np.int64(1), np.int64(2)
 
+#: how a stroke's locating steps ended (``guess._guess``, ``locate._ends``): found, a scalpel position
+#: that missed the surface, the two points the same, no plane through the points and the blade
+OK, FROM_MISSES, TO_MISSES, NO_MOTION, NO_PLANE = 0, 1, 2, 3, 4
+
+# ---- the columns of the records' arrays ----------------------------------------------------------------
+#: a path node row (``Path.nodes``): the node (kind, id), and what the segment from the previous node
+#: runs through (carrier kind, carrier id); the walk's node table adds the node's parent in its tree
+KIND, ID, CARRIER_KIND, CARRIER, PARENT = 0, 1, 2, 3, 4
+#: a path point row (``Path.points``): the edge parameter t (of an EDGE node), then x, y, z from
+#: ``POINT``; the walk's node table adds the length of the way from the start
+EDGE_T, POINT, LENGTH = 0, 1, 4
+#: a twin row (``Slit.twins``): the vertex it copies, the far side's rank, the path node
+TWIN_OF, TWIN_RANK, TWIN_NODE = 0, 1, 2
+#: a moved row (``Slit.moved``): the existing vertex, its side (+1 near, -1 far), the far side's rank
+#: (-1 on the near side), the path node
+MOVED_VERTEX, MOVED_SIDE, MOVED_RANK, MOVED_NODE = 0, 1, 2, 3
+
 
 # ---- the data handed from step to step -------------------------------------------------------------
 class Ends(NamedTuple):
@@ -41,10 +58,10 @@ class Ends(NamedTuple):
 class Path(NamedTuple):
     """Step 4 (``walk``): the path from S_i to S_{i+1}, one row per node.
 
-    nodes : (k, 4) int64 (kind, id, carrier kind, carrier id): the carrier is what the segment from
-        the previous node runs through (a face, an edge lying in the plane, or -- JUMP_CARRIER, id -1 --
-        an opening of the surface between two boundary points)
-    points : (k, 4) float64 (edge parameter t from edges[id, 0], x, y, z)
+    nodes : (k, 4) int64 rows (``KIND``, ``ID``, ``CARRIER_KIND``, ``CARRIER``): the carrier is what
+        the segment from the previous node runs through (a face, an edge lying in the plane, or --
+        JUMP_CARRIER, id -1 -- an opening of the surface between two boundary points)
+    points : (k, 4) float64 rows (``EDGE_T``: the parameter from edges[id, 0], then x, y, z from ``POINT``)
     """
 
     nodes: np.ndarray
@@ -89,10 +106,10 @@ class TornFaces(NamedTuple):
 class Slit(NamedTuple):
     """Step 6b (``slit.open_slit``): which path nodes split, and the far side's vertices.
 
-    split : (k,) bool ; twins : (t, 3) int64 (vertex it copies, far side rank, path node), twin i
-    being vertex n + v + i ; moved : (s, 4) int64 (existing vertex that belongs to a side, +1 near /
-    -1 far, far side rank or -1, path node) ; side_a, side_b : (k,) int64 one vertex per node on each
-    side
+    split : (k,) bool ; twins : (t, 3) int64 rows (``TWIN_OF``, ``TWIN_RANK``, ``TWIN_NODE``), twin i
+    being vertex n + v + i ; moved : (s, 4) int64 rows (``MOVED_VERTEX``, ``MOVED_SIDE``,
+    ``MOVED_RANK``, ``MOVED_NODE``): the existing vertices that belong to a side ; side_a, side_b :
+    (k,) int64 one vertex per node on each side
     """
 
     split: np.ndarray

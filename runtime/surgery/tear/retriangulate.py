@@ -8,7 +8,7 @@ from ..._shared.jit import F2, I2, f8, helper, i8, kernel
 from ...algebra.vec3 import _distance
 from ...generated.kernels import barycentric
 from ..surface import WELDED_MESH
-from .records import EDGE, FACE, FACE_CARRIER, VERTEX
+from .records import CARRIER, CARRIER_KIND, EDGE, EDGE_T, FACE, FACE_CARRIER, ID, KIND, POINT, VERTEX
 
 
 @helper
@@ -16,7 +16,7 @@ def _position(code, f, wfaces, wpos, path_float):
     """Position of a polygon element: corner k of face f (code -1-k) or path node ``code``."""
     if code < 0:
         return wpos[wfaces[f, -1 - code]]
-    return path_float[code, 1:4]
+    return path_float[code, POINT:POINT + 3]
 
 
 @helper
@@ -93,16 +93,16 @@ def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_
     for k in range(3):
         code = -1 - k
         for j in nodes:
-            if path_int[j, 0] == VERTEX and path_int[j, 1] == wfaces[f, k]:
+            if path_int[j, KIND] == VERTEX and path_int[j, ID] == wfaces[f, k]:
                 code = j
         poly[count], flat[count] = code, False
         count += 1
         first = count
         for j in nodes:
-            if path_int[j, 0] == EDGE and path_int[j, 1] == face_edges[f, k]:
+            if path_int[j, KIND] == EDGE and path_int[j, ID] == face_edges[f, k]:
                 # in order along the side (several nodes lie on an edge in the plane)
                 e = face_edges[f, k]
-                s = path_float[j, 0] if wfaces[f, k] == edges[e, 0] else 1.0 - path_float[j, 0]
+                s = path_float[j, EDGE_T] if wfaces[f, k] == edges[e, 0] else 1.0 - path_float[j, EDGE_T]
                 i = count
                 while i > first and along[i - 1] > s:
                     poly[i], along[i] = poly[i - 1], along[i - 1]
@@ -114,11 +114,11 @@ def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_
     chord_a, chord_b = -1, -1
     hub_count = np.zeros(3, np.int64)
     for j in nodes:
-        if path_int[j, 0] == FACE and path_int[j, 1] == f:
+        if path_int[j, KIND] == FACE and path_int[j, ID] == f:
             inner[n_inner] = j
             n_inner += 1
     for j in nodes:
-        if j >= 1 and path_int[j, 2] == FACE_CARRIER and path_int[j, 3] == f:
+        if j >= 1 and path_int[j, CARRIER_KIND] == FACE_CARRIER and path_int[j, CARRIER] == f:
             chord_a, chord_b = j - 1, j
             for q in range(n_inner):
                 if inner[q] == j - 1 or inner[q] == j:
@@ -163,7 +163,7 @@ def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_
         if q == hub:
             continue
         e = inner[q]
-        pe = path_float[e, 1:4]
+        pe = path_float[e, POINT:POINT + 3]
         best, best_score, best_k = 0, -np.inf, 0
         for i in range(n_out):
             la, lb, lc = barycentric(_position(out[i, 0], f, wfaces, wpos, path_float),
@@ -231,7 +231,7 @@ def _face_nodes(path_int, slot, n_aff, ef_offsets, ef_faces, vf_offsets, vf_face
             count = offsets[:n_aff].copy()
             last[:] = -1
         for j in range(k_nodes):
-            kind, ident = path_int[j, 0], path_int[j, 1]
+            kind, ident = path_int[j, KIND], path_int[j, ID]
             lo, hi, faces = np.int64(0), np.int64(0), ef_faces
             if kind == EDGE:
                 lo, hi = ef_offsets[ident], ef_offsets[ident + 1]
@@ -239,7 +239,7 @@ def _face_nodes(path_int, slot, n_aff, ef_offsets, ef_faces, vf_offsets, vf_face
                 lo, hi, faces = vf_offsets[ident], vf_offsets[ident + 1], vf_faces
             for r in range(lo - 2, hi):
                 if r == lo - 2:
-                    g = path_int[j, 3] if path_int[j, 2] == FACE_CARRIER else -1
+                    g = path_int[j, CARRIER] if path_int[j, CARRIER_KIND] == FACE_CARRIER else -1
                 elif r == lo - 1:
                     g = ident if kind == FACE else -1
                 else:
@@ -285,8 +285,8 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
     of the face's corners there), with coefficients (1 - s, s) by the edge parameter from the face's
     own corner; a point inside the face has one, with its barycentric coordinates (generated
     kernel). returns (index among the new vertices, new count)."""
-    if path_int[code, 0] == EDGE:
-        e = path_int[code, 1]
+    if path_int[code, KIND] == EDGE:
+        e = path_int[code, ID]
         k = 0
         while face_edges[f, k] != e:
             k += 1
@@ -296,18 +296,18 @@ def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
             if (new_src[q, 0] == va and new_src[q, 1] == vb) or (new_src[q, 0] == vb and new_src[q, 1] == va):
                 return q, n_new
             q = chain[q]
-        s = path_float[code, 0] if wfaces[f, k] == edges[e, 0] else 1.0 - path_float[code, 0]
+        s = path_float[code, EDGE_T] if wfaces[f, k] == edges[e, 0] else 1.0 - path_float[code, EDGE_T]
         new_src[n_new, 0], new_src[n_new, 1], new_src[n_new, 2] = va, vb, va
         new_coef[n_new, 0], new_coef[n_new, 1], new_coef[n_new, 2] = 1.0 - s, s, 0.0
     else:
         if head[code] >= 0:
             return head[code], n_new
         la, lb, lc = barycentric(wpos[wfaces[f, 0]], wpos[wfaces[f, 1]], wpos[wfaces[f, 2]],
-                                 path_float[code, 1:4])
+                                 path_float[code, POINT:POINT + 3])
         if not (math.isfinite(la) and math.isfinite(lb) and math.isfinite(lc)):
             # a face of zero area (the file's, or a sliver): its longest side is all there is of it
             la, lb, lc = _segment_coordinates(wpos[wfaces[f, 0]], wpos[wfaces[f, 1]], wpos[wfaces[f, 2]],
-                                              path_float[code, 1:4])
+                                              path_float[code, POINT:POINT + 3])
         # a point on the face's boundary may come out a rounding error outside
         la, lb, lc = max(la, 0.0), max(lb, 0.0), max(lc, 0.0)
         total = la + lb + lc
@@ -341,15 +341,15 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     for j in range(k_nodes):
         for r in range(3):
             if r == 0:
-                g = path_int[j, 3] if path_int[j, 2] == FACE_CARRIER else -1
+                g = path_int[j, CARRIER] if path_int[j, CARRIER_KIND] == FACE_CARRIER else -1
             elif r == 1:
-                g = path_int[j, 1] if path_int[j, 0] == FACE else -1
+                g = path_int[j, ID] if path_int[j, KIND] == FACE else -1
             else:
                 g = -1
             if g >= 0 and slot[g] < 0:
                 affected, n_aff = _append(affected, n_aff, g, slot)
-        if path_int[j, 0] == EDGE:
-            e = path_int[j, 1]
+        if path_int[j, KIND] == EDGE:
+            e = path_int[j, ID]
             for r in range(ef_offsets[e], ef_offsets[e + 1]):
                 if slot[ef_faces[r]] < 0:
                     affected, n_aff = _append(affected, n_aff, ef_faces[r], slot)
@@ -378,9 +378,9 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
                 code = local[i, c]
                 if code < 0:                                   # a corner of the face
                     tris[n_tris, c] = faces[f, -1 - code]
-                elif path_int[code, 0] == VERTEX:              # a corner that is on the path
+                elif path_int[code, KIND] == VERTEX:              # a corner that is on the path
                     k = 0
-                    while wfaces[f, k] != path_int[code, 1]:
+                    while wfaces[f, k] != path_int[code, ID]:
                         k += 1
                     tris[n_tris, c] = faces[f, k]
                 else:                                          # a new vertex

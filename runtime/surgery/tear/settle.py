@@ -11,9 +11,10 @@ from __future__ import annotations
 
 from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8
 from ..bvh import BVH_ARRAYS
-from .locate import OK, _ends
+from .locate import _ends
 from ..posed_bounds import POSING, _pose_region
 from .patch import _faces_in_region, _patch_arrays, _region
+from .records import OK
 from .region import _margin
 
 #: how often the patch is taken again before giving up (the plane of a patch is its own: twice is enough)
@@ -46,7 +47,7 @@ def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, ha
         mesh = (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces)
         ends = _ends((tree[0], tree[1], tree[2], tree[3], tree[4], tree[5], tree[6], patch_positions, local),
                      a0, b0, a1, b1, patch_positions, local, mesh, patch_boundary, snap, min_sine)
-        status, points, hit_faces, located = ends[0], ends[2], ends[4], ends[5]
+        status, _, points, _, hit_faces, located, _ = ends         # (the fields of ``Ends``)
         settled = status == OK
         if settled:
             needed = _margin(wpos, wfaces, hit_faces, points[0], points[1])

@@ -5,7 +5,7 @@ import numpy as np
 from ..._shared.jit import F1, F2, I1, I2, helper, kernel
 from ...generated.kernels import point_plane_distance
 from ..surface import WELDED_MESH
-from .records import VERTEX
+from .records import ID, KIND, POINT, VERTEX
 
 
 @helper
@@ -244,17 +244,17 @@ def _torn_faces(path_int, path_float, faces, welded, mesh, affected, tris, new_n
     k_nodes = path_int.shape[0]
     node_w = np.empty(k_nodes, np.int64)
     for j in range(k_nodes):
-        node_w[j] = path_int[j, 1] if path_int[j, 0] == VERTEX else n_welded + j
+        node_w[j] = path_int[j, ID] if path_int[j, KIND] == VERTEX else n_welded + j
     new_positions = np.empty((new_node.shape[0], 3))
     for i in range(new_node.shape[0]):
         for c in range(3):
-            new_positions[i, c] = path_float[new_node[i], 1 + c]
+            new_positions[i, c] = path_float[new_node[i], POINT + c]
     # the faces that can touch a path node, in increasing order: the kept faces around path vertices,
     # and the pieces (the last rows)
     is_candidate = np.zeros(m_out, np.bool_)
     for j in range(k_nodes):
-        if path_int[j, 0] == VERTEX:
-            w = path_int[j, 1]
+        if path_int[j, KIND] == VERTEX:
+            w = path_int[j, ID]
             for q in range(vf_offsets[w], vf_offsets[w + 1]):
                 if index[vf_faces[q]] >= 0:
                     is_candidate[index[vf_faces[q]]] = True

@@ -33,9 +33,10 @@ from ..surface import WELDED_MESH
 from ..new_vertices import attribute_rule, interpolate_in_place
 from ..posed_bounds import POSING, _pose_blades
 from ..weld import _boundary_of
-from .guess import FOUND, FROM_MISSES, _guess
+from .guess import _guess
 from .opening import _opening_offsets
-from .records import JUMP_CARRIER, VERTEX, Ends, Path
+from .records import (CARRIER_KIND, FROM_MISSES, ID, JUMP_CARRIER, KIND, MOVED_VERTEX, OK, POINT, TWIN_OF, VERTEX,
+                      Ends, Path)
 from .retriangulate import _retriangulate
 from .settle import _settle
 from .slit import _open_slit, _torn_faces
@@ -91,7 +92,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
         source.joints, source.weights, blades, source.top_label, source.diagonal, tol.snap, tol.min_sine, tol.on_edge,
         opening, source.affines if posed else np.zeros((1, 12)), posed, source.posing)
     source.check_hits(hit_faces)
-    if status != FOUND:
+    if status != OK:
         name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
         raise MissesMeshError(f"the scalpel {name} (handle {blades[i].tolist()} -> tip {blades[i + 1].tolist()}) "
                               f"does not meet the surface")
@@ -124,7 +125,7 @@ def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, 
     a small mesh's stroke). ``posing`` (``posed_bounds.Posing``), when active, poses the parts of the
     rest tree and mesh each query reaches first (``bvh`` is then the posed tree it fills).
 
-    returns the guess's status (``guess.FOUND``, or which scalpel position missed) and hit faces (2,),
+    returns the guess's status (``records.OK``, or which scalpel position missed) and hit faces (2,),
     then None when it missed, else (settled, the fields of ``Ends``, (found, the fields of ``Path``),
     the splice): the splice is None unless the patch settled and the walk found a path with nodes, else
     (rows (p,), ``_splice_arrays``' values as a tuple)
@@ -133,7 +134,7 @@ def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, 
     _pose_blades(bvh, posing, blades, 2.0 * snap)      # the guess's queries stay within snap of the blades
     status, plane, margin, hit_faces = _guess(bvh, boundary, blades, snap, min_sine)
     located = None
-    if status == FOUND:
+    if status == OK:
         (settled, face_ids, rows, patch_faces, patch_positions, welded, mesh, patch_boundary, patch_vertices,
          patch_labels, tree, ends) = _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane,
                                              plane.any(), margin, snap, min_sine, diagonal, posing)
@@ -189,9 +190,9 @@ def _splice_arrays(path_int, path_float, faces, positions, vertex_welded, mesh, 
     k_nodes = path_int.shape[0]
     points, kinds, jumps = np.empty((k_nodes, 3)), np.empty(k_nodes, np.int64), np.empty(k_nodes, np.bool_)
     for i in range(k_nodes):
-        points[i] = path_float[i, 1:4]
-        kinds[i], jumps[i] = path_int[i, 0], path_int[i, 2] == JUMP_CARRIER
-    return ((new_src, new_coef, twins[:, 0].copy(), read),
+        points[i] = path_float[i, POINT:POINT + 3]
+        kinds[i], jumps[i] = path_int[i, KIND], path_int[i, CARRIER_KIND] == JUMP_CARRIER
+    return ((new_src, new_coef, twins[:, TWIN_OF].copy(), read),
             (changed, out_vertices, out_joints, out_weights, out_labels, removed, kept, kept_corners, new_faces,
              parents, boundary_rows, boundary_flags),
             (points, kinds, side_a, side_b, split, jumps), residual)
@@ -272,8 +273,8 @@ def _boundary_changes(vertices, labels, faces, candidates, welded, n_welded, pat
     of every vertex asked about. welded (p,) the welded vertex of each patch vertex (of n_welded)."""
     on_path = np.zeros(n_welded, np.bool_)
     for j in range(path_int.shape[0]):
-        if path_int[j, 0] == VERTEX:
-            on_path[path_int[j, 1]] = True
+        if path_int[j, KIND] == VERTEX:
+            on_path[path_int[j, ID]] = True
     changed = np.empty(vertices.shape[0], np.int64)
     count = 0
     for i in range(vertices.shape[0]):
@@ -303,11 +304,11 @@ def _stroke_rows(new_src, twins, moved, rows, vertices, labels, joints, weights,
         if v < p:
             is_read[v] = True
     for i in range(twins.shape[0]):
-        if twins[i, 0] < p:
-            is_read[twins[i, 0]] = True
+        if twins[i, TWIN_OF] < p:
+            is_read[twins[i, TWIN_OF]] = True
     for i in range(moved.shape[0]):
-        if moved[i, 0] < p:
-            is_read[moved[i, 0]] = is_changed[moved[i, 0]] = True
+        if moved[i, MOVED_VERTEX] < p:
+            is_read[moved[i, MOVED_VERTEX]] = is_changed[moved[i, MOVED_VERTEX]] = True
     read = np.flatnonzero(is_read)
     out_vertices, out_labels = np.empty((p + added, 3)), np.empty(p + added, np.int64)
     out_vertices[:p], out_labels[:p] = vertices, labels

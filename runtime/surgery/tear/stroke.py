@@ -82,8 +82,7 @@ from ...errors import InvalidInputError, MissesMeshError, PlacementWarning, Tear
 from ...tolerances import tol
 from ..bvh import TriangleBVH
 from ..surface import TEAR_LABEL, tear_topology
-from .locate import FROM_MISSES, NO_MOTION, NO_PLANE, OK, TO_MISSES
-from .records import Ends
+from .records import FROM_MISSES, NO_MOTION, NO_PLANE, OK, TO_MISSES, Ends
 from .rig_source import RigSource, torn_rig
 from .splice import stroke_splice
 

@@ -5,6 +5,7 @@ import numpy as np
 from ..._shared.jit import helper
 from ...algebra.vec3 import _copy_row, _set_row
 from ..new_vertices import _blended, _solve_linear, _to_rest, blend_weight_rows
+from .records import MOVED_NODE, MOVED_RANK, MOVED_SIDE, MOVED_VERTEX, POINT, TWIN_NODE, TWIN_OF, TWIN_RANK
 
 
 @helper
@@ -44,7 +45,7 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
         j = new_node[i]
         if not posed:
             for c in range(3):
-                out_v[n + i, c] = path_float[j, 1 + c]
+                out_v[n + i, c] = path_float[j, POINT + c]
         elif first[j] >= 0:
             _copy_row(out_v, n + i, out_v, n + first[j])
         else:
@@ -54,18 +55,18 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
                 guess[c] = (new_coef[i, 0] * out_v[new_src[i, 0], c] + new_coef[i, 1] * out_v[new_src[i, 1], c]
                             + new_coef[i, 2] * out_v[new_src[i, 2], c])
             blend = _blended(new_joints, new_weights, affines, i)
-            x, res = _to_rest(path_float[j, 1:4], guess, blend)
+            x, res = _to_rest(path_float[j, POINT:POINT + 3], guess, blend)
             _set_row(out_v, n + i, x)
             if not res <= residual:          # NaN too: a residual that is not a number is reported
                 residual = res
     for i in range(t):
-        _copy_row(out_v, n + v + i, out_v, twins[i, 0])
-        _copy_row(out_j, n + v + i, out_j, twins[i, 0])
-        _copy_row(out_w, n + v + i, out_w, twins[i, 0])
-        out_l[n + v + i] = top + 1 + twins[i, 1]
+        _copy_row(out_v, n + v + i, out_v, twins[i, TWIN_OF])
+        _copy_row(out_j, n + v + i, out_j, twins[i, TWIN_OF])
+        _copy_row(out_w, n + v + i, out_w, twins[i, TWIN_OF])
+        out_l[n + v + i] = top + 1 + twins[i, TWIN_RANK]
     for i in range(moved.shape[0]):
-        if moved[i, 1] < 0:
-            out_l[moved[i, 0]] = top + 1 + moved[i, 2]
+        if moved[i, MOVED_SIDE] < 0:
+            out_l[moved[i, MOVED_VERTEX]] = top + 1 + moved[i, MOVED_RANK]
     if opening > 0.0:
         # (vertex, sign, node) of every vertex of a split node; offsets per (node, side)
         k = moved.shape[0] + t
@@ -73,10 +74,10 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
         signs = np.empty(k)
         nodes = np.empty(k, np.int64)
         for i in range(moved.shape[0]):
-            ids[i], signs[i], nodes[i] = moved[i, 0], moved[i, 1], moved[i, 3]
+            ids[i], signs[i], nodes[i] = moved[i, MOVED_VERTEX], moved[i, MOVED_SIDE], moved[i, MOVED_NODE]
         for i in range(t):
             q = moved.shape[0] + i
-            ids[q], signs[q], nodes[q] = n + v + i, -1.0, twins[i, 2]
+            ids[q], signs[q], nodes[q] = n + v + i, -1.0, twins[i, TWIN_NODE]
         offset = np.empty((k_nodes, 2, 3))
         done = np.zeros((k_nodes, 2), np.bool_)
         delta = np.empty(3)

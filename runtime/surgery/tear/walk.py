@@ -3,13 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F1, I1, S1, callee, f8, helper, i8, record
+from ..._shared.jit import F1, I1, S1, callee, f8, helper, i8, inlined, record
 from ..bvh import BVH_ARRAYS
 from ..surface import WELDED_MESH
 from .elements import _along_edge, _edge_parameter, _elements, _in_plane, _push, _push_element
 from .flat import _across_flat, _flat, _line_plane, _line_side
 from .junctions import _boundary_vertex, _jumps, _openings
-from .records import EDGE, EDGE_CARRIER, FACE, FACE_CARRIER, JUMP_CARRIER, NO_CARRIER, VERTEX
+from .records import (CARRIER, CARRIER_KIND, EDGE, EDGE_CARRIER, EDGE_T, FACE, FACE_CARRIER, ID, JUMP_CARRIER,
+                      KIND, LENGTH, NO_CARRIER, PARENT, POINT, VERTEX)
 from .region import _margin
 
 
@@ -51,18 +52,20 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
         # both ends inside one face: the chord between them
         # (arrays filled by element: numba types an array built from nested lists for seconds)
         path_int, path_float = np.empty((2, 4), np.int64), np.zeros((2, 4))
-        path_int[0, 0], path_int[0, 1], path_int[0, 2], path_int[0, 3] = FACE, s_id, NO_CARRIER, -1
-        path_int[1, 0], path_int[1, 1], path_int[1, 2], path_int[1, 3] = FACE, s_id, FACE_CARRIER, s_id
+        path_int[0, KIND], path_int[0, ID], path_int[0, CARRIER_KIND], path_int[0, CARRIER] = FACE, s_id, NO_CARRIER, -1
+        path_int[1, KIND], path_int[1, ID] = FACE, s_id
+        path_int[1, CARRIER_KIND], path_int[1, CARRIER] = FACE_CARRIER, s_id
         for c in range(3):
-            path_float[0, 1 + c], path_float[1, 1 + c] = s_pos[c], t_pos[c]
+            path_float[0, POINT + c], path_float[1, POINT + c] = s_pos[c], t_pos[c]
         return _with_midpoint(path_int, path_float, wpos, edges)
     margin = _margin(wpos, wfaces, hit_faces, s_pos, t_pos)
     m = wfaces.shape[0]
     cap = max(capacity, 1)
-    ni = np.empty((cap, 5), np.int64)         # kind, id, parent, carrier kind, carrier
-    nf = np.empty((cap, 5))                   # t, x, y, z, length from the start
+    # the node table: a path node row and its PARENT, a path point row and its LENGTH from the start
+    ni = np.empty((cap, PARENT + 1), np.int64)
+    nf = np.empty((cap, LENGTH + 1))
     target = np.zeros(cap, np.bool_)
-    open_ = np.empty(cap, np.int64)           # the open fronts (at most one per node)
+    open_ = np.empty(cap, np.int64)           # the open fronts: a heap (``_pop_front``), one entry per node
     face_used = np.zeros(m, np.bool_)
     edge_used = np.zeros(edges.shape[0], np.bool_)
     vertex_used = np.full(wpos.shape[0], np.inf)     # shortest length a node of each vertex was pushed with
@@ -72,33 +75,27 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
     jumped = np.empty(0, np.bool_)
     looked = False
 
-    ni[0, 0], ni[0, 1], ni[0, 2], ni[0, 3], ni[0, 4] = s_kind, s_id, -1, NO_CARRIER, -1
-    nf[0, 0], nf[0, 1], nf[0, 2], nf[0, 3], nf[0, 4] = 0.0, s_pos[0], s_pos[1], s_pos[2], 0.0
+    ni[0, KIND], ni[0, ID], ni[0, PARENT], ni[0, CARRIER_KIND], ni[0, CARRIER] = s_kind, s_id, -1, NO_CARRIER, -1
+    nf[0, EDGE_T], nf[0, LENGTH] = 0.0, 0.0
+    nf[0, POINT], nf[0, POINT + 1], nf[0, POINT + 2] = s_pos[0], s_pos[1], s_pos[2]
     if s_kind == EDGE:
-        nf[0, 0] = _edge_parameter(s_id, s_pos, cls, plane, wpos, edges)
+        nf[0, EDGE_T] = _edge_parameter(s_id, s_pos, cls, plane, wpos, edges)
     t_param = _edge_parameter(t_id, t_pos, cls, plane, wpos, edges) if t_kind == EDGE else 0.0
     line = _line_plane(plane, s_pos, t_pos)
     if s_kind == VERTEX:
         vertex_used[s_id] = 0.0
     n = np.int64(1)
     open_[0] = 0
-    n_open = 1
+    n_open = np.int64(1)
     found = -1
     while n_open > 0:
-        # the shortest open front
-        best = 0
-        for q in range(1, n_open):
-            if nf[open_[q], 4] < nf[open_[best], 4]:
-                best = q
-        node = open_[best]
-        n_open -= 1
-        open_[best] = open_[n_open]
+        node, n_open = _pop_front(open_, n_open, nf)
         if target[node]:
             found = node
             break
-        if ni[node, 0] == VERTEX and nf[node, 4] > vertex_used[ni[node, 1]]:
+        if ni[node, KIND] == VERTEX and nf[node, LENGTH] > vertex_used[ni[node, ID]]:
             continue             # superseded: a shorter way reached this vertex (elements._push_element)
-        kind, ident, ck, cid = ni[node, 0], ni[node, 1], ni[node, 3], ni[node, 4]
+        kind, ident, ck, cid = ni[node, KIND], ni[node, ID], ni[node, CARRIER_KIND], ni[node, CARRIER]
         ni, nf, target, open_ = _room(ni, nf, target, open_, n, _most_pushed(kind, ident, ef_offsets, vf_offsets))
         before = n
         if kind == FACE and _flat(ident, wfaces, cls):
@@ -211,8 +208,7 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
             n = _jumps(node, ni, nf, target, n, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id,
                        vertex_used, region, margin, snap)
         for q in range(before, n):
-            open_[n_open] = q
-            n_open += 1
+            n_open = _push_front(open_, n_open, q, nf)
 
     if found < 0:
         return False, np.empty((0, 4), np.int64), np.empty((0, 4))
@@ -222,16 +218,16 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
     q = found
     while q >= 0:
         length += 1
-        q = ni[q, 2]
+        q = ni[q, PARENT]
     chain = np.empty(length, np.int64)
     q = found
     for r in range(length - 1, -1, -1):
         chain[r] = q
-        q = ni[q, 2]
+        q = ni[q, PARENT]
     first, last = 0, length - 1
-    while last > 0 and ni[chain[last], 3] == JUMP_CARRIER:
+    while last > 0 and ni[chain[last], CARRIER_KIND] == JUMP_CARRIER:
         last -= 1
-    while first < last and ni[chain[first + 1], 3] == JUMP_CARRIER:
+    while first < last and ni[chain[first + 1], CARRIER_KIND] == JUMP_CARRIER:
         first += 1
     if first == last:
         return True, np.empty((0, 4), np.int64), np.empty((0, 4))
@@ -239,14 +235,56 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
     path_float = np.empty((last - first + 1, 4))
     for r in range(first, last + 1):
         q = chain[r]
-        path_int[r - first, 0], path_int[r - first, 1] = ni[q, 0], ni[q, 1]
-        path_int[r - first, 2], path_int[r - first, 3] = ni[q, 3], ni[q, 4]
-        for c in range(4):
+        path_int[r - first, KIND], path_int[r - first, ID] = ni[q, KIND], ni[q, ID]
+        path_int[r - first, CARRIER_KIND], path_int[r - first, CARRIER] = ni[q, CARRIER_KIND], ni[q, CARRIER]
+        for c in range(LENGTH):             # (a path point row is the table's row without its length)
             path_float[r - first, c] = nf[q, c]
-    path_int[0, 2], path_int[0, 3] = NO_CARRIER, -1
+    path_int[0, CARRIER_KIND], path_int[0, CARRIER] = NO_CARRIER, -1
     if path_int.shape[0] == 2:
         return _with_midpoint(path_int, path_float, wpos, edges)
     return True, path_int, path_float
+
+
+@inlined
+def _before(nf, a, b):
+    """Whether the walk expands node ``a`` before node ``b``: the shorter way from the start first, then
+    the node pushed first."""
+    return nf[a, LENGTH] < nf[b, LENGTH] or (nf[a, LENGTH] == nf[b, LENGTH] and a < b)
+
+
+@inlined
+def _push_front(heap, size, node, nf):
+    """Add ``node`` to the open fronts: ``heap``'s first ``size`` entries, a binary heap in the order of
+    ``_before`` (``heap`` is as long as the node table, so it has room); returns the new size."""
+    i = size
+    heap[i] = node
+    while i > 0:
+        up = (i - 1) // 2
+        if not _before(nf, heap[i], heap[up]):
+            break
+        heap[i], heap[up] = heap[up], heap[i]
+        i = up
+    return size + 1
+
+
+@inlined
+def _pop_front(heap, size, nf):
+    """(the first open front in the order of ``_before``, the heap's new size), taken off the heap."""
+    node = heap[0]
+    size -= 1
+    heap[0] = heap[size]
+    i = 0
+    while True:
+        first = 2 * i + 1
+        if first >= size:
+            break
+        if first + 1 < size and _before(nf, heap[first + 1], heap[first]):
+            first += 1
+        if not _before(nf, heap[first], heap[i]):
+            break
+        heap[i], heap[first] = heap[first], heap[i]
+        i = first
+    return node, size
 
 
 @helper
@@ -272,7 +310,7 @@ def _room(ni, nf, target, open_, n, need):
     if n + need <= cap:
         return ni, nf, target, open_
     size = max(2 * cap, n + need)
-    grown_ni, grown_nf = np.empty((size, 5), np.int64), np.empty((size, 5))
+    grown_ni, grown_nf = np.empty((size, PARENT + 1), np.int64), np.empty((size, LENGTH + 1))
     grown_target, grown_open = np.zeros(size, np.bool_), np.empty(size, np.int64)
     grown_ni[:n], grown_nf[:n], grown_target[:n] = ni[:n], nf[:n], target[:n]
     grown_open[:cap] = open_
@@ -283,33 +321,33 @@ def _room(ni, nf, target, open_, n, need):
 def _with_midpoint(path_int, path_float, wpos, edges):
     """(True, path) with a one-segment path's midpoint as a third node, so that the slit has a vertex
     to split (with both ends kept single, a single edge could not open)."""
-    kind, carrier = path_int[1, 2], path_int[1, 3]
+    kind, carrier = path_int[1, CARRIER_KIND], path_int[1, CARRIER]
     mid_int = np.empty(4, np.int64)
-    mid_int[0], mid_int[1], mid_int[2], mid_int[3] = EDGE, carrier, EDGE_CARRIER, carrier
+    mid_int[KIND], mid_int[ID], mid_int[CARRIER_KIND], mid_int[CARRIER] = EDGE, carrier, EDGE_CARRIER, carrier
     mid_float = np.empty(4)
     if kind == FACE_CARRIER:
-        mid_int[0], mid_int[2] = FACE, FACE_CARRIER
-        mid_float[0] = 0.0
+        mid_int[KIND], mid_int[CARRIER_KIND] = FACE, FACE_CARRIER
+        mid_float[EDGE_T] = 0.0
         for c in range(3):
-            mid_float[1 + c] = 0.5 * (path_float[0, 1 + c] + path_float[1, 1 + c])
+            mid_float[POINT + c] = 0.5 * (path_float[0, POINT + c] + path_float[1, POINT + c])
     else:
         lo, hi = wpos[edges[carrier, 0]], wpos[edges[carrier, 1]]
-        if path_int[0, 0] == VERTEX and path_int[1, 0] == VERTEX:
+        if path_int[0, KIND] == VERTEX and path_int[1, KIND] == VERTEX:
             # along a whole edge in the plane: its midpoint
-            mid_float[0] = 0.5
+            mid_float[EDGE_T] = 0.5
             for c in range(3):
-                mid_float[1 + c] = 0.5 * (lo[c] + hi[c])
+                mid_float[POINT + c] = 0.5 * (lo[c] + hi[c])
         else:
             # along part of an edge in the plane (an end is a point of it): the middle of that part, at
             # the mean of the two ends' parameters on the edge (a corner's is 0 or 1)
             ts = np.empty(2)
             for r in range(2):
-                corner = 1.0 if edges[carrier, 1] == path_int[r, 1] else 0.0
-                ts[r] = path_float[r, 0] if path_int[r, 0] == EDGE else corner
+                corner = 1.0 if edges[carrier, 1] == path_int[r, ID] else 0.0
+                ts[r] = path_float[r, EDGE_T] if path_int[r, KIND] == EDGE else corner
             t = 0.5 * (ts[0] + ts[1])
-            mid_float[0] = t
+            mid_float[EDGE_T] = t
             for c in range(3):
-                mid_float[1 + c] = lo[c] + t * (hi[c] - lo[c])
+                mid_float[POINT + c] = lo[c] + t * (hi[c] - lo[c])
     out_int, out_float = np.empty((3, 4), np.int64), np.empty((3, 4))
     out_int[0], out_int[1], out_int[2] = path_int[0], mid_int, path_int[1]
     out_float[0], out_float[1], out_float[2] = path_float[0], mid_float, path_float[1]
