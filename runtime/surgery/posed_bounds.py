@@ -36,7 +36,7 @@ from .._shared.jit import F1, F2, I1, I2, f8, helper, kernel, record
 from .._shared.memory import sparse_zeros
 from ..generated.skinning import skin_blend
 from .bone_influences import INFLUENCES, TABLE, WEIGHT_STEPS
-from .bvh import BVH_ARRAYS, _near_box, _push_children
+from .bvh import BVH_ARRAYS, BVHArrays, _near_box, _push_children
 from .bvh_build import N1
 
 __all__ = ["Posing", "POSING", "PosedScratch", "no_posing", "pose_region"]
@@ -49,8 +49,8 @@ class Posing(NamedTuple):
     rest_lo, rest_hi : (N, 3) float64 the rest tree's padded node boxes ; influences : ``Influences`` ;
     node_stamp (N,), vertex_stamp (n,) int64: which nodes and vertices hold this pose's values ;
     vertices (n, 3), joints (n, k), weights (n, k) : the rest mesh ; affines (B, 12) : the pose's bone
-    maps ; state (2,) int64 : [stamp of this pose, 1 when posing is active (0: the surface is as stored)] ;
-    pad (1,) float64 : relative padding of a posed box
+    maps ; state (2,) int64 : (``STAMP`` of this pose, ``ACTIVE``: 1 when posing is active, 0 when the
+    surface is as stored) ; pad (1,) float64 : relative padding of a posed box
     """
 
     rest_lo: np.ndarray
@@ -66,6 +66,9 @@ class Posing(NamedTuple):
     pad: np.ndarray
 
 
+#: the entries of ``Posing.state``
+STAMP, ACTIVE = 0, 1
+
 #: the numba type of ``Posing`` (as a plain tuple)
 POSING = record(F2, F2, INFLUENCES, I1, I1, F2, I2, F2, F2, I1, F1)
 
@@ -73,9 +76,10 @@ POSING = record(F2, F2, INFLUENCES, I1, I1, F2, I2, F2, F2, I1, F1)
 def no_posing() -> tuple:
     """The inactive ``Posing`` of a surface torn as stored (empty arrays)."""
     f2, i1 = np.empty((0, 3)), np.zeros(0, np.int64)
-    return (f2, f2, (np.zeros((0, 1), np.uint64), np.zeros((0, TABLE), np.int16), np.zeros((0, TABLE), np.uint16),
-                      np.zeros((0, TABLE), np.uint16)), i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
-            np.zeros((0, 12)), np.zeros(2, np.int64), np.zeros(1))
+    influences = (np.zeros((0, 1), np.uint64), np.zeros((0, TABLE), np.int16), np.zeros((0, TABLE), np.uint16),
+                  np.zeros((0, TABLE), np.uint16))
+    return tuple(Posing(f2, f2, influences, i1, i1, f2, np.zeros((0, 4), np.int64), np.zeros((0, 4)),
+                        np.zeros((0, 12)), state=np.zeros(2, np.int64), pad=np.zeros(1)))
 
 
 # ---- posed boxes and positions, where a query reaches ----------------------------------------------
@@ -104,8 +108,8 @@ def _posed_box(bvh, posing, node):
     bone maps: the mask's bound, cut by the weight table's where the node has one (module docstring;
     an empty rest box, or no bone, gives an empty box)."""
     lo, hi = bvh[0], bvh[1]
-    rest_lo, rest_hi, (masks, bones, lows, highs), affines, pad = (posing[0], posing[1], posing[2], posing[8],
-                                                                   posing[10][0])
+    rest_lo, rest_hi, (masks, bones, lows, highs), _, _, _, _, _, affines, _, relative_pad = posing
+    pad = relative_pad[0]
     for k in range(3):
         lo[node, k], hi[node, k] = np.inf, -np.inf
     if not rest_lo[node, 0] <= rest_hi[node, 0]:
@@ -169,12 +173,11 @@ def _pose_region(bvh, posing, query, a, b, reach):
     (descending where it meets the query) and the skinned positions of the vertices of the leaves it
     meets, in bvh (BVHArrays as a tuple: lo, hi and positions are written). Nothing when posing is not
     active."""
-    node_stamp, vertex_stamp, vertices, joints, weights, affines, state = (posing[3], posing[4], posing[5],
-                                                                          posing[6], posing[7], posing[8], posing[9])
-    if state[1] == 0:
+    _, _, _, node_stamp, vertex_stamp, vertices, joints, weights, affines, state, _ = posing
+    if state[ACTIVE] == 0:
         return
     lo, hi, left, right, start, count, order, positions, faces = bvh
-    stamp, d = state[0], b - a
+    stamp, d = state[STAMP], b - a
     todo = np.empty(64, np.int64)           # the vertices to skin, in one call of the blend at the end
     n_todo = 0
     stack = np.empty(128, np.int64)
@@ -279,7 +282,10 @@ class PosedScratch:
         if self._affines is None or not np.array_equal(affines, self._affines):
             self._stamp, self._affines = self._stamp + 1, affines.copy()
         positions = self._positions[:n]
-        bvh = (self._lo, self._hi, tree[2], tree[3], tree[4], tree[5], tree[6], positions, tree[8])
-        posing = (tree[0], tree[1], influences, self._node_stamp, self._vertex_stamp[:n], vertices, joints, weights,
-                  affines, np.array([self._stamp, 1]), np.array([pad]))
-        return bvh, posing
+        rest = BVHArrays(*tree)
+        bvh = rest._replace(lo=self._lo, hi=self._hi, positions=positions)
+        state = np.empty(2, np.int64)
+        state[STAMP], state[ACTIVE] = self._stamp, 1
+        posing = Posing(rest.lo, rest.hi, influences, self._node_stamp, self._vertex_stamp[:n], vertices, joints,
+                        weights, affines, state, np.array([pad]))
+        return tuple(bvh), tuple(posing)

@@ -9,7 +9,7 @@ from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
 from ...tolerances import tol
 from ..bvh import _first_hit
-from .records import EDGE, FACE, FROM_MISSES, NO_MOTION, NO_PLANE, OK, VERTEX, Ends
+from .records import EDGE, FACE, FROM_MISSES, ID, KIND, NO_MOTION, NO_PLANE, OK, VERTEX, Ends
 
 
 @helper
@@ -111,7 +111,7 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
             for k in range(3):
                 hits[i, k] = a[k] + t_w * (b[k] - a[k])
             hit_faces[i] = vf_faces[vf_offsets[w]]
-            ends_int[i, 0], ends_int[i, 1] = VERTEX, w
+            ends_int[i, KIND], ends_int[i, ID] = VERTEX, w
             _set_row(ends_pos, i, wpos[w])
             continue
         if face < 0:
@@ -120,7 +120,7 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
             hits[i, k] = a[k] + t * (b[k] - a[k])
         hit_faces[i] = face
         kind, ident, point = _hit_node(face, hits[i], wfaces, wpos, tol)
-        ends_int[i, 0], ends_int[i, 1] = kind, ident
+        ends_int[i, KIND], ends_int[i, ID] = kind, ident
         _set_row(ends_pos, i, point)
     s0, s1 = ends_pos[0], ends_pos[1]
     if _distance(s1, s0) <= tol:
@@ -164,17 +164,17 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
 
     _classify(plane, wpos, tol, cls)
     for i in range(2):
-        if ends_int[i, 0] == VERTEX:
-            cls[ends_int[i, 1]] = 0          # a snapped end is on the plane by definition
+        if ends_int[i, KIND] == VERTEX:
+            cls[ends_int[i, ID]] = 0          # a snapped end is on the plane by definition
     for i in range(2):
         kind, ident, point = _snap_to_edge(
-            ends_int[i, 0], ends_int[i, 1], ends_pos[i], wfaces, face_edges, edges, wpos, cls, plane, tol)
-        ends_int[i, 0], ends_int[i, 1] = kind, ident
+            ends_int[i, KIND], ends_int[i, ID], ends_pos[i], wfaces, face_edges, edges, wpos, cls, plane, tol)
+        ends_int[i, KIND], ends_int[i, ID] = kind, ident
         _set_row(ends_pos, i, point)          # may be ends_pos[i] itself: a row copied onto itself
-    if ends_int[0, 0] == ends_int[1, 0] and ends_int[0, 1] == ends_int[1, 1] and ends_int[0, 0] != FACE:
+    if ends_int[0, KIND] == ends_int[1, KIND] and ends_int[0, ID] == ends_int[1, ID] and ends_int[0, KIND] != FACE:
         # one vertex, or one crossing; two points of one edge that lies in the plane differ
-        e = ends_int[0, 1]
-        in_plane = ends_int[0, 0] == EDGE and cls[edges[e, 0]] == 0 and cls[edges[e, 1]] == 0
+        e = ends_int[0, ID]
+        in_plane = ends_int[0, KIND] == EDGE and cls[edges[e, 0]] == 0 and cls[edges[e, 1]] == 0
         if not in_plane or _distance(ends_pos[0], ends_pos[1]) <= tol:
             return NO_MOTION, ends_int, ends_pos, hits, hit_faces, plane, cls
     return OK, ends_int, ends_pos, hits, hit_faces, plane, cls

@@ -45,8 +45,8 @@ def _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane, ha
         (patch_positions, welded, wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces,
          patch_boundary, patch_vertices, patch_labels) = topology
         mesh = (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces)
-        ends = _ends((tree[0], tree[1], tree[2], tree[3], tree[4], tree[5], tree[6], patch_positions, local),
-                     a0, b0, a1, b1, patch_positions, local, mesh, patch_boundary, snap, min_sine)
+        ends = _ends(tree + (patch_positions, local), a0, b0, a1, b1, patch_positions, local, mesh, patch_boundary,
+                     snap, min_sine)
         status, _, points, _, hit_faces, located, _ = ends         # (the fields of ``Ends``)
         settled = status == OK
         if settled:

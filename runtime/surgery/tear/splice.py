@@ -143,9 +143,9 @@ def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, 
         spliced = None
         if settled:
             found, path_int, path_float = _walk(
-                mesh, sides, ends_plane, ends_int[0, 0], ends_int[0, 1], ends_pos[0], ends_int[1, 0], ends_int[1, 1],
-                ends_pos[1], (tree[0], tree[1], tree[2], tree[3], tree[4], tree[5], tree[6], patch_positions,
-                              patch_faces), (blades[0], blades[1], blades[2], blades[3]), ends_faces, snap)
+                mesh, sides, ends_plane, ends_int[0, KIND], ends_int[0, ID], ends_pos[0], ends_int[1, KIND],
+                ends_int[1, ID], ends_pos[1], tree + (patch_positions, patch_faces),
+                (blades[0], blades[1], blades[2], blades[3]), ends_faces, snap)
             if found and path_int.shape[0] > 0:
                 spliced = (rows, _splice_arrays(
                     path_int, path_float, patch_faces, patch_positions, welded, mesh, ends_plane, face_ids, rows,
