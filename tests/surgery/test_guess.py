@@ -1,24 +1,37 @@
-"""A stroke's first guess reads the boundary vertices near the blade through the BVH; it must find the
-vertex that a scan of every boundary vertex finds (``locate._boundary_hit``), ties and all."""
+"""Where a blade meets the surface (``locate._meet``, which a stroke's guess and ``locate`` share) reads
+the boundary vertices near the blade through the BVH; it must find the vertex that a scan of every
+boundary vertex finds, ties and all."""
+import math
+
 import numpy as np
 from hypothesis import given, strategies as st
 from numba import njit
 
 import cgaskin
 from cgaskin.surgery.bvh import TriangleBVH
-from cgaskin.surgery.tear.guess import _boundary_near
-from cgaskin.surgery.tear.locate import _boundary_hit
+from cgaskin.surgery.tear.locate import _boundary_near
 from cgaskin.surgery.tear.rig_source import RigSource
 
 
 @njit
 def _near(bvh, flags, a, b, t_max, snap):
-    return _boundary_near(bvh, flags, a, b, t_max, snap)
+    return _boundary_near(bvh, bvh[7], bvh[8], flags, a, b, t_max, snap)
 
 
 @njit
 def _scan(a, b, t_max, boundary, positions, snap):
-    return _boundary_hit(a, b, t_max, boundary, positions, snap)
+    """The oracle: every boundary vertex (ascending ids), the one within ``snap`` of a -> b with the
+    smallest parameter t < t_max, the lowest id among equal t."""
+    d = b - a
+    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    best, best_t = -1, t_max
+    for w in boundary:
+        p = positions[w]
+        t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
+        if t < best_t and math.sqrt((a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2
+                                    + (a[2] + t * d[2] - p[2]) ** 2) <= snap:
+            best, best_t = w, t
+    return best, best_t
 
 
 def _torn_capsule():

@@ -8,7 +8,7 @@ from ..._shared.jit import helper, kernel
 from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
 from ...tolerances import tol
-from ..bvh import _first_hit
+from ..bvh import _first_hit, _near_box, _push_children
 from .records import EDGE, FACE, FROM_MISSES, ID, KIND, NO_MOTION, NO_PLANE, OK, VERTEX, Ends
 
 
@@ -69,21 +69,77 @@ def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plan
 
 
 @helper
-def _boundary_hit(a, b, t_max, boundary, wpos, tol):
-    """The first boundary vertex within ``tol`` of segment a -> b before parameter ``t_max``:
-    (welded vertex, t) or (-1, t_max). A slit opened wide ends in a wedge-shaped gap whose tip is the
-    slit's end vertex: a blade aimed at that vertex (the previous stroke's blade, to continue the
-    slit) passes it within rounding and may slip through the gap, so it counts as meeting it."""
-    d = _sub(b, a)
-    dd = _dot(d, d)
+def _boundary_near(bvh, positions, faces, boundary, a, b, t_max, snap):
+    """The flagged (``boundary`` (n,) bool) vertex within ``snap`` of segment a -> b with the smallest
+    parameter t < t_max (then the lowest vertex id), as (vertex, t), or (-1, t_max); ``positions`` and
+    ``faces`` the corners of ``bvh``'s faces in the vertex ids of ``boundary``. Only the leaves whose
+    box the segment passes within ``snap`` of are read: a boundary vertex is a corner of a face in
+    such a leaf, so a stroke costs what the blade passes, not the length of every slit made so far."""
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, _, _ = bvh
+    d = b - a
+    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
     best, best_t = -1, t_max
-    for w in boundary:
-        p = wpos[w]
-        t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
-        if t < best_t and math.sqrt((a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2
-                                    + (a[2] + t * d[2] - p[2]) ** 2) <= tol:
-            best, best_t = w, t
+    stack = np.empty(128, np.int64)
+    top = 0
+    stack[0] = 0
+    while top >= 0:
+        node = stack[top]
+        top -= 1
+        if not _near_box(node_lo[node], node_hi[node], a, d, t_max, snap):
+            continue
+        if node_left[node] >= 0:
+            stack, top = _push_children(stack, top, node_left[node], node_right[node])
+            continue
+        for i in range(node_start[node], node_start[node] + node_count[node]):
+            for c in range(3):
+                w = faces[order[i], c]
+                if not boundary[w]:
+                    continue
+                p = positions[w]
+                t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
+                if (t < best_t or (best >= 0 and t == best_t and w < best)) and math.sqrt(
+                        (a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2
+                        + (a[2] + t * d[2] - p[2]) ** 2) <= snap:
+                    best, best_t = w, t
     return best, best_t
+
+
+@helper
+def _meet(bvh, positions, faces, boundary, a, b, snap):
+    """Where the blade a -> b meets the surface of ``bvh`` (BVHArrays as a tuple), as both a stroke's
+    guess and ``_ends`` take it: the first ``boundary`` vertex the blade passes within ``snap`` before
+    it hits a face (a slit opened wide ends in a wedge-shaped gap whose tip is a boundary vertex: a
+    blade aimed at it, the previous stroke's blade, passes it within rounding and may slip through the
+    gap), else the nearest corner of the face hit within ``snap``, else the hit point in the face.
+    ``positions``, ``faces``: the corners of bvh's faces in the vertex ids of ``boundary`` (n,) bool.
+
+    returns (kind: VERTEX, FACE, or -1 when the blade misses ; id ; point (3,) ; t along the blade ;
+    the face hit, -1 at a boundary vertex)
+    """
+    face, t = _first_hit(bvh, a, b)
+    w, t_w = _boundary_near(bvh, positions, faces, boundary, a, b, t if face >= 0 else 1.0, snap)
+    if w >= 0:
+        return VERTEX, w, positions[w].copy(), t_w, np.int64(-1)
+    if face < 0:
+        return np.int64(-1), np.int64(-1), np.zeros(3), t, face
+    hit = np.empty(3)
+    for k in range(3):
+        hit[k] = a[k] + t * (b[k] - a[k])
+    kind, ident, point = _hit_node(face, hit, faces, positions, snap)
+    return kind, ident, point, t, face
+
+
+@helper
+def _plane_through(s0, p, q, tol, min_sine, plane):
+    """plane := the plane through s0, p and q when p and q are further than ``tol`` from s0 and not
+    aligned with it (the sine between them above ``min_sine``); returns whether it was."""
+    u, v = _sub(p, s0), _sub(q, s0)
+    lu, lv = _norm(u), _norm(v)
+    if lu > tol and lv > tol and _norm(_cross(u, v)) > min_sine * lu * lv:
+        r = plane_from_points(s0, p, q)
+        plane[0], plane[1], plane[2], plane[3] = r[0], r[1], r[2], r[3]
+        return True
+    return False
 
 
 @kernel()
@@ -103,23 +159,16 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
     hit_faces = np.full(2, -1, np.int64)
     plane = np.zeros(4)
     cls = np.zeros(wpos.shape[0], np.int8)
+    flags = np.zeros(wpos.shape[0], np.bool_)
+    flags[boundary] = True
     for i in range(2):
         a, b = (a0, b0) if i == 0 else (a1, b1)
-        face, t = _first_hit(bvh, a, b)
-        w, t_w = _boundary_hit(a, b, t if face >= 0 else 1.0, boundary, wpos, tol)
-        if w >= 0:
-            for k in range(3):
-                hits[i, k] = a[k] + t_w * (b[k] - a[k])
-            hit_faces[i] = vf_faces[vf_offsets[w]]
-            ends_int[i, KIND], ends_int[i, ID] = VERTEX, w
-            _set_row(ends_pos, i, wpos[w])
-            continue
-        if face < 0:
+        kind, ident, point, t, face = _meet(bvh, wpos, wfaces, flags, a, b, tol)
+        if kind < 0:
             return FROM_MISSES + i, ends_int, ends_pos, hits, hit_faces, plane, cls
         for k in range(3):
             hits[i, k] = a[k] + t * (b[k] - a[k])
-        hit_faces[i] = face
-        kind, ident, point = _hit_node(face, hits[i], wfaces, wpos, tol)
+        hit_faces[i] = face if face >= 0 else vf_faces[vf_offsets[ident]]
         ends_int[i, KIND], ends_int[i, ID] = kind, ident
         _set_row(ends_pos, i, point)
     s0, s1 = ends_pos[0], ends_pos[1]
@@ -152,11 +201,7 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
             p, q = s1, np.empty(3)
             for k in range(3):
                 q[k] = s0[k] + hint[k] * _norm(stroke)
-        u, v = _sub(p, s0), _sub(q, s0)
-        lu, lv = _norm(u), _norm(v)
-        if lu > tol and lv > tol and _norm(_cross(u, v)) > min_sine * lu * lv:
-            r = plane_from_points(s0, p, q)
-            plane[0], plane[1], plane[2], plane[3] = r[0], r[1], r[2], r[3]
+        if _plane_through(s0, p, q, tol, min_sine, plane):
             found = True
             break
     if not found:
