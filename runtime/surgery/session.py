@@ -35,7 +35,6 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.cache import seed
-from .._shared.jit import F2, I1, i8, kernel
 from .._shared.memory import minor_page_faults, release_free_memory
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
@@ -47,7 +46,7 @@ from .posed_bounds import PosedScratch, no_posing
 from .posed_source import PosedSource, SessionInfluences, bone_affines_of
 from .rows import Rows
 from .session_drill import session_drill
-from .session_write import _write_splice
+from .session_write import _grown_box, _write_splice
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
 from .tear.splice import stroke_splice
@@ -59,8 +58,28 @@ __all__ = ["Surgery", "OperationCost"]
 _VERTEX_ARRAYS = ("vertices", "labels", "joints", "weights", "boundary")
 
 
+class _State(NamedTuple):
+    """Everything a session holds of its mesh (``Surgery._state``)."""
+
+    template: object
+    arrays: dict
+    attributes: dict
+    faces: object
+    alive: object
+    bvh: object
+    influences: object
+    used: object
+    pad: object
+    top_label: float
+    labelled: bool
+    bounds: np.ndarray
+
+
 class _Undo(NamedTuple):
-    """What one stroke changed: counts before it, and the old values of the rows it rewrote."""
+    """What one operation changed, to take it back (the undo log's one record type). An operation
+    spliced in place (a stroke, a hole): the counts before it and the old values of the rows it
+    rewrote. An operation that replaced the whole mesh (a cut): ``replaced``, the session's whole
+    state before it (``_Undo.of_state``)."""
 
     n: int
     m: int
@@ -74,6 +93,12 @@ class _Undo(NamedTuple):
     boundary_rows: np.ndarray
     old_flags: np.ndarray
     scalars: tuple
+    replaced: _State | None = None
+
+    @classmethod
+    def of_state(cls, state: _State) -> "_Undo":
+        none = np.empty(0, np.int64)
+        return cls(0, 0, none, {}, none, none, none, none, none, none, none, (), state)
 
 
 class OperationCost(NamedTuple):
@@ -151,9 +176,15 @@ class Surgery:
         self._bvh.use(self.positions, self.faces)
         release_free_memory()          # the builds' temporaries (half a millisecond)
 
-    def _state(self) -> tuple:
-        return (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._influences,
-                self._used, self._pad, self.top_label, self._labelled, self._bounds)
+    def _state(self) -> _State:
+        return _State(self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
+                      self._influences, self._used, self._pad, self.top_label, self._labelled, self._bounds)
+
+    def _restore(self, state: _State) -> None:
+        (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._influences,
+         self._used, self._pad, self.top_label, self._labelled, bounds) = state
+        self._set_bounds(bounds)
+        self._scratch.reset()                   # (what it posed was of the tree the cut made)
 
     # ---- the source interface of tear/splice.py -------------------------------------------------------
     vertices = property(lambda self: self._arrays["vertices"].view)
@@ -206,7 +237,7 @@ class Surgery:
                                          cap=cap)
             previous = self._state()
             self._reset(replace(_joined(positive, negative), name=self._template.name))
-            self._history.append(previous)
+            self._history.append(_Undo.of_state(previous))
 
     def drill(self, start, end, radius, pose=None, wall: bool = True):
         """Drill a hole (``cgaskin.drill`` in ``pose``, None: the session's pose; the same arguments but
@@ -229,13 +260,10 @@ class Surgery:
             raise InvalidInputError("nothing to undo: the session has no operation left to take back")
         with self._costed("undo"):
             record = self._history.pop()
-            if isinstance(record, _Undo):
+            if record.replaced is None:
                 self._revert(record)
             else:
-                (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
-                 self._influences, self._used, self._pad, self.top_label, self._labelled, bounds) = record
-                self._set_bounds(bounds)
-                self._scratch.reset()                   # (what it posed was of the tree the cut made)
+                self._restore(record.replaced)
             self._snapshot = None
 
     @property
@@ -359,23 +387,6 @@ class Surgery:
         # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
         self._edit_bvh(np.arange(record.m, m), record.removed, np.full(len(record.removed), -1), record.moved_faces,
                        self._arrays["vertices"].data, self._faces.data, record.moved, record.n, n)
-
-
-@kernel((F2, I1, i8, F2), cost=0.1)
-def _grown_box(positions, moved, first_new, box):
-    """Grow ``box`` (2, 3) in place by the positions of the rows ``moved`` and of every row from
-    ``first_new`` on; whether it changed (numpy's reductions along the first axis of an (r, 3) array
-    cost tens of microseconds)."""
-    changed = False
-    for i in range(moved.shape[0] + positions.shape[0] - first_new):
-        r = moved[i] if i < moved.shape[0] else first_new + i - moved.shape[0]
-        for k in range(3):
-            x = positions[r, k]
-            if x < box[0, k]:
-                box[0, k], changed = x, True
-            if x > box[1, k]:
-                box[1, k], changed = x, True
-    return changed
 
 
 def _joined(positive, negative):
