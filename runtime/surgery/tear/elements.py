@@ -34,14 +34,26 @@ def _step(nf, parent, x, y, z):
 
 
 @helper
-def _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target):
-    """Append a node of the search tree; its length is its parent's plus the step."""
+def _push(table, n, kind, ident, at, parent, carrier_kind, carrier, is_target):
+    """Append node n to the walk's ``NodeTable``: the element (kind, ident) at ``at`` (t, x, y, z),
+    reached from ``parent`` through the carrier; its length is its parent's plus the step. Returns
+    n + 1."""
+    ni, nf = table.ints, table.floats
+    t, x, y, z = at
     ni[n, KIND], ni[n, ID], ni[n, PARENT] = kind, ident, parent
     ni[n, CARRIER_KIND], ni[n, CARRIER] = carrier_kind, carrier
     nf[n, EDGE_T], nf[n, POINT], nf[n, POINT + 1], nf[n, POINT + 2] = t, x, y, z
     nf[n, LENGTH] = nf[parent, LENGTH] + _step(nf, parent, x, y, z)
-    target[n] = is_target
+    table.target[n] = is_target
     return n + 1
+
+
+@helper
+def _push_target(table, n, goal, parent, carrier_kind, carrier):
+    """Append the walk's ``Target`` ``goal`` as node n, reached from ``parent`` through the carrier."""
+    p = goal.point
+    return _push(table, n, goal.kind, goal.ident, (goal.t, p[0], p[1], p[2]), parent, carrier_kind, carrier,
+                 np.bool_(True))
 
 
 @helper
@@ -56,28 +68,30 @@ def _element_point(kind, ident, plane, wpos, edges):
 
 
 @helper
-def _push_element(ni, nf, target, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges,
-                  t_kind, t_id, vertex_used, region, margin):
-    """Append the node for a boundary element (``_element_point``). Returns the new count, unchanged
-    when the element lies outside the swept region (``region.py``: the front dies there, no detour)
-    or is a vertex that a path as short or shorter already reached (``vertex_used`` (w,) float64: the
-    shortest length a node of each welded vertex was pushed with, inf if none; so no self-crossing path,
-    and where the plane holds edges and faces, which reach a vertex by several ways, the shortest wins:
-    the walk drops a vertex's node that a shorter one superseded when it pops it)."""
-    is_target = t_kind == kind and ident == t_id
-    t, x, y, z = _element_point(kind, ident, plane, wpos, edges)
+def _push_element(table, n, kind, ident, parent, carrier_kind, carrier, plane, wpos, edges, goal, reach):
+    """Append the node for a boundary element (``_element_point``) to the walk's ``NodeTable``.
+    Returns the new count, unchanged when the element lies outside the walk's ``Reach``: outside the
+    swept region (``region.py``: the front dies there, no detour), or a vertex that a path as short or
+    shorter already reached (so no self-crossing path, and where the plane holds edges and faces, which
+    reach a vertex by several ways, the shortest wins: the walk drops a vertex's node that a shorter one
+    superseded when it pops it)."""
+    nf, vertex_used = table.floats, reach.vertex_used
+    is_target = goal.kind == kind and ident == goal.ident
+    at = _element_point(kind, ident, plane, wpos, edges)
+    _, x, y, z = at
     if kind == VERTEX and not is_target:
         length = nf[parent, LENGTH] + _step(nf, parent, x, y, z)
         if not length < vertex_used[ident]:
             return n
     if not is_target:
         # within the margin of S_i (the root: in the hull) is within the region; else measure
+        margin = reach.margin
         near = (x - nf[0, POINT]) ** 2 + (y - nf[0, POINT + 1]) ** 2 + (z - nf[0, POINT + 2]) ** 2 <= margin * margin
-        if not near and _outside((x, y, z), region) > margin:
+        if not near and _outside((x, y, z), reach.region) > margin:
             return n
     if kind == VERTEX:
         vertex_used[ident] = min(vertex_used[ident], nf[parent, LENGTH] + _step(nf, parent, x, y, z))  # as _push
-    return _push(ni, nf, target, n, kind, ident, t, x, y, z, parent, carrier_kind, carrier, is_target)
+    return _push(table, n, kind, ident, at, parent, carrier_kind, carrier, is_target)
 
 
 @helper
@@ -102,15 +116,12 @@ def _edge_parameter(e, point, cls, plane, wpos, edges):
 
 
 @helper
-def _along_edge(ni, nf, target, n, node, e, plane, wpos, edges, t_kind, t_id, t_param, t_pos, vertex_used,
-                region, margin):
+def _along_edge(table, n, node, e, plane, wpos, edges, goal, reach):
     """From a path node on edge e lying in the plane (a point of it, not a corner): along the edge, to
     the target when it lies on the same edge, else to both ends of the edge (the section there is the
     edge itself: the faces on it lie on either side, or in the plane, whose own edges go on)."""
-    if t_kind == EDGE and t_id == e:
-        return _push(ni, nf, target, n, EDGE, e, t_param, t_pos[0], t_pos[1], t_pos[2], node, EDGE_CARRIER, e,
-                     np.bool_(True))
+    if goal.kind == EDGE and goal.ident == e:
+        return _push_target(table, n, goal, node, EDGE_CARRIER, e)
     for side in range(2):
-        n = _push_element(ni, nf, target, n, VERTEX, edges[e, side], node, EDGE_CARRIER, e, plane, wpos, edges,
-                          t_kind, t_id, vertex_used, region, margin)
+        n = _push_element(table, n, VERTEX, edges[e, side], node, EDGE_CARRIER, e, plane, wpos, edges, goal, reach)
     return n

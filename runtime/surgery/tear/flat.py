@@ -14,8 +14,8 @@ import numpy as np
 
 from ..._shared.jit import helper
 from ...generated.kernels import point_plane_distance
-from .elements import _push, _push_element
-from .records import EDGE, FACE, VERTEX
+from .elements import _push_element, _push_target
+from .records import EDGE, FACE, FACE_CARRIER, VERTEX
 
 
 @helper
@@ -66,16 +66,16 @@ def _line_exits(g, wfaces, face_edges, line, wpos, tol, kinds, ids):
 
 
 @helper
-def _across_flat(ni, nf, target, n, node, g, skip_kind, skip_id, carrier_kind, line, wfaces, face_edges,
-                 wpos, edges, tol, t_kind, t_id, t_param, t_pos, vertex_used, region, margin, kinds, ids):
+def _across_flat(table, n, node, g, skip_kind, skip_id, line, mesh, tol, goal, reach):
     """From path node ``node`` on the boundary of flat face g (the element ``skip_kind``, ``skip_id``:
     a corner, or a point of an edge) or inside it (the start, -1), straight on across g: to the target
-    when it is inside g or on an edge of g that Q leaves by, else to where Q leaves g, never back nor
-    along g's border. Edge points are Q's crossings (generated ``segment_plane``). Returns the new node
-    count."""
-    if t_kind == FACE and t_id == g:              # the target inside g
-        return _push(ni, nf, target, n, t_kind, g, 0.0, t_pos[0], t_pos[1], t_pos[2], node, carrier_kind, g,
-                     np.bool_(True))
+    when it is inside g or on an edge of g that Q (``line``) leaves by, else to where Q leaves g, never
+    back nor along g's border; the segments run across g (FACE_CARRIER). Edge points are Q's crossings
+    (generated ``segment_plane``). ``mesh``: WeldedMesh (as a tuple). Returns the new node count."""
+    wpos, wfaces, face_edges, edges = mesh[0], mesh[1], mesh[2], mesh[3]
+    if goal.kind == FACE and goal.ident == g:              # the target inside g
+        return _push_target(table, n, goal, node, FACE_CARRIER, g)
+    kinds, ids = np.empty(3, np.int64), np.empty(3, np.int64)
     count = _line_exits(g, wfaces, face_edges, line, wpos, tol, kinds, ids)
     for c in range(count):
         if kinds[c] == skip_kind and ids[c] == skip_id:
@@ -86,10 +86,8 @@ def _across_flat(ni, nf, target, n, node, g, skip_kind, skip_id, carrier_kind, l
             continue
         if skip_kind == EDGE and kinds[c] == VERTEX and (ids[c] == edges[skip_id, 0] or ids[c] == edges[skip_id, 1]):
             continue
-        if kinds[c] == EDGE and t_kind == EDGE and ids[c] == t_id:
-            n = _push(ni, nf, target, n, EDGE, t_id, t_param, t_pos[0], t_pos[1], t_pos[2], node, carrier_kind,
-                      g, np.bool_(True))
+        if kinds[c] == EDGE and goal.kind == EDGE and ids[c] == goal.ident:
+            n = _push_target(table, n, goal, node, FACE_CARRIER, g)
             continue
-        n = _push_element(ni, nf, target, n, kinds[c], ids[c], node, carrier_kind, g, line, wpos, edges, t_kind,
-                          t_id, vertex_used, region, margin)
+        n = _push_element(table, n, kinds[c], ids[c], node, FACE_CARRIER, g, line, wpos, edges, goal, reach)
     return n

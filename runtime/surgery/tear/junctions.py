@@ -102,12 +102,12 @@ def _boundary_vertex(w, wfaces, face_edges, ef_offsets, vf_offsets, vf_faces, cl
 
 
 @helper
-def _jumps(node, ni, nf, target, n, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id, vertex_used, region,
-           margin, snap):
-    """Push the jumps from boundary node ``node`` to the ``openings`` (``_openings``) not yet jumped
-    to that ``_jump`` allows (at most one node per opening: the walk makes room for them first);
-    returns the new node count."""
+def _jumps(node, table, n, openings, jumped, bvh, mesh, cls, plane, goal, reach, snap):
+    """Push the jumps from boundary node ``node`` of the walk's ``NodeTable`` to the ``openings``
+    (``_openings``) not yet jumped to that ``_jump`` allows (at most one node per opening: the walk
+    makes room for them first); returns the new node count."""
     wpos, edges = mesh[0], mesh[3]
+    ni, nf = table.ints, table.floats
     kind, ident = ni[node, KIND], ni[node, ID]
     came_from = nf[max(ni[node, PARENT], 0), POINT:POINT + 3]
     to = np.empty(3)
@@ -118,6 +118,5 @@ def _jumps(node, ni, nf, target, n, openings, jumped, bvh, mesh, cls, plane, t_k
         _, to[0], to[1], to[2] = _element_point(ok, oid, plane, wpos, edges)
         if _jump(bvh, mesh, cls, plane, kind, ident, nf[node, POINT:POINT + 3], came_from, ok, oid, to, snap):
             jumped[c] = True
-            n = _push_element(ni, nf, target, n, ok, oid, node, JUMP_CARRIER, np.int64(-1), plane, wpos, edges,
-                              t_kind, t_id, vertex_used, region, margin)
+            n = _push_element(table, n, ok, oid, node, JUMP_CARRIER, np.int64(-1), plane, wpos, edges, goal, reach)
     return n

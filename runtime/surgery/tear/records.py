@@ -118,3 +118,38 @@ class Slit(NamedTuple):
     side_a: np.ndarray
     side_b: np.ndarray
 
+
+# ---- the walk's own records (step 4; compiled code makes and reads them) ------------------------------
+class NodeTable(NamedTuple):
+    """The walk's search tree, a row per node, with room for the nodes the walk may push next
+    (``walk._room`` grows it).
+
+    ints : (cap, PARENT + 1) int64 a path node row and the node's parent ; floats : (cap, LENGTH + 1)
+    float64 a path point row and the length of the way from the start ; target : (cap,) bool whether
+    the node is the target ; fronts : (cap,) int64 the open fronts, a heap (``walk._pop_front``)
+    """
+
+    ints: np.ndarray
+    floats: np.ndarray
+    target: np.ndarray
+    fronts: np.ndarray
+
+
+class Target(NamedTuple):
+    """The node a walk goes to: kind, ident, its edge parameter ``t`` (0 unless an EDGE) and its
+    ``point`` (3,)."""
+
+    kind: int
+    ident: int
+    t: float
+    point: np.ndarray
+
+
+class Reach(NamedTuple):
+    """Where a walk's fronts may go: ``vertex_used`` (w,) float64 the shortest length a node of each
+    welded vertex was pushed with (inf if none: a front reaching it again by a way as long or longer
+    dies), and the swept ``region`` (the blade at both times) widened by ``margin`` (``region.py``)."""
+
+    vertex_used: np.ndarray
+    region: tuple
+    margin: float

@@ -6,11 +6,11 @@ import numpy as np
 from ..._shared.jit import F1, I1, S1, callee, f8, helper, i8, inlined, record
 from ..bvh import BVH_ARRAYS
 from ..surface import WELDED_MESH
-from .elements import _along_edge, _edge_parameter, _elements, _in_plane, _push, _push_element
+from .elements import _along_edge, _edge_parameter, _elements, _in_plane, _push_element, _push_target
 from .flat import _across_flat, _flat, _line_plane, _line_side
 from .junctions import _boundary_vertex, _jumps, _openings
 from .records import (CARRIER, CARRIER_KIND, EDGE, EDGE_CARRIER, EDGE_T, FACE, FACE_CARRIER, ID, JUMP_CARRIER,
-                      KIND, LENGTH, NO_CARRIER, PARENT, POINT, VERTEX)
+                      KIND, LENGTH, NO_CARRIER, PARENT, POINT, VERTEX, NodeTable, Reach, Target)
 from .region import _margin
 
 
@@ -61,57 +61,54 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
     margin = _margin(wpos, wfaces, hit_faces, s_pos, t_pos)
     m = wfaces.shape[0]
     cap = max(capacity, 1)
-    # the node table: a path node row and its PARENT, a path point row and its LENGTH from the start
-    ni = np.empty((cap, PARENT + 1), np.int64)
-    nf = np.empty((cap, LENGTH + 1))
-    target = np.zeros(cap, np.bool_)
-    open_ = np.empty(cap, np.int64)           # the open fronts: a heap (``_pop_front``), one entry per node
+    table = NodeTable(np.empty((cap, PARENT + 1), np.int64), np.empty((cap, LENGTH + 1)), np.zeros(cap, np.bool_),
+                      np.empty(cap, np.int64))
     face_used = np.zeros(m, np.bool_)
     edge_used = np.zeros(edges.shape[0], np.bool_)
-    vertex_used = np.full(wpos.shape[0], np.inf)     # shortest length a node of each vertex was pushed with
+    reach = Reach(np.full(wpos.shape[0], np.inf), region, margin)
     kinds = np.empty(3, np.int64)
     ids = np.empty(3, np.int64)
     openings = np.empty((0, 2), np.int64)   # boundary points on the plane, found when first needed
     jumped = np.empty(0, np.bool_)
     looked = False
 
+    ni, nf = table.ints, table.floats
     ni[0, KIND], ni[0, ID], ni[0, PARENT], ni[0, CARRIER_KIND], ni[0, CARRIER] = s_kind, s_id, -1, NO_CARRIER, -1
     nf[0, EDGE_T], nf[0, LENGTH] = 0.0, 0.0
     nf[0, POINT], nf[0, POINT + 1], nf[0, POINT + 2] = s_pos[0], s_pos[1], s_pos[2]
     if s_kind == EDGE:
         nf[0, EDGE_T] = _edge_parameter(s_id, s_pos, cls, plane, wpos, edges)
-    t_param = _edge_parameter(t_id, t_pos, cls, plane, wpos, edges) if t_kind == EDGE else 0.0
+    goal = Target(t_kind, t_id, _edge_parameter(t_id, t_pos, cls, plane, wpos, edges) if t_kind == EDGE else 0.0,
+                  t_pos)
     line = _line_plane(plane, s_pos, t_pos)
     if s_kind == VERTEX:
-        vertex_used[s_id] = 0.0
+        reach.vertex_used[s_id] = 0.0
     n = np.int64(1)
-    open_[0] = 0
+    table.fronts[0] = 0
     n_open = np.int64(1)
     found = -1
     while n_open > 0:
-        node, n_open = _pop_front(open_, n_open, nf)
-        if target[node]:
+        node, n_open = _pop_front(table, n_open)
+        ni, nf = table.ints, table.floats
+        if table.target[node]:
             found = node
             break
-        if ni[node, KIND] == VERTEX and nf[node, LENGTH] > vertex_used[ni[node, ID]]:
+        if ni[node, KIND] == VERTEX and nf[node, LENGTH] > reach.vertex_used[ni[node, ID]]:
             continue             # superseded: a shorter way reached this vertex (elements._push_element)
         kind, ident, ck, cid = ni[node, KIND], ni[node, ID], ni[node, CARRIER_KIND], ni[node, CARRIER]
-        ni, nf, target, open_ = _room(ni, nf, target, open_, n, _most_pushed(kind, ident, ef_offsets, vf_offsets))
+        table = _room(table, n, _most_pushed(kind, ident, ef_offsets, vf_offsets))
         before = n
         if kind == FACE and _flat(ident, wfaces, cls):
             # the start inside a face lying in the plane: straight on towards S_(i+1) (flat.py)
             face_used[ident] = True
-            n = _across_flat(ni, nf, target, n, node, ident, np.int64(-1), np.int64(-1), FACE_CARRIER, line, wfaces,
-                             face_edges, wpos, edges, snap, t_kind, t_id, t_param, t_pos, vertex_used, region,
-                             margin, kinds, ids)
+            n = _across_flat(table, n, node, ident, np.int64(-1), np.int64(-1), line, mesh, snap, goal, reach)
         elif kind == FACE:
             # the start inside a face: the section leaves it at both ends of its chord
             g = ident
             face_used[g] = True
             count = _elements(g, wfaces, face_edges, cls, kinds, ids)
             for q in range(count):
-                n = _push_element(ni, nf, target, n, kinds[q], ids[q], node, FACE_CARRIER, g, plane,
-                                  wpos, edges, t_kind, t_id, vertex_used, region, margin)
+                n = _push_element(table, n, kinds[q], ids[q], node, FACE_CARRIER, g, plane, wpos, edges, goal, reach)
         elif kind == EDGE and _in_plane(ident, edges, cls):
             # a point of an edge lying in the plane: straight on across each face on it that lies in the
             # plane too; along the edge where a face on it does not (there the edge is the section, or
@@ -123,15 +120,12 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
                     along = True
                 elif not (face_used[g] or (ck == FACE_CARRIER and g == cid)):
                     face_used[g] = True
-                    n = _across_flat(ni, nf, target, n, node, g, EDGE, ident, FACE_CARRIER, line, wfaces, face_edges,
-                                     wpos, edges, snap, t_kind, t_id, t_param, t_pos, vertex_used, region, margin,
-                                     kinds, ids)
+                    n = _across_flat(table, n, node, g, EDGE, ident, line, mesh, snap, goal, reach)
             if along and ef_offsets[ident + 1] - ef_offsets[ident] >= 2:
                 # (even when a front from one of its ends went along it: the way on from this point
                 # may be the shorter one to the other end)
                 edge_used[ident] = True
-                n = _along_edge(ni, nf, target, n, node, ident, plane, wpos, edges, t_kind, t_id, t_param, t_pos,
-                                vertex_used, region, margin)
+                n = _along_edge(table, n, node, ident, plane, wpos, edges, goal, reach)
         elif kind == EDGE:
             # across the edge into each other face on it (one on a manifold edge)
             for r in range(ef_offsets[ident], ef_offsets[ident + 1]):
@@ -140,8 +134,7 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
                     continue
                 face_used[g] = True
                 if t_kind == FACE and g == t_id:
-                    n = _push(ni, nf, target, n, FACE, g, 0.0, t_pos[0], t_pos[1], t_pos[2], node,
-                              FACE_CARRIER, g, np.bool_(True))
+                    n = _push_target(table, n, goal, node, FACE_CARRIER, g)
                     continue
                 count = _elements(g, wfaces, face_edges, cls, kinds, ids)
                 exits = 0
@@ -151,8 +144,7 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
                         exits += 1
                         ek, eid = kinds[q], ids[q]
                 if exits == 1:       # 0: the section ends (cannot happen); > 1: g lies in the plane
-                    n = _push_element(ni, nf, target, n, ek, eid, node, FACE_CARRIER, g, plane, wpos,
-                                      edges, t_kind, t_id, vertex_used, region, margin)
+                    n = _push_element(table, n, ek, eid, node, FACE_CARRIER, g, plane, wpos, edges, goal, reach)
         else:
             # through a vertex on the plane: every face of its fan that the plane crosses from it,
             # and every edge from it that lies in the plane
@@ -166,20 +158,17 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
                 x, y = wfaces[g, (k + 1) % 3], wfaces[g, (k + 2) % 3]
                 if t_kind == FACE and g == t_id:
                     face_used[g] = True
-                    n = _push(ni, nf, target, n, FACE, g, 0.0, t_pos[0], t_pos[1], t_pos[2], node,
-                              FACE_CARRIER, g, np.bool_(True))
+                    n = _push_target(table, n, goal, node, FACE_CARRIER, g)
                     continue
                 if cls[x] == 0 and cls[y] == 0 and _line_side(ident, line, wpos, snap) == 0:
                     # a face lying in the plane, and the vertex on the line from S_i to S_(i+1): straight
                     # on across it (and round it by its edges, below)
                     face_used[g] = True
-                    n = _across_flat(ni, nf, target, n, node, g, VERTEX, ident, FACE_CARRIER, line, wfaces,
-                                     face_edges, wpos, edges, snap, t_kind, t_id, t_param, t_pos, vertex_used,
-                                     region, margin, kinds, ids)
+                    n = _across_flat(table, n, node, g, VERTEX, ident, line, mesh, snap, goal, reach)
                 if cls[x] * cls[y] < 0:
                     face_used[g] = True
-                    n = _push_element(ni, nf, target, n, EDGE, face_edges[g, (k + 1) % 3], node,
-                                      FACE_CARRIER, g, plane, wpos, edges, t_kind, t_id, vertex_used, region, margin)
+                    n = _push_element(table, n, EDGE, face_edges[g, (k + 1) % 3], node, FACE_CARRIER, g, plane, wpos,
+                                      edges, goal, reach)
                     continue
                 for side in range(2):
                     z = x if side == 0 else y
@@ -190,11 +179,9 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
                         continue     # a boundary edge: the surface is already open there
                     edge_used[e] = True
                     if t_kind == EDGE and t_id == e:      # the target lies on this edge: it ends there
-                        n = _push(ni, nf, target, n, EDGE, e, t_param, t_pos[0], t_pos[1], t_pos[2], node,
-                                  EDGE_CARRIER, e, np.bool_(True))
+                        n = _push_target(table, n, goal, node, EDGE_CARRIER, e)
                         continue
-                    n = _push_element(ni, nf, target, n, VERTEX, z, node, EDGE_CARRIER, e, plane,
-                                      wpos, edges, t_kind, t_id, vertex_used, region, margin)
+                    n = _push_element(table, n, VERTEX, z, node, EDGE_CARRIER, e, plane, wpos, edges, goal, reach)
         at_boundary = ((kind == EDGE and ef_offsets[ident + 1] - ef_offsets[ident] == 1)
                        or (kind == VERTEX and _boundary_vertex(ident, wfaces, face_edges, ef_offsets, vf_offsets,
                                                               vf_faces, cls, False)))
@@ -204,14 +191,14 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
                 looked = True
                 openings = _openings(cls, edges, ef_offsets, plane, wpos, region, margin)
                 jumped = np.zeros(openings.shape[0], np.bool_)
-            ni, nf, target, open_ = _room(ni, nf, target, open_, n, openings.shape[0])   # a jump per opening
-            n = _jumps(node, ni, nf, target, n, openings, jumped, bvh, mesh, cls, plane, t_kind, t_id,
-                       vertex_used, region, margin, snap)
+            table = _room(table, n, openings.shape[0])   # a jump per opening
+            n = _jumps(node, table, n, openings, jumped, bvh, mesh, cls, plane, goal, reach, snap)
         for q in range(before, n):
-            n_open = _push_front(open_, n_open, q, nf)
+            n_open = _push_front(table, n_open, q)
 
     if found < 0:
         return False, np.empty((0, 4), np.int64), np.empty((0, 4))
+    ni, nf = table.ints, table.floats
     # the path, leaf to root; a jump at either end only reaches a hit across an opening: the slit ends
     # where it meets the opening (no nodes at all when the path only jumps: nothing to tear)
     length = 0
@@ -253,9 +240,10 @@ def _before(nf, a, b):
 
 
 @inlined
-def _push_front(heap, size, node, nf):
-    """Add ``node`` to the open fronts: ``heap``'s first ``size`` entries, a binary heap in the order of
-    ``_before`` (``heap`` is as long as the node table, so it has room); returns the new size."""
+def _push_front(table, size, node):
+    """Add ``node`` to the open fronts: the first ``size`` entries of the ``NodeTable``'s fronts, a binary
+    heap in the order of ``_before`` (as long as the table, so it has room); returns the new size."""
+    heap, nf = table.fronts, table.floats
     i = size
     heap[i] = node
     while i > 0:
@@ -268,8 +256,9 @@ def _push_front(heap, size, node, nf):
 
 
 @inlined
-def _pop_front(heap, size, nf):
+def _pop_front(table, size):
     """(the first open front in the order of ``_before``, the heap's new size), taken off the heap."""
+    heap, nf = table.fronts, table.floats
     node = heap[0]
     size -= 1
     heap[0] = heap[size]
@@ -302,19 +291,19 @@ def _most_pushed(kind, ident, ef_offsets, vf_offsets):
 
 
 @helper
-def _room(ni, nf, target, open_, n, need):
-    """The walk's node table (``ni``, ``nf``, ``target``, and ``open_`` of the same length) with room
-    for ``need`` nodes after its first n: the same arrays, or copies at least twice as long (so a walk
-    that outgrows its first size copies its nodes a few times in all)."""
-    cap = ni.shape[0]
+def _room(table, n, need):
+    """The walk's ``NodeTable`` with room for ``need`` nodes after its first n: the same table, or one of
+    copies at least twice as long (so a walk that outgrows its first size copies its nodes a few times
+    in all; the fronts' heap is copied whole, as it may hold every node)."""
+    cap = table.ints.shape[0]
     if n + need <= cap:
-        return ni, nf, target, open_
+        return table
     size = max(2 * cap, n + need)
-    grown_ni, grown_nf = np.empty((size, PARENT + 1), np.int64), np.empty((size, LENGTH + 1))
-    grown_target, grown_open = np.zeros(size, np.bool_), np.empty(size, np.int64)
-    grown_ni[:n], grown_nf[:n], grown_target[:n] = ni[:n], nf[:n], target[:n]
-    grown_open[:cap] = open_
-    return grown_ni, grown_nf, grown_target, grown_open
+    grown = NodeTable(np.empty((size, PARENT + 1), np.int64), np.empty((size, LENGTH + 1)),
+                      np.zeros(size, np.bool_), np.empty(size, np.int64))
+    grown.ints[:n], grown.floats[:n], grown.target[:n] = table.ints[:n], table.floats[:n], table.target[:n]
+    grown.fronts[:cap] = table.fronts
+    return grown
 
 
 @helper
