@@ -33,7 +33,7 @@ def _step(nf, parent, x, y, z):
     return math.sqrt((x - nf[parent, POINT]) ** 2 + (y - nf[parent, POINT + 1]) ** 2 + (z - nf[parent, POINT + 2]) ** 2)
 
 
-@helper
+@inlined
 def _push(table, n, kind, ident, at, parent, carrier_kind, carrier, is_target):
     """Append node n to the walk's ``NodeTable``: the element (kind, ident) at ``at`` (t, x, y, z),
     reached from ``parent`` through the carrier; its length is its parent's plus the step. Returns
@@ -48,7 +48,7 @@ def _push(table, n, kind, ident, at, parent, carrier_kind, carrier, is_target):
     return n + 1
 
 
-@helper
+@inlined
 def _push_target(table, n, goal, parent, carrier_kind, carrier):
     """Append the walk's ``Target`` ``goal`` as node n, reached from ``parent`` through the carrier."""
     p = goal.point
