@@ -53,6 +53,10 @@ LEAF_SIZE = LEAF_MAX // 2
 #: ``degradation`` (SAH relative to the last build) past which an edit rebuilds (measured above)
 REBUILD_AT = 3.0
 
+#: where a ``TreeState``'s positions are, followed by its faces
+_POSITIONS = TreeState._fields.index("positions")
+assert TreeState._fields[_POSITIONS + 1] == "faces"
+
 
 def _cost(st: TreeState) -> float:
     """The SAH cost: the SAH sum over the root's area (0 for an empty tree; ``_change`` returns it)."""
@@ -213,7 +217,7 @@ class DynamicBVH:
         faces (F, 3), the arrays the BVH reads from now on)."""
         ids = self._ids(face_ids, "face_ids", True)
         (positions, faces), none = _geometry(ids, positions, faces), np.empty(0, np.int64)
-        self._st = self._st._replace(positions=positions, faces=faces)
+        self._read_from(positions, faces)
         self._edit_tree(none, none, none, ids)
 
     def insert(self, face_ids, positions, faces, near=None):
@@ -227,7 +231,7 @@ class DynamicBVH:
         if near.shape != (k,) or (given >= len(face_slot)).any() or (face_slot[given] < 0).any():
             raise InvalidInputError(f"near must hold ({k},) live faces or -1, got {near[:8].tolist()}")
         positions, faces = _geometry(ids, positions, faces)
-        self._st = self._st._replace(positions=positions, faces=faces)
+        self._read_from(positions, faces)
         if k:
             self._edit_tree(ids, near, np.empty(0, np.int64), np.empty(0, np.int64))
 
@@ -235,7 +239,13 @@ class DynamicBVH:
         """Read the triangles from ``positions`` (n, 3) float64 and ``faces`` (F, 3) int64, C-contiguous,
         from now on: arrays that hold every live face's triangle as the last ones did (a copy that the
         caller goes on to edit). Unchecked, like ``edit``."""
-        self._st = self._st._replace(positions=positions, faces=faces)
+        self._read_from(positions, faces)
+
+    def _read_from(self, positions, faces) -> None:
+        """Read the corners from ``positions`` and ``faces`` from now on (per stroke: a tuple's slices,
+        a third of ``_replace``'s cost)."""
+        st = self._st
+        self._st = TreeState._make(st[:_POSITIONS] + (positions, faces) + st[_POSITIONS + 2:])
 
     def _edit_tree(self, inserted, near, removed, moved) -> None:
         """``_change`` with room made first where it lacks it, then a rebuild if the tree degraded."""
@@ -266,7 +276,7 @@ class DynamicBVH:
         new ids go in first, each into the leaf of the live face near (k,) (-1: descend), then
         removed (r,) live faces out, then moved (u,) live faces, whose corners changed, are refitted.
         Ids int64, C-contiguous."""
-        self._st = self._st._replace(positions=positions, faces=faces)
+        self._read_from(positions, faces)
         self._edit_tree(inserted, near, removed, moved)
 
     def rebuild(self):

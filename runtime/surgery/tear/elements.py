@@ -51,8 +51,7 @@ def _push(table, n, kind, ident, at, parent, carrier_kind, carrier, is_target):
 @inlined
 def _push_target(table, n, goal, parent, carrier_kind, carrier):
     """Append the walk's ``Target`` ``goal`` as node n, reached from ``parent`` through the carrier."""
-    p = goal.point
-    return _push(table, n, goal.kind, goal.ident, (goal.t, p[0], p[1], p[2]), parent, carrier_kind, carrier,
+    return _push(table, n, goal.kind, goal.ident, (goal.t, goal.x, goal.y, goal.z), parent, carrier_kind, carrier,
                  np.bool_(True))
 
 

@@ -126,23 +126,24 @@ class NodeTable(NamedTuple):
 
     ints : (cap, PARENT + 1) int64 a path node row and the node's parent ; floats : (cap, LENGTH + 1)
     float64 a path point row and the length of the way from the start ; target : (cap,) bool whether
-    the node is the target ; fronts : (cap,) int64 the open fronts, a heap (``walk._pop_front``)
+    the node is the target
     """
 
     ints: np.ndarray
     floats: np.ndarray
     target: np.ndarray
-    fronts: np.ndarray
 
 
 class Target(NamedTuple):
-    """The node a walk goes to: kind, ident, its edge parameter ``t`` (0 unless an EDGE) and its
-    ``point`` (3,)."""
+    """The node a walk goes to: kind, ident, its edge parameter ``t`` (0 unless an EDGE) and its point
+    (x, y, z). (Scalars: a record of arrays handed to a compiled call costs their reference counts.)"""
 
     kind: int
     ident: int
     t: float
-    point: np.ndarray
+    x: float
+    y: float
+    z: float
 
 
 class Reach(NamedTuple):

@@ -61,8 +61,8 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
     margin = _margin(wpos, wfaces, hit_faces, s_pos, t_pos)
     m = wfaces.shape[0]
     cap = max(capacity, 1)
-    table = NodeTable(np.empty((cap, PARENT + 1), np.int64), np.empty((cap, LENGTH + 1)), np.zeros(cap, np.bool_),
-                      np.empty(cap, np.int64))
+    table = NodeTable(np.empty((cap, PARENT + 1), np.int64), np.empty((cap, LENGTH + 1)), np.zeros(cap, np.bool_))
+    fronts = np.empty(cap, np.int64)          # the open fronts: a heap (``_pop_front``), as long as the table
     face_used = np.zeros(m, np.bool_)
     edge_used = np.zeros(edges.shape[0], np.bool_)
     reach = Reach(np.full(wpos.shape[0], np.inf), region, margin)
@@ -79,16 +79,16 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
     if s_kind == EDGE:
         nf[0, EDGE_T] = _edge_parameter(s_id, s_pos, cls, plane, wpos, edges)
     goal = Target(t_kind, t_id, _edge_parameter(t_id, t_pos, cls, plane, wpos, edges) if t_kind == EDGE else 0.0,
-                  t_pos)
+                  t_pos[0], t_pos[1], t_pos[2])
     line = _line_plane(plane, s_pos, t_pos)
     if s_kind == VERTEX:
         reach.vertex_used[s_id] = 0.0
     n = np.int64(1)
-    table.fronts[0] = 0
+    fronts[0] = 0
     n_open = np.int64(1)
     found = -1
     while n_open > 0:
-        node, n_open = _pop_front(table, n_open)
+        node, n_open = _pop_front(fronts, n_open, table.floats)
         ni, nf = table.ints, table.floats
         if table.target[node]:
             found = node
@@ -96,7 +96,7 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
         if ni[node, KIND] == VERTEX and nf[node, LENGTH] > reach.vertex_used[ni[node, ID]]:
             continue             # superseded: a shorter way reached this vertex (elements._push_element)
         kind, ident, ck, cid = ni[node, KIND], ni[node, ID], ni[node, CARRIER_KIND], ni[node, CARRIER]
-        table = _room(table, n, _most_pushed(kind, ident, ef_offsets, vf_offsets))
+        table, fronts = _room(table, fronts, n, _most_pushed(kind, ident, ef_offsets, vf_offsets))
         before = n
         if kind == FACE and _flat(ident, wfaces, cls):
             # the start inside a face lying in the plane: straight on towards S_(i+1) (flat.py)
@@ -191,10 +191,10 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
                 looked = True
                 openings = _openings(cls, edges, ef_offsets, plane, wpos, region, margin)
                 jumped = np.zeros(openings.shape[0], np.bool_)
-            table = _room(table, n, openings.shape[0])   # a jump per opening
+            table, fronts = _room(table, fronts, n, openings.shape[0])   # a jump per opening
             n = _jumps(node, table, n, openings, jumped, bvh, mesh, cls, plane, goal, reach, snap)
         for q in range(before, n):
-            n_open = _push_front(table, n_open, q)
+            n_open = _push_front(fronts, n_open, q, table.floats)
 
     if found < 0:
         return False, np.empty((0, 4), np.int64), np.empty((0, 4))
@@ -240,10 +240,10 @@ def _before(nf, a, b):
 
 
 @inlined
-def _push_front(table, size, node):
-    """Add ``node`` to the open fronts: the first ``size`` entries of the ``NodeTable``'s fronts, a binary
-    heap in the order of ``_before`` (as long as the table, so it has room); returns the new size."""
-    heap, nf = table.fronts, table.floats
+def _push_front(heap, size, node, nf):
+    """Add ``node`` to the open fronts: ``heap``'s first ``size`` entries, a binary heap in the order of
+    ``_before`` (``nf``: the node table's floats; the heap is as long as the table, so it has room);
+    returns the new size."""
     i = size
     heap[i] = node
     while i > 0:
@@ -256,9 +256,8 @@ def _push_front(table, size, node):
 
 
 @inlined
-def _pop_front(table, size):
+def _pop_front(heap, size, nf):
     """(the first open front in the order of ``_before``, the heap's new size), taken off the heap."""
-    heap, nf = table.fronts, table.floats
     node = heap[0]
     size -= 1
     heap[0] = heap[size]
@@ -291,19 +290,19 @@ def _most_pushed(kind, ident, ef_offsets, vf_offsets):
 
 
 @helper
-def _room(table, n, need):
-    """The walk's ``NodeTable`` with room for ``need`` nodes after its first n: the same table, or one of
-    copies at least twice as long (so a walk that outgrows its first size copies its nodes a few times
-    in all; the fronts' heap is copied whole, as it may hold every node)."""
+def _room(table, fronts, n, need):
+    """The walk's ``NodeTable`` and its fronts' heap (as long as the table) with room for ``need`` nodes
+    after its first n: the same arrays, or copies at least twice as long (so a walk that outgrows its
+    first size copies its nodes a few times in all; the heap is copied whole: it may hold every node)."""
     cap = table.ints.shape[0]
     if n + need <= cap:
-        return table
+        return table, fronts
     size = max(2 * cap, n + need)
-    grown = NodeTable(np.empty((size, PARENT + 1), np.int64), np.empty((size, LENGTH + 1)),
-                      np.zeros(size, np.bool_), np.empty(size, np.int64))
+    grown = NodeTable(np.empty((size, PARENT + 1), np.int64), np.empty((size, LENGTH + 1)), np.zeros(size, np.bool_))
     grown.ints[:n], grown.floats[:n], grown.target[:n] = table.ints[:n], table.floats[:n], table.target[:n]
-    grown.fronts[:cap] = table.fronts
-    return grown
+    grown_fronts = np.empty(size, np.int64)
+    grown_fronts[:cap] = fronts
+    return grown, grown_fronts
 
 
 @helper
