@@ -1,6 +1,6 @@
 """Where a blade meets the surface (``locate._meet``, which a stroke's guess and ``locate`` share) reads
-the boundary vertices near the blade through the BVH; it must find the vertex that a scan of every
-boundary vertex finds, ties and all."""
+the boundary vertices near the blade through the BVH (the whole surface) or from a list (a patch); both
+must find the vertex that a scan of every boundary vertex finds, ties and all."""
 import math
 
 import numpy as np
@@ -15,7 +15,12 @@ from cgaskin.surgery.tear.rig_source import RigSource
 
 @njit
 def _near(bvh, flags, a, b, t_max, snap):
-    return _boundary_near(bvh, bvh[7], bvh[8], flags, a, b, t_max, snap)
+    return _boundary_near(bvh, bvh[7], bvh[8], flags, np.zeros(0, np.int64), a, b, t_max, snap)
+
+
+@njit
+def _near_list(bvh, boundary, a, b, t_max, snap):
+    return _boundary_near(bvh, bvh[7], bvh[8], np.zeros(0, np.bool_), boundary, a, b, t_max, snap)
 
 
 @njit
@@ -59,7 +64,9 @@ def test_the_first_boundary_vertex_near_a_blade_is_the_one_a_full_scan_finds(tar
     offset = np.zeros(3) if through else 0.05 * np.array([dx, dy, dz])
     a = p + np.array([0.0, 0.6, 0.2]) + offset
     b = p - np.array([0.0, 0.6, 0.2]) + offset
-    assert _near(BVH, FLAGS, a, b, t_max, snap) == _scan(a, b, t_max, BOUNDARY, POSITIONS, snap)
+    found = _scan(a, b, t_max, BOUNDARY, POSITIONS, snap)
+    assert _near(BVH, FLAGS, a, b, t_max, snap) == found                  # through the BVH (the whole surface)
+    assert _near_list(BVH, BOUNDARY[::-1].copy(), a, b, t_max, snap) == found   # over a list (a patch), any order
     assert BOUNDARY.size > 20                               # the slit's sides are there to find
 
 

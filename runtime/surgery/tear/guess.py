@@ -27,8 +27,10 @@ def _guess(bvh, boundary, blades, snap, min_sine):
     points = np.empty((2, 3))
     hit_faces = np.full(2, -1, np.int64)
     longest = 0.0
+    no_list = np.zeros(0, np.int64)
     for i in range(2):
-        kind, _, point, _, face = _meet(bvh, positions, faces, boundary, blades[2 * i], blades[2 * i + 1], snap)
+        kind, _, point, _, face = _meet(bvh, positions, faces, boundary, no_list, blades[2 * i], blades[2 * i + 1],
+                                        snap)
         if kind < 0:
             return FROM_MISSES + i, np.zeros(4), 0.0, hit_faces
         points[i] = point

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import helper, kernel
+from ..._shared.jit import helper, inlined, kernel
 from ...algebra.vec3 import _cross, _distance, _dot, _norm, _set_row, _sub
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
 from ...tolerances import tol
@@ -68,17 +68,35 @@ def _snap_to_edge(kind, ident, point, wfaces, face_edges, edges, wpos, cls, plan
     return kind, ident, point
 
 
+@inlined
+def _nearer(w, positions, a, d, dd, snap, best, best_t):
+    """(best, best_t) with boundary vertex w taken when it is within ``snap`` of segment a -> a + d at a
+    smaller parameter t than best_t (a lower vertex id at the same t)."""
+    p = positions[w]
+    t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
+    if (t < best_t or (best >= 0 and t == best_t and w < best)) and math.sqrt(
+            (a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2 + (a[2] + t * d[2] - p[2]) ** 2) <= snap:
+        return w, t
+    return best, best_t
+
+
 @helper
-def _boundary_near(bvh, positions, faces, boundary, a, b, t_max, snap):
-    """The flagged (``boundary`` (n,) bool) vertex within ``snap`` of segment a -> b with the smallest
-    parameter t < t_max (then the lowest vertex id), as (vertex, t), or (-1, t_max); ``positions`` and
-    ``faces`` the corners of ``bvh``'s faces in the vertex ids of ``boundary``. Only the leaves whose
-    box the segment passes within ``snap`` of are read: a boundary vertex is a corner of a face in
-    such a leaf, so a stroke costs what the blade passes, not the length of every slit made so far."""
-    node_lo, node_hi, node_left, node_right, node_start, node_count, order, _, _ = bvh
+def _boundary_near(bvh, positions, faces, flags, boundary, a, b, t_max, snap):
+    """The boundary vertex within ``snap`` of segment a -> b with the smallest parameter t < t_max (then
+    the lowest vertex id), as (vertex, t), or (-1, t_max). The boundary vertices are the flagged ones
+    (``flags`` (n,) bool) of the leaves whose box the segment passes within ``snap`` of (a boundary vertex
+    is a corner of a face in such a leaf, so a stroke on the whole surface costs what the blade passes,
+    not the length of every slit made so far), or, with no flags, the list ``boundary`` (b,) (a stroke's
+    patch: a BVH of one leaf, which would read every face). ``positions`` and ``faces``: the corners of
+    ``bvh``'s faces in those vertex ids."""
     d = b - a
     dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
     best, best_t = -1, t_max
+    if flags.shape[0] == 0:
+        for w in boundary:
+            best, best_t = _nearer(w, positions, a, d, dd, snap, best, best_t)
+        return best, best_t
+    node_lo, node_hi, node_left, node_right, node_start, node_count, order, _, _ = bvh
     stack = np.empty(128, np.int64)
     top = 0
     stack[0] = 0
@@ -93,31 +111,26 @@ def _boundary_near(bvh, positions, faces, boundary, a, b, t_max, snap):
         for i in range(node_start[node], node_start[node] + node_count[node]):
             for c in range(3):
                 w = faces[order[i], c]
-                if not boundary[w]:
-                    continue
-                p = positions[w]
-                t = min(max(((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1] + (p[2] - a[2]) * d[2]) / dd, 0.0), 1.0)
-                if (t < best_t or (best >= 0 and t == best_t and w < best)) and math.sqrt(
-                        (a[0] + t * d[0] - p[0]) ** 2 + (a[1] + t * d[1] - p[1]) ** 2
-                        + (a[2] + t * d[2] - p[2]) ** 2) <= snap:
-                    best, best_t = w, t
+                if flags[w]:
+                    best, best_t = _nearer(w, positions, a, d, dd, snap, best, best_t)
     return best, best_t
 
 
 @helper
-def _meet(bvh, positions, faces, boundary, a, b, snap):
+def _meet(bvh, positions, faces, flags, boundary, a, b, snap):
     """Where the blade a -> b meets the surface of ``bvh`` (BVHArrays as a tuple), as both a stroke's
     guess and ``_ends`` take it: the first ``boundary`` vertex the blade passes within ``snap`` before
     it hits a face (a slit opened wide ends in a wedge-shaped gap whose tip is a boundary vertex: a
     blade aimed at it, the previous stroke's blade, passes it within rounding and may slip through the
     gap), else the nearest corner of the face hit within ``snap``, else the hit point in the face.
-    ``positions``, ``faces``: the corners of bvh's faces in the vertex ids of ``boundary`` (n,) bool.
+    The boundary vertices: ``flags`` or ``boundary`` (``_boundary_near``); ``positions``, ``faces``: the
+    corners of bvh's faces in their vertex ids.
 
     returns (kind: VERTEX, FACE, or -1 when the blade misses ; id ; point (3,) ; t along the blade ;
     the face hit, -1 at a boundary vertex)
     """
     face, t = _first_hit(bvh, a, b)
-    w, t_w = _boundary_near(bvh, positions, faces, boundary, a, b, t if face >= 0 else 1.0, snap)
+    w, t_w = _boundary_near(bvh, positions, faces, flags, boundary, a, b, t if face >= 0 else 1.0, snap)
     if w >= 0:
         return VERTEX, w, positions[w].copy(), t_w, np.int64(-1)
     if face < 0:
@@ -159,11 +172,10 @@ def _ends(bvh, a0, b0, a1, b1, positions, faces, mesh, boundary, tol, min_sine):
     hit_faces = np.full(2, -1, np.int64)
     plane = np.zeros(4)
     cls = np.zeros(wpos.shape[0], np.int8)
-    flags = np.zeros(wpos.shape[0], np.bool_)
-    flags[boundary] = True
+    no_flags = np.zeros(0, np.bool_)
     for i in range(2):
         a, b = (a0, b0) if i == 0 else (a1, b1)
-        kind, ident, point, t, face = _meet(bvh, wpos, wfaces, flags, a, b, tol)
+        kind, ident, point, t, face = _meet(bvh, wpos, wfaces, no_flags, boundary, a, b, tol)
         if kind < 0:
             return FROM_MISSES + i, ends_int, ends_pos, hits, hit_faces, plane, cls
         for k in range(3):
