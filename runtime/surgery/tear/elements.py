@@ -48,9 +48,10 @@ def _push(table, n, kind, ident, at, parent, carrier_kind, carrier, is_target):
     return n + 1
 
 
-@inlined
+@helper
 def _push_target(table, n, goal, parent, carrier_kind, carrier):
-    """Append the walk's ``Target`` ``goal`` as node n, reached from ``parent`` through the carrier."""
+    """Append the walk's ``Target`` ``goal`` as node n, reached from ``parent`` through the carrier (a
+    call: once a walk, where ``_push`` is typed into ``_push_element``, once a node)."""
     return _push(table, n, goal.kind, goal.ident, (goal.t, goal.x, goal.y, goal.z), parent, carrier_kind, carrier,
                  np.bool_(True))
 
