@@ -46,6 +46,7 @@ from .posed_bounds import PosedScratch, no_posing
 from .posed_source import PosedSource, SessionInfluences, bone_affines_of
 from .rows import Rows
 from .session_drill import session_drill
+from .session_undo import SessionState, Undo
 from .session_write import _grown_box, _write_splice
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
@@ -56,49 +57,6 @@ __all__ = ["Surgery", "OperationCost"]
 
 #: the per-vertex buffers a stroke writes, in ``session_write._write_splice``'s order
 _VERTEX_ARRAYS = ("vertices", "labels", "joints", "weights", "boundary")
-
-
-class _State(NamedTuple):
-    """Everything a session holds of its mesh (``Surgery._state``)."""
-
-    template: object
-    arrays: dict
-    attributes: dict
-    faces: object
-    alive: object
-    bvh: object
-    influences: object
-    used: object
-    pad: object
-    top_label: float
-    labelled: bool
-    bounds: np.ndarray
-
-
-class _Undo(NamedTuple):
-    """What one operation changed, to take it back (the undo log's one record type). An operation
-    spliced in place (a stroke, a hole): the counts before it and the old values of the rows it
-    rewrote. An operation that replaced the whole mesh (a cut): ``replaced``, the session's whole
-    state before it (``_Undo.of_state``)."""
-
-    n: int
-    m: int
-    rows: np.ndarray
-    old_rows: dict
-    moved: np.ndarray
-    removed: np.ndarray
-    kept: np.ndarray
-    old_kept: np.ndarray
-    moved_faces: np.ndarray
-    boundary_rows: np.ndarray
-    old_flags: np.ndarray
-    scalars: tuple
-    replaced: _State | None = None
-
-    @classmethod
-    def of_state(cls, state: _State) -> "_Undo":
-        none = np.empty(0, np.int64)
-        return cls(0, 0, none, {}, none, none, none, none, none, none, none, (), state)
 
 
 class OperationCost(NamedTuple):
@@ -176,11 +134,11 @@ class Surgery:
         self._bvh.use(self.positions, self.faces)
         release_free_memory()          # the builds' temporaries (half a millisecond)
 
-    def _state(self) -> _State:
-        return _State(self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
+    def _state(self) -> SessionState:
+        return SessionState(self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
                       self._influences, self._used, self._pad, self.top_label, self._labelled, self._bounds)
 
-    def _restore(self, state: _State) -> None:
+    def _restore(self, state: SessionState) -> None:
         (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._influences,
          self._used, self._pad, self.top_label, self._labelled, bounds) = state
         self._set_bounds(bounds)
@@ -237,7 +195,7 @@ class Surgery:
                                          cap=cap)
             previous = self._state()
             self._reset(replace(_joined(positive, negative), name=self._template.name))
-            self._history.append(_Undo.of_state(previous))
+            self._history.append(Undo.of_state(previous))
 
     def drill(self, start, end, radius, pose=None, wall: bool = True):
         """Drill a hole (``cgaskin.drill`` in ``pose``, None: the session's pose; the same arguments but
@@ -326,7 +284,7 @@ class Surgery:
                                  np.concatenate((moved_rows, np.arange(first_row, end_row))))
 
     # ---- a stroke's rows in, and out again ------------------------------------------------------------
-    def _apply(self, splice) -> _Undo:
+    def _apply(self, splice) -> Undo:
         p, n, m, k = len(splice.rows), self.n_vertices, self._faces.n, len(splice.pieces)
         added = len(splice.vertices) - p
         buffers = [self._arrays[name] for name in _VERTEX_ARRAYS]
@@ -350,7 +308,7 @@ class Surgery:
         self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
                        self.faces, moved, n, self.n_vertices)
         self._grow_bounds(moved, n, old_positions)
-        return _Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved,
+        return Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved,
                      splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
 
     def _grow_bounds(self, moved, first_new, old) -> None:
@@ -365,7 +323,7 @@ class Surgery:
         if _grown_box(self.positions, moved, first_new, box):
             self._set_bounds(box)
 
-    def _revert(self, record: _Undo) -> None:
+    def _revert(self, record: Undo) -> None:
         rows, m, n = record.rows, self._faces.n, self.n_vertices
         self._faces.truncate(record.m)
         self._alive.truncate(record.m)
