@@ -355,7 +355,8 @@ def sample_poses(skeleton, clip, times, rotation_blend: str = "slerp") -> tuple:
     matrices (T, j, 4, 4), similar (T, j), in one compiled call."""
     times = np.array(float_array(times, "times", ndim=1), order="C")      # the caller's array stays theirs
     _, _, arguments, blend, rest = frame_sampler(skeleton, clip, rotation_blend)
-    versors, matrices, similar = (np.repeat(field[None], len(times), axis=0) for field in rest[1:])
+    versors, matrices, similar = (np.repeat(field[None], len(times), axis=0)
+                                  for field in (rest.versors, rest.matrices, rest.similar))
     status, node, frame = _sample_poses(*arguments, times, blend, versors, matrices, similar)
     if status != OK:
         _check(status, node, f"clip {clip.name!r} at t={times[frame]} (times[{frame}])", skeleton)
