@@ -14,8 +14,8 @@ from .records import FROM_MISSES, OK
 @callee((BVH_ARRAYS, B1, F2, f8, f8), cost=5.0)
 def _guess(bvh, boundary, blades, snap, min_sine):
     """Where the blade meets the skin at both times, on the whole surface (``locate._meet``), the plane
-    through the first point and the blade at t_(i+1), and the margin of ``region.py`` with the hit faces' edges, widened
-    (``locate`` may snap the points a little further).
+    through the first point and the blade at t_(i+1), and the margin of ``region.py`` with the hit
+    faces' edges, widened (``locate`` may snap the points a little further).
 
     bvh : BVHArrays (as a tuple) of the whole surface ; boundary : (n,) bool the boundary flags of
     its vertices ; blades : (4, 3) handle and tip at t_i, then at t_(i+1) ; snap : absolute distance

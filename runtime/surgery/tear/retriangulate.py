@@ -281,7 +281,8 @@ def _segment_coordinates(a, b, c, p):
 def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges, wpos, new_node, new_src,
                 new_coef, n_new, head, chain):
     """The new vertex of path node ``code`` as face ``f`` uses it: found among the first ``n_new`` (the
-    node's are chained from ``head[code]`` through ``chain``) or appended. An edge crossing has one per attribute-split copy of its edge (the pair of vertex ids
+    node's are chained from ``head[code]`` through ``chain``) or appended. An edge crossing has one per
+    attribute-split copy of its edge (the pair of vertex ids
     of the face's corners there), with coefficients (1 - s, s) by the edge parameter from the face's
     own corner; a point inside the face has one, with its barycentric coordinates (generated
     kernel). returns (index among the new vertices, new count)."""

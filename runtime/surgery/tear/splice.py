@@ -104,7 +104,8 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
         raise InternalError(f"the stroke's patch did not settle: this is a bug in cgaskin, not bad input; please "
                             f"report it with the model and the scalpel positions {blades.tolist()}")
     no_path(ends, Path(nodes, points) if found else None)
-    rows, ((new_src, new_coef, twin_of, read), arrays, (points, kinds, side_a, side_b, split, jumps), residual) = spliced
+    rows, ((new_src, new_coef, twin_of, read), arrays, (points, kinds, side_a, side_b, split, jumps),
+           residual) = spliced
     if not residual <= tol.placement * source.diagonal:
         warn(f"a new vertex lands {residual:.3g} from its posed path point when skinned (its "
              f"blended transform is singular or nearly so)", PlacementWarning)
