@@ -1,11 +1,14 @@
-"""``_shared.memory.sparse_zeros``: scratch written at scattered rows holds only the pages written."""
+"""``_shared.memory``: scratch written at scattered rows (``sparse_zeros``) holds only the pages written;
+recycled output arrays (``recycled_empty``) reuse only memory that no array uses any more."""
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from cgaskin._shared.memory import sparse_zeros
+from cgaskin._shared import memory
+from cgaskin._shared.frozen import frozen, kernel_array
+from cgaskin._shared.memory import is_recycled, recycled_empty, release_free_memory, sparse_zeros
 
 
 def _resident() -> int:
@@ -35,3 +38,76 @@ def test_small_and_multidimensional_sparse_arrays():
     large = sparse_zeros((1 << 20, 3))
     large[5, 2] = 7.0
     assert large.shape == (1 << 20, 3) and large[5, 2] == 7.0 and large.reshape(-1)[17] == 7.0
+
+
+# --- recycled output arrays ---------------------------------------------------------------------
+
+def _address(array) -> int:
+    return array.__array_interface__["data"][0]
+
+
+@pytest.fixture
+def recycle_small(monkeypatch):
+    """Recycled blocks for arrays of any size (the tests' arrays are small), and none left over."""
+    monkeypatch.setattr(memory, "RECYCLED_FROM", 1)
+    release_free_memory()
+    yield
+    release_free_memory()
+
+
+def test_a_dropped_output_gives_its_memory_to_the_next(recycle_small):
+    first = recycled_empty((1000, 3))
+    address = _address(first)
+    del first
+    second = recycled_empty((1000, 4), np.int64)          # a little larger: the block has room
+    assert _address(second) == address
+    assert second.shape == (1000, 4) and second.dtype == np.int64 and second.flags.writeable
+    assert is_recycled(second)
+
+
+def test_memory_is_not_reused_while_any_view_of_its_array_lives(recycle_small):
+    first = recycled_empty((1000, 3))
+    first[:] = 7.0
+    views = [first[::2], first.reshape(-1), frozen(first), memoryview(first)]
+    del first
+    for _ in range(3):
+        other = recycled_empty((1000, 3))
+        other[:] = -1.0
+        assert not any(np.shares_memory(other, np.asarray(v)) for v in views)
+        del other
+    assert all((np.asarray(v) == 7.0).all() for v in views)
+
+
+def test_a_frozen_recycled_array_is_not_copied_and_its_kernel_array_is_it(recycle_small):
+    array = recycled_empty((100, 3))
+    view = frozen(array)
+    assert np.shares_memory(view, array) and not view.flags.writeable
+    assert kernel_array(view) is array
+    assert not frozen(array[1:]).base is array      # a view of it is still copied
+
+
+def test_free_blocks_beyond_the_kept_bytes_go_back(recycle_small, monkeypatch):
+    monkeypatch.setattr(memory, "KEPT_BYTES", 3 * memory._ROUND)
+    arrays = [recycled_empty((k * 10_000,)) for k in range(1, 30)]      # 29 blocks, up to 4.6 MB
+    assert len(memory._BLOCKS) == 29
+    del arrays
+    _ = recycled_empty((10_000_000,))                                   # fits none: a new block
+    free = [kept for kept in memory._BLOCKS if kept.free()]
+    assert sum(len(kept.block) for kept in free) <= 3 * memory._ROUND
+    release_free_memory()
+    assert len(memory._BLOCKS) == 1                                     # the one in use
+
+
+def test_outputs_made_in_threads_never_share_memory(recycle_small):
+    from concurrent.futures import ThreadPoolExecutor
+
+    def make(i):
+        array = recycled_empty((500 + i % 7, 3))
+        array[:] = i
+        return array
+
+    with ThreadPoolExecutor(4) as pool:
+        for round_ in range(5):
+            arrays = list(pool.map(make, range(40)))
+            assert all((a == i).all() for i, a in enumerate(arrays))
+            del arrays

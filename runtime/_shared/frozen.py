@@ -14,13 +14,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from .memory import is_recycled
+
 __all__ = ["frozen", "kernel_array", "FrozenDict"]
 
 
 def frozen(array: np.ndarray) -> np.ndarray:
     """A read-only C-contiguous view of ``array``, which must be a fresh array nobody else holds (it
-    is the buffer behind the view; copied first when it is itself a view or not C-contiguous)."""
-    if array.base is not None or not array.flags.c_contiguous or not array.flags.writeable:
+    is the buffer behind the view; copied first when it is itself a view, other than a recycled output
+    array on its own block, or not C-contiguous)."""
+    if (array.base is not None and not is_recycled(array)) or not array.flags.c_contiguous or not array.flags.writeable:
         array = np.array(array, order="C")
     view = array.view()
     view.flags.writeable = False

@@ -10,7 +10,10 @@ each page the work writes: with 4 kB pages about 2 µs each, ~45 ms for 100 MB (
 million-face cut computes). numpy asks for 2 MB pages for arrays of 4 MB and more (transparent huge
 pages on ``madvise`` kernels; numba's own allocator does not): a few times cheaper, though each array's
 ends up to its first and from its last 2 MB boundary still take 4 kB pages. Working arrays that an
-operation repeats on the same data can be kept (``Reusable``) and cost no fault at all.
+operation repeats on the same data can be kept (``Reusable``) and cost no fault at all. Large output
+arrays, which the caller keeps, come from ``recycled_empty``: their memory, once the caller drops them,
+is kept for the next operation's outputs (within ``KEPT_BYTES``) instead of going back to the operating
+system, so a repeated operation (a cut per sample of a dataset) finds its pages mapped.
 
 Huge pages are the wrong choice for an array written *sparsely* (scratch indexed by node or vertex,
 where a stroke writes a few thousand scattered rows): each write there makes a whole 2 MB page resident,
@@ -23,7 +26,10 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import math
 import mmap
+import threading
+import weakref
 
 import numpy as np
 
@@ -32,7 +38,8 @@ try:
 except ImportError:                 # Windows
     resource = None
 
-__all__ = ["release_free_memory", "minor_page_faults", "Reusable", "sparse_zeros"]
+__all__ = ["release_free_memory", "minor_page_faults", "Reusable", "sparse_zeros", "recycled_empty",
+           "is_recycled", "KEPT_BYTES"]
 
 
 def _trim():
@@ -47,7 +54,10 @@ _MALLOC_TRIM = _trim()
 
 
 def release_free_memory() -> None:
-    """Return the heap's free pages to the operating system (glibc); a no-op elsewhere."""
+    """Return the heap's free pages and the recycled blocks that no array uses to the operating system
+    (the heap's: glibc only)."""
+    with _BLOCKS_LOCK:
+        _BLOCKS[:] = [kept for kept in _BLOCKS if not kept.free()]
     if _MALLOC_TRIM is not None:
         _MALLOC_TRIM(0)
 
@@ -68,6 +78,69 @@ def sparse_zeros(shape, dtype=np.float64) -> np.ndarray:
     memory = mmap.mmap(-1, size)
     memory.madvise(mmap.MADV_NOHUGEPAGE)
     return np.frombuffer(memory, dtype).reshape(shape)
+
+
+class _Block(np.ndarray):
+    """The memory of recycled output arrays: a 1-D uint8 array owning its data. Being a subclass
+    matters: numpy stops collapsing a view's ``base`` at a change of type, so an output array's base
+    is its block, and the base of a view of the output (``frozen``) is the output."""
+
+
+class _Kept:
+    """A recycled block and a weak reference to the array made on it: every view of that array holds
+    the array (its ``base``), so the block is free once the reference is dead."""
+
+    __slots__ = ("block", "user")
+
+    def __init__(self, block):
+        self.block = block
+        self.user = None
+
+    def free(self) -> bool:
+        return self.user is None or self.user() is None
+
+
+#: every recycled block, in use or free; and the most bytes of free blocks kept
+_BLOCKS: list = []
+_BLOCKS_LOCK = threading.Lock()
+KEPT_BYTES = 512 << 20
+_ROUND = 2 << 20
+#: smaller outputs take np.empty's memory (the heap's, which glibc keeps anyway)
+RECYCLED_FROM = _HUGE_PAGE_THRESHOLD
+
+
+def recycled_empty(shape, dtype=np.float64) -> np.ndarray:
+    """``np.empty(shape, dtype)`` for an output array that the caller keeps: of 4 MB and more it is made
+    on a recycled block, a free one (no array on it alive) of at least its size and at most about
+    twice it when there is one, so that its pages are mapped already. A new block is a little larger
+    than asked (a later call's slightly larger output fits it); free blocks beyond ``KEPT_BYTES`` go
+    back to the operating system. The array's ``base`` is its block (``is_recycled``)."""
+    dtype = np.dtype(dtype)
+    size = math.prod(shape) * dtype.itemsize
+    if size < RECYCLED_FROM:                 # (cheap: a small cut makes ten of them)
+        return np.empty(shape, dtype)
+    with _BLOCKS_LOCK:
+        free = [kept for kept in _BLOCKS if kept.free()]
+        fits = [kept for kept in free if size <= len(kept.block) <= 2 * size + _ROUND]
+        if fits:
+            chosen = min(fits, key=lambda kept: len(kept.block))
+        else:
+            chosen = _Kept(np.ndarray.__new__(_Block, (-(-(size + size // 8) // _ROUND) * _ROUND,), np.uint8))
+            _BLOCKS.append(chosen)
+            total = sum(len(kept.block) for kept in free)
+            for old in sorted(free, key=lambda kept: len(kept.block), reverse=True):   # the largest first
+                if total <= KEPT_BYTES:
+                    break
+                _BLOCKS.remove(old)
+                total -= len(old.block)
+        array = np.ndarray(shape, dtype, buffer=chosen.block)
+        chosen.user = weakref.ref(array)
+        return array
+
+
+def is_recycled(array: np.ndarray) -> bool:
+    """Whether ``array`` is an output of ``recycled_empty`` on a block (its memory is its own)."""
+    return type(array.base) is _Block
 
 
 def minor_page_faults() -> int:

@@ -1,6 +1,7 @@
-"""A cut keeps its working arrays per rig (``cgaskin._shared.memory.Reusable``): later cuts of the same
-rig, in any order, in threads, give what a cut of a rig never cut before gives, and the arrays a cut
-returns are its own (never the kept ones).
+"""A cut keeps its working arrays per rig (``cgaskin._shared.memory.Reusable``) and makes its outputs on
+recycled memory (``recycled_empty``): later cuts of the same rig, in any order, in threads, give what a
+cut of a rig never cut before gives, the arrays a cut returns are its own (never the kept ones), and
+the outputs the caller still holds never change.
 """
 from concurrent.futures import ThreadPoolExecutor
 
@@ -8,6 +9,7 @@ import numpy as np
 import pytest
 
 from cgaskin import Rig, capsule_arm, cut_details
+from cgaskin._shared import memory
 from cgaskin._shared.cache import rig_cached
 
 # (one plane misses the capsule on purpose; a filter set inside threads would race with the others)
@@ -45,7 +47,18 @@ def _same(a, b) -> bool:
                for x, y in zip(_arrays(a), _arrays(b), strict=True))
 
 
-def test_repeated_cuts_of_one_rig_match_cuts_of_fresh_rigs():
+@pytest.fixture(params=["large outputs recycled", "every output recycled"])
+def recycling(request, monkeypatch):
+    """As cgaskin runs (only outputs of 4 MB and more recycled: none of the capsule's), and with every
+    output on recycled memory."""
+    if request.param == "every output recycled":
+        monkeypatch.setattr(memory, "RECYCLED_FROM", 1)
+    memory.release_free_memory()
+    yield
+    memory.release_free_memory()
+
+
+def test_repeated_cuts_of_one_rig_match_cuts_of_fresh_rigs(recycling):
     rig = capsule_arm()
     expected = [_cut(_fresh(rig), *c) for c in CUTS]
     for order in (CUTS, CUTS[::-1], CUTS + CUTS):
@@ -62,7 +75,7 @@ def test_a_cut_leaves_its_working_arrays_as_it_found_them():
         assert (work.new_of_edge == -1).all()
 
 
-def test_cuts_in_threads_match_cuts_one_after_another():
+def test_cuts_in_threads_match_cuts_one_after_another(recycling):
     rig = capsule_arm()
     expected = [_cut(_fresh(rig), *c) for c in CUTS]
     jobs = CUTS * 4
@@ -72,7 +85,7 @@ def test_cuts_in_threads_match_cuts_one_after_another():
         assert _same(result, expected[CUTS.index(c)])
 
 
-def test_returned_arrays_share_no_memory_with_the_kept_ones_or_each_other():
+def test_returned_arrays_share_no_memory_with_the_kept_ones_or_each_other(recycling):
     rig = capsule_arm()
     first = _cut(rig, *CUTS[0])
     second = _cut(rig, *CUTS[0])
@@ -80,3 +93,17 @@ def test_returned_arrays_share_no_memory_with_the_kept_ones_or_each_other():
     for a in _arrays(first):
         for b in list(kept) + _arrays(second):
             assert not np.shares_memory(a, b)
+
+
+def test_outputs_held_by_the_caller_survive_later_cuts(recycling):
+    rig = capsule_arm()
+    held = [_cut(rig, *c) for c in CUTS]                 # all held: every later cut takes new memory
+    snapshot = [[a.copy() for a in _arrays(r)] for r in held]
+    views = [held[0].positive.vertices[::3], held[1].negative.faces.T]
+    pinned = [v.copy() for v in views]
+    del held[2:]                                         # dropped: their memory serves the next cuts
+    for c in CUTS + CUTS[::-1]:
+        _cut(rig, *c)
+    for result, arrays in zip(held, snapshot):
+        assert all(np.array_equal(a, b) for a, b in zip(_arrays(result), arrays, strict=True))
+    assert all(np.array_equal(v, p) for v, p in zip(views, pinned))

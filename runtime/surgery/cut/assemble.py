@@ -1,14 +1,15 @@
 """Step 6 of a cut: the per-vertex arrays of both halves (originals they keep, then the new vertices).
 
-The arrays are made here with numpy and filled by the kernel: numpy asks for 2 MB pages for arrays of
-4 MB and more (transparent huge pages on ``madvise`` kernels), numba's allocator does not, and a
-million-face cut's ~100 MB of fresh 4 kB pages cost more system time than the cut computes. The
-halves' rigs then hold these arrays as they are (``frozen`` copies an array that has a base).
+The arrays are made here (``recycled_empty``) and filled by the kernel: a million-face cut's ~100 MB of
+fresh pages cost the operating system about as much time as the cut computes, and a cut repeated
+after the previous halves are dropped finds their memory mapped. The halves' rigs then hold these
+arrays as they are.
 """
 import numpy as np
 
 from ..._shared.frozen import kernel_array
 from ..._shared.jit import F2, I1, I2, kernel
+from ..._shared.memory import recycled_empty
 from ..new_vertices import interpolate_attribute
 
 
@@ -50,7 +51,7 @@ def _halves(values, pos_src, neg_src, extra, shape=None):
     """(positive, negative) arrays of rows ``values[src]`` then ``extra``, of ``values``' dtype and
     ``shape`` (the trailing dimensions; default: values' own)."""
     shape = values.shape[1:] if shape is None else shape
-    halves = tuple(np.empty((len(src) + len(extra),) + shape, values.dtype) for src in (pos_src, neg_src))
+    halves = tuple(recycled_empty((len(src) + len(extra),) + shape, values.dtype) for src in (pos_src, neg_src))
     _assemble(values, pos_src, neg_src, extra, *(h.reshape(len(h), -1) for h in halves))
     return halves
 

@@ -7,6 +7,7 @@ import numpy as np
 from numba import types
 
 from ..._shared.jit import helper, kernel, record, F1, F2, I1, I2, S1, f8
+from ..._shared.memory import recycled_empty
 from ...generated.kernels import plane_from_points, point_plane_distance, segment_plane
 
 
@@ -41,18 +42,16 @@ def _classify(plane, positions, representative, welded, rel_tol, distance, welde
     returns the absolute tolerance and the bounding-box diagonal
     """
     w = representative.shape[0]
-    lo = np.full(3, np.inf)
-    hi = np.full(3, -np.inf)
+    # (the box in scalars, which stay in registers; an array's elements are stored at every step)
+    lo_x = lo_y = lo_z = np.inf
+    hi_x = hi_y = hi_z = -np.inf
     for i in range(w):
-        x = positions[representative[i]]
-        distance[i] = point_plane_distance(plane, x)
-        for c in range(3):
-            lo[c] = min(lo[c], x[c])
-            hi[c] = max(hi[c], x[c])
-    diag = 0.0
-    for c in range(3):
-        diag += (hi[c] - lo[c]) ** 2
-    diag = math.sqrt(diag)
+        r = representative[i]
+        distance[i] = point_plane_distance(plane, positions[r])
+        lo_x, hi_x = min(lo_x, positions[r, 0]), max(hi_x, positions[r, 0])
+        lo_y, hi_y = min(lo_y, positions[r, 1]), max(hi_y, positions[r, 1])
+        lo_z, hi_z = min(lo_z, positions[r, 2]), max(hi_z, positions[r, 2])
+    diag = math.sqrt((hi_x - lo_x) ** 2 + (hi_y - lo_y) ** 2 + (hi_z - lo_z) ** 2)
     tol = rel_tol * diag
     for i in range(w):
         d = distance[i]
@@ -70,9 +69,9 @@ def _put(out, row, a, b, c):
 
 
 class Scratch(NamedTuple):
-    """A cut's working arrays (``scratch``), filled by ``_classify`` and ``_sides`` and read by ``_fill``,
-    which leaves ``used`` all 0 and ``new_of_edge`` all -1 again, as ``scratch`` makes them: a later cut
-    of the same rig reuses them.
+    """A cut's working arrays (``scratch``), filled by ``_classify`` and ``_sides`` and read by ``_fill``;
+    ``_sides`` leaves ``used`` all 0 and ``_fill`` ``new_of_edge`` all -1 again, as ``scratch`` makes
+    them: a later cut of the same rig reuses them.
 
     referenced (n,) uint8: 1 where a face uses the vertex (the mesh's, set once) ;
     distance (w,) float64: the signed distance of each welded vertex to the plane ;
@@ -125,12 +124,12 @@ def split_halves(plane, positions, faces, topo, work: Scratch) -> Split:
     returns the ``Split``: its ``pos_src`` and ``neg_src`` are rows of ``work`` (read them while it is
     held), the other arrays its own
 
-    The arrays are made here with numpy once the first pass has counted them, and filled by the
-    second: the halves' rigs hold them as they are, without a copy (see ``assemble``).
+    The faces' arrays are made here (``recycled_empty``) once the first pass has counted them, and
+    filled by the second: the halves' rigs hold them as they are, without a copy (see ``assemble``).
     """
     arrays = (topo.welded, topo.representative, topo.face_vertex_edges, topo.vertex_edges)
     n_new, m_pos, m_neg, n_pos, n_neg = _sides(plane, positions, faces, arrays, tuple(work))
-    out = Split(np.empty((m_pos, 3), np.int64), np.empty((m_neg, 3), np.int64), work.pos_src[:n_pos],
+    out = Split(recycled_empty((m_pos, 3), np.int64), recycled_empty((m_neg, 3), np.int64), work.pos_src[:n_pos],
                 work.neg_src[:n_neg], np.empty(n_new, np.int64), np.empty(n_new, np.int64), np.empty(n_new),
                 np.empty((n_new, 3)))
     _fill(plane, positions, faces, arrays, tuple(work), tuple(out))
@@ -139,14 +138,14 @@ def split_halves(plane, positions, faces, topo, work: Scratch) -> Split:
 
 @kernel((F1, F2, I2, CUT_TOPOLOGY, SCRATCH), cost=1.2)
 def _sides(plane, positions, faces, topo, work):
-    """First pass: the side of each face, the vertices each half keeps and their ranks, the numbering
-    of the new vertices (in face order).
+    """First pass: the side of each face, the vertices each half keeps (``pos_src``, ``neg_src``) and
+    their ranks, the numbering of the new vertices (in face order).
 
     returns the counts (new vertices, positive faces, negative faces, positive originals, negative
     originals)
     """
     welded, representative, face_vertex_edges, vertex_edges = topo
-    referenced, _, _, sign, side, used, new_of_edge, edge_of_new, pos_map, neg_map, _, _ = work
+    referenced, _, _, sign, side, used, new_of_edge, edge_of_new, pos_map, neg_map, pos_src, neg_src = work
     n = positions.shape[0]
     m = faces.shape[0]
     n_new = 0
@@ -156,6 +155,13 @@ def _sides(plane, positions, faces, topo, work):
         s0 = sign[faces[f, 0]]
         s1 = sign[faces[f, 1]]
         s2 = sign[faces[f, 2]]
+        if s0 == s1 and s1 == s2 and s0 != 0:          # most faces: all corners on one side
+            side[f] = s0
+            if s0 > 0:
+                m_pos += 1
+            else:
+                m_neg += 1
+            continue
         has_pos = s0 > 0 or s1 > 0 or s2 > 0
         has_neg = s0 < 0 or s1 < 0 or s2 < 0
         if has_pos and has_neg:
@@ -206,18 +212,24 @@ def _sides(plane, positions, faces, topo, work):
     n_neg = 0
     # A vertex off the plane is kept by the half on its side when some face uses it (every face with
     # a corner on the positive side is positive or split, and either keeps that corner there); the
-    # face loop above marked only the vertices on the plane.
+    # face loop above marked only the vertices on the plane. ``used`` is left all 0 again.
     for v in range(n):
+        kept = used[v]
         if referenced[v]:
             sv = sign[v]
             if sv > 0:
-                used[v] = 1
+                kept = 1
             elif sv < 0:
-                used[v] = 2
+                kept = 2
         pos_map[v] = n_pos
         neg_map[v] = n_neg
-        n_pos += used[v] & 1
-        n_neg += (used[v] >> 1) & 1
+        if kept & 1:
+            pos_src[n_pos] = v
+            n_pos += 1
+        if kept & 2:
+            neg_src[n_neg] = v
+            n_neg += 1
+        used[v] = 0
     return n_new, m_pos, m_neg, n_pos, n_neg
 
 
@@ -240,25 +252,18 @@ def _new_vertex(plane, positions, welded, representative, vertex_edges, e, j, ne
 
 @kernel((F1, F2, I2, CUT_TOPOLOGY, SCRATCH, SPLIT), cost=1.2)
 def _fill(plane, positions, faces, topo, work, out):
-    """Second pass: write the fields of ``Split`` (arrays of the sizes ``_sides`` counted), and leave
-    ``work.used`` and ``work.new_of_edge`` as ``scratch`` made them.
+    """Second pass: write the fields of ``Split`` (arrays of the sizes ``_sides`` counted; its
+    ``pos_src`` and ``neg_src`` are ``_sides``'), and leave ``work.new_of_edge`` as ``scratch`` made it.
 
     Faces refer to output rows: original vertex v -> map[v] (its rank among the half's original
     vertices), new vertex j -> n_half_originals + j.
     """
     welded, representative, face_vertex_edges, vertex_edges = topo
-    referenced, _, _, sign, side, used, new_of_edge, edge_of_new, pos_map, neg_map, _, _ = work
+    _, _, _, sign, side, _, new_of_edge, edge_of_new, pos_map, neg_map, _, _ = work
     pos_faces, neg_faces, pos_src, neg_src, new_lo, new_hi, new_t, new_point = out
-    n = positions.shape[0]
     m = faces.shape[0]
     n_pos = pos_src.shape[0]
     n_neg = neg_src.shape[0]
-    for v in range(n):
-        if used[v] & 1:
-            pos_src[pos_map[v]] = v
-        if used[v] & 2:
-            neg_src[neg_map[v]] = v
-        used[v] = 0
 
     # Faces of both halves, in output numbering.
     ip = np.int64(0)           # np.int64, not a literal: see tear/records.py's note on literals
