@@ -12,7 +12,7 @@ from cgaskin import capsule_arm, tear_stroke
 from cgaskin.errors import CgaskinError, InternalError
 from cgaskin.surgery.tear import splice
 from cgaskin.surgery.tear.guess import _guess
-from cgaskin.surgery.tear.records import OK
+from cgaskin.surgery.tear.records import OK, StrokeSource
 from cgaskin.surgery.tear.rig_source import RigSource
 from cgaskin.surgery.tear.settle import _settle
 from cgaskin.surgery.tear.walk import _walk_within
@@ -22,29 +22,31 @@ from tests.helpers.tear_checks import capsule_blades
 
 
 @njit
-def _walks(bvh, boundary, vertices, positions, labels, faces, blades, diagonal, snap, min_sine, posing, capacities):
-    """Steps 2-4 of ``splice._stroke`` on a rest source, the walk run once per first node-table size in
-    ``capacities`` and once as the stroke runs it (a node per patch face and edge): (found, path_int,
-    path_float) of each, the stroke's last; empty when the guess misses or the patch does not settle."""
+def _walks(source, blades, snap, min_sine, posing, capacities):
+    """Steps 2-4 of ``splice._stroke`` on a rest source (``records.StrokeSource`` as a tuple), the walk
+    run once per first node-table size in ``capacities`` and once as the stroke runs it (a node per
+    patch face and edge): (found, path_int, path_float) of each, the stroke's last; empty when the guess
+    misses or the patch does not settle."""
+    bvh, boundary, _, _, _, _, _, _, _, _, _, diagonal = source
     snap = snap * diagonal
     status, plane, margin, hit_faces = _guess(bvh, boundary, blades, snap, min_sine)
     out = [(False, np.empty((0, 4), np.int64), np.empty((0, 4)))]
     out.clear()
     if status != OK:
         return out
-    (settled, face_ids, rows, patch_faces, patch_positions, welded, mesh, patch_boundary, patch_vertices,
-     patch_labels, tree, ends) = _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane,
-                                         plane.any(), margin, snap, min_sine, diagonal, posing)
+    settled, patch, tree, ends = _settle(source, blades, plane, plane.any(), margin, snap, min_sine, posing)
     if not settled:
         return out
+    _, _, patch_faces, patch_positions, _, mesh, _, _, _ = patch
     _, ends_int, ends_pos, _, ends_faces, ends_plane, sides = ends
     patch_bvh = (tree[0], tree[1], tree[2], tree[3], tree[4], tree[5], tree[6], patch_positions, patch_faces)
     region = (blades[0], blades[1], blades[2], blades[3])
     sizes = np.empty(capacities.shape[0] + 1, np.int64)
     sizes[:-1], sizes[-1] = capacities, mesh[1].shape[0] + mesh[3].shape[0] + 4
     for capacity in sizes:
-        out.append(_walk_within(mesh, sides, ends_plane, ends_int[0, 0], ends_int[0, 1], ends_pos[0], ends_int[1, 0],
-                                ends_int[1, 1], ends_pos[1], patch_bvh, region, ends_faces, snap, capacity))
+        out.append(_walk_within(mesh, sides, ends_plane, (ends_int[0, 0], ends_int[0, 1], ends_pos[0]),
+                                (ends_int[1, 0], ends_int[1, 1], ends_pos[1]), patch_bvh, region, ends_faces, snap,
+                                capacity))
     return out
 
 
@@ -65,9 +67,10 @@ def _long_stroke():
 def test_walk_grows_its_node_table(capacities):
     rig, blades = _long_stroke()
     source = RigSource(rig, None, None)
-    walks = _walks(tuple(source.bvh_arrays), source.boundary, source.vertices, source.positions, source.labels,
-                   source.faces, blades, source.diagonal, tol.snap, tol.min_sine, source.posing,
-                   np.array(capacities, np.int64))
+    arrays = StrokeSource(tuple(source.bvh_arrays), source.boundary, source.vertices, source.positions,
+                          source.labels, source.faces, source.joints, source.weights, np.zeros((1, 12)), False,
+                          source.top_label, source.diagonal)
+    walks = _walks(tuple(arrays), blades, tol.snap, tol.min_sine, source.posing, np.array(capacities, np.int64))
     assert len(walks) == len(capacities) + 1          # the stroke's patch settled
     found, path_int, path_float = walks[-1]
     assert found and len(path_int) > 300            # the long way: far more nodes than a small table

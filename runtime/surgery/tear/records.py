@@ -68,6 +68,65 @@ class Path(NamedTuple):
     points: np.ndarray
 
 
+class StrokeSource(NamedTuple):
+    """A source's arrays and values as the compiled stroke takes them (``splice.stroke_splice``).
+
+    bvh : ``BVHArrays`` as a tuple ; boundary (n,) bool ; vertices, positions (n, 3) float64 ;
+    labels (n,) int64 ; faces (m, 3) int64 ; joints (n, 4) int64 ; weights (n, 4) float64 ;
+    affines (B, 12) float64 (zeros, unused, when not posed) ; posed bool ; top_label int ;
+    diagonal float
+    """
+
+    bvh: tuple
+    boundary: np.ndarray
+    vertices: np.ndarray
+    positions: np.ndarray
+    labels: np.ndarray
+    faces: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+    affines: np.ndarray
+    posed: bool
+    top_label: int
+    diagonal: float
+
+
+class Tolerances(NamedTuple):
+    """A stroke's tolerances relative to the diagonal (``tolerances.tol``): snap, min_sine, on_edge."""
+
+    snap: float
+    min_sine: float
+    on_edge: float
+
+
+class PatchArrays(NamedTuple):
+    """A stroke's patch, settled (``settle._settle``): the faces near the tear plane, renumbered.
+
+    face_ids (q,), rows (p,) int64 its faces and vertices in the source ; faces (q, 3) int64 over
+    0..p-1 ; positions (p, 3) float64 ; welded (p,) int64 the welded vertex of each vertex ; mesh :
+    its ``WeldedMesh`` as a tuple ; boundary : flags of the welded vertices ; vertices (p, 3) rest
+    rows ; labels (p,) int64
+    """
+
+    face_ids: np.ndarray
+    rows: np.ndarray
+    faces: np.ndarray
+    positions: np.ndarray
+    welded: np.ndarray
+    mesh: tuple
+    boundary: np.ndarray
+    vertices: np.ndarray
+    labels: np.ndarray
+
+
+class WalkEnd(NamedTuple):
+    """A walk's start or target node: its kind, id and point (3,)."""
+
+    kind: int
+    ident: int
+    point: np.ndarray
+
+
 class Pieces(NamedTuple):
     """Step 5 (``retriangulate``): the crossed faces split along the path, and the new vertices.
 

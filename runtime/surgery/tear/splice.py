@@ -24,21 +24,19 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import B1, F1, F2, I1, I2, b1, callee, f8, helper, i8, kernel
+from ..._shared.jit import F1, F2, I1, I2, callee, f8, helper, i8, kernel, record
 from ..._shared.warn import warn
 from ...errors import InternalError, MissesMeshError, PlacementWarning
 from ...tolerances import tol
-from ..bvh import BVH_ARRAYS
-from ..surface import WELDED_MESH
 from ..new_vertices import attribute_rule, interpolate_in_place
 from ..posed_bounds import POSING, _pose_blades
 from ..weld import _boundary_of
 from .guess import _guess
 from .opening import _opening_offsets
 from .records import (CARRIER_KIND, FROM_MISSES, ID, JUMP_CARRIER, KIND, MOVED_VERTEX, OK, POINT, TWIN_OF, VERTEX,
-                      Ends, Path)
+                      Ends, Path, StrokeSource, Tolerances)
 from .retriangulate import _retriangulate
-from .settle import _settle
+from .settle import PATCH_ARRAYS, STROKE_SOURCE, _settle
 from .slit import _open_slit, _torn_faces
 from .vertex_data import _vertex_data
 from .walk import _walk
@@ -87,10 +85,11 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     position misses the surface.
     """
     posed = source.affines is not None
-    status, hit_faces, located = _stroke(
-        source.bvh_arrays, source.boundary, source.vertices, source.positions, source.labels, source.faces,
-        source.joints, source.weights, blades, source.top_label, source.diagonal, tol.snap, tol.min_sine, tol.on_edge,
-        opening, source.affines if posed else np.zeros((1, 12)), posed, source.posing)
+    arrays = StrokeSource(source.bvh_arrays, source.boundary, source.vertices, source.positions, source.labels,
+                          source.faces, source.joints, source.weights,
+                          source.affines if posed else np.zeros((1, 12)), posed, source.top_label, source.diagonal)
+    status, hit_faces, located = _stroke(tuple(arrays), blades, tuple(Tolerances(tol.snap, tol.min_sine, tol.on_edge)),
+                                         opening, source.posing)
     source.check_hits(hit_faces)
     if status != OK:
         name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
@@ -117,60 +116,58 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     return Splice(rows, *arrays, attributes, stroke)
 
 
-@kernel((BVH_ARRAYS, B1, F2, F2, I1, I2, I2, F2, F2, i8, f8, f8, f8, f8, f8, F2, b1, POSING), cost=13.0, fused=True)
-def _stroke(bvh, boundary, vertices, positions, labels, faces, joints, weights, blades, top_label, diagonal, snap,
-            min_sine, on_edge, opening, affines, posed, posing):
-    """Steps 2-7 of one stroke on a source's arrays (``stroke_splice``'s source interface; ``snap``,
-    ``min_sine`` and ``on_edge`` the relative tolerances), compiled in one call: every step hands the
-    next a dozen arrays, and from Python each returned array cost a boxing and each step a call (half
-    a small mesh's stroke). ``posing`` (``posed_bounds.Posing``), when active, poses the parts of the
-    rest tree and mesh each query reaches first (``bvh`` is then the posed tree it fills).
+@kernel((STROKE_SOURCE, F2, record(f8, f8, f8), f8, POSING), cost=13.0, fused=True)
+def _stroke(source, blades, tolerances, opening, posing):
+    """Steps 2-7 of one stroke on a source's arrays (``records.StrokeSource``; ``tolerances`` a
+    ``records.Tolerances``, relative), compiled in one call: every step hands the next a dozen arrays,
+    and from Python each returned array cost a boxing and each step a call (half a small mesh's
+    stroke). ``posing`` (``posed_bounds.Posing``), when active, poses the parts of the rest tree and
+    mesh each query reaches first (the source's ``bvh`` is then the posed tree it fills).
 
     returns the guess's status (``records.OK``, or which scalpel position missed) and hit faces (2,),
     then None when it missed, else (settled, the fields of ``Ends``, (found, the fields of ``Path``),
     the splice): the splice is None unless the patch settled and the walk found a path with nodes, else
     (rows (p,), ``_splice_arrays``' values as a tuple)
     """
+    bvh, boundary, _, _, _, _, _, _, _, _, _, diagonal = source
+    snap, min_sine, on_edge = tolerances
     snap = snap * diagonal
     _pose_blades(bvh, posing, blades, 2.0 * snap)      # the guess's queries stay within snap of the blades
     status, plane, margin, hit_faces = _guess(bvh, boundary, blades, snap, min_sine)
     located = None
     if status == OK:
-        (settled, face_ids, rows, patch_faces, patch_positions, welded, mesh, patch_boundary, patch_vertices,
-         patch_labels, tree, ends) = _settle(bvh, boundary, vertices, positions, labels, faces, blades, plane,
-                                             plane.any(), margin, snap, min_sine, diagonal, posing)
+        settled, patch, tree, ends = _settle(source, blades, plane, plane.any(), margin, snap, min_sine, posing)
+        _, rows, patch_faces, patch_positions, _, mesh, _, _, _ = patch
         _, ends_int, ends_pos, _, ends_faces, ends_plane, sides = ends
         found, path_int, path_float = False, np.empty((0, 4), np.int64), np.empty((0, 4))
         spliced = None
         if settled:
             found, path_int, path_float = _walk(
-                mesh, sides, ends_plane, ends_int[0, KIND], ends_int[0, ID], ends_pos[0], ends_int[1, KIND],
-                ends_int[1, ID], ends_pos[1], tree + (patch_positions, patch_faces),
+                mesh, sides, ends_plane, (ends_int[0, KIND], ends_int[0, ID], ends_pos[0]),
+                (ends_int[1, KIND], ends_int[1, ID], ends_pos[1]), tree + (patch_positions, patch_faces),
                 (blades[0], blades[1], blades[2], blades[3]), ends_faces, snap)
             if found and path_int.shape[0] > 0:
-                spliced = (rows, _splice_arrays(
-                    path_int, path_float, patch_faces, patch_positions, welded, mesh, ends_plane, face_ids, rows,
-                    patch_vertices, patch_labels, joints, weights, positions.shape[0], top_label, on_edge, opening,
-                    affines, posed))
+                spliced = (rows, _splice_arrays((path_int, path_float), patch, ends_plane, source, on_edge, opening))
         located = (settled, ends, (found, path_int, path_float), spliced)
     return status, hit_faces, located
 
 
-@callee((I2, F2, I2, F2, I1, WELDED_MESH, F1, I1, I1, F2, I1, I2, F2, i8, i8, f8, f8, F2, b1), cost=22.0)
-def _splice_arrays(path_int, path_float, faces, positions, vertex_welded, mesh, plane, face_ids, rows, vertices,
-                   labels, joints, weights, n, top_label, on_edge, opening, affines, posed):
+@callee((record(I2, F2), PATCH_ARRAYS, F1, STROKE_SOURCE, f8, f8), cost=22.0)
+def _splice_arrays(path, patch, plane, source, on_edge, opening):
     """Steps 5-7 on the patch and the splice in the source's numbering: the faces the path
     crosses split (``retriangulate``), the torn faces and the slit opened (``slit.py``), the vertex rows
     (``vertex_data``), the boundary flags that change, all mapped to the source (``_in_source``).
 
-    path_int, path_float : the ``Path``'s fields ; faces (q, 3), positions (p, 3), vertex_welded (p,),
-    mesh (its WeldedMesh as a tuple) : the patch's surface ; plane (4,) the tear plane ; face_ids (q,),
-    rows (p,), vertices (p, 3), labels (p,) : the patch's ids and rest rows in the source ; joints,
-    weights (n, 4) : the source's ; top_label, affines (B, 12), posed : the source's ;
+    path : the ``Path``'s fields ; patch : ``records.PatchArrays`` ; plane (4,) the tear plane ;
+    source : ``records.StrokeSource`` (its joints, weights, affines and top label) ;
     returns (new_src, new_coef, twin_of, read) for the attributes (``_attribute_rows``), the fields
     of ``Splice`` from ``changed`` to ``boundary_flags``, (points, kinds, side_a, side_b, split,
     jumps) of the stroke's record, and the largest placement residual (``vertex_data``)
     """
+    path_int, path_float = path
+    face_ids, rows, faces, positions, vertex_welded, mesh, _, vertices, labels = patch
+    _, _, _, source_positions, _, _, joints, weights, affines, posed, top_label, _ = source
+    n = source_positions.shape[0]
     p = rows.shape[0]
     pieces = _retriangulate(path_int, path_float, faces, mesh, p, on_edge)
     affected, _, new_node, new_src, new_coef, parent = pieces

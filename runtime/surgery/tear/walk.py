@@ -14,23 +14,22 @@ from .records import (CARRIER, CARRIER_KIND, EDGE, EDGE_CARRIER, EDGE_T, FACE, F
 from .region import _margin
 
 
-@callee((WELDED_MESH, S1, F1, i8, i8, F1, i8, i8, F1, BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8), cost=12.0)
-def _walk(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap):
+@callee((WELDED_MESH, S1, F1, record(i8, i8, F1), record(i8, i8, F1), BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8),
+        cost=12.0)
+def _walk(mesh, cls, plane, start, target, bvh, region, hit_faces, snap):
     """``_walk_within`` with a node table first sized for a node per face and per edge of the patch,
     which the walks seen fill a small part of (it grows if one ever needs more)."""
     capacity = mesh[1].shape[0] + mesh[3].shape[0] + 4
-    return _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap,
-                        capacity)
+    return _walk_within(mesh, cls, plane, start, target, bvh, region, hit_faces, snap, capacity)
 
 
 @helper
-def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh, region, hit_faces, snap,
-                 capacity):
+def _walk_within(mesh, cls, plane, start, target, bvh, region, hit_faces, snap, capacity):
     """Follow the plane's section of the surface from the start node to the target node.
 
     Nodes are (kind, id): VERTEX (welded vertex on the plane), EDGE (edge crossed by the plane, at
-    its crossing point), FACE (a point inside a face: the start or the target, at s_pos / t_pos);
-    the start and the target may be of any kind. The search grows fronts
+    its crossing point), FACE (a point inside a face: the start or the target, at its point);
+    the start and the target (``records.WalkEnd``: kind, id, point) may be of any kind. The search grows fronts
     from the start along every direction the section leaves it by (two, or more at a saddle), always
     advancing the shortest one, so the first front to pop the target is the shorter way round.
     Each face (and each in-plane edge) is crossed at most once, which bounds the search by the face
@@ -48,6 +47,8 @@ def _walk_within(mesh, cls, plane, s_kind, s_id, s_pos, t_kind, t_id, t_pos, bvh
     returns found (bool), and the fields of ``Path`` from start to target
     """
     (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces) = mesh
+    s_kind, s_id, s_pos = start
+    t_kind, t_id, t_pos = target
     if s_kind == FACE and t_kind == FACE and s_id == t_id:
         # both ends inside one face: the chord between them
         # (arrays filled by element: numba types an array built from nested lists for seconds)
