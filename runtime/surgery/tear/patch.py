@@ -90,10 +90,10 @@ def _compact(faces, face_ids):
 def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     """The patch's arrays in one pass (a dozen numpy calls cost more than the work on a few hundred
     faces), welded by rest position and label exactly as ``topology.checked_topology`` welds and
-    numbers (-0.0 as +0.0): its surface positions (p, 3), the welded vertex of each vertex (p,), the
-    fields of its ``WeldedMesh``, the welded vertices (increasing) that carry a ``boundary`` flag, and
+    numbers (-0.0 as +0.0): its surface positions (p, 3), the welded vertex of each vertex (p,), its
+    ``WeldedMesh`` (as a tuple), the welded vertices (increasing) that carry a ``boundary`` flag, and
     the patch's rows of ``vertices`` (p, 3) and ``labels`` (p,) (read here anyway: a stroke reuses
-    them).
+    them): the fields of ``records.PatchArrays`` from ``positions`` on.
 
     vertices, positions (n, 3), labels (n,), boundary (n,): the source's ; rows (p,) ; faces (q, 3)
     over 0..p-1
@@ -131,8 +131,8 @@ def _patch_topology(vertices, positions, labels, boundary, rows, faces):
     flagged = np.zeros(w, np.bool_)
     for i in range(p):
         flagged[welded[i]] = flagged[welded[i]] or boundary[rows[i]]
-    return (patch_positions, welded, welded_positions, welded_faces, face_edges, edges, ef_offsets, ef_faces,
-            vf_offsets, vf_faces, np.flatnonzero(flagged), patch_vertices, patch_labels)
+    mesh = (welded_positions, welded_faces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces)
+    return patch_positions, welded, mesh, np.flatnonzero(flagged), patch_vertices, patch_labels
 
 
 def patch_surface(source, face_ids) -> Patch:
@@ -141,7 +141,7 @@ def patch_surface(source, face_ids) -> Patch:
     source : a surgery source (``splice.py``): positions, faces, vertices, labels, boundary, diagonal,
         affines
     """
-    rows, faces, (positions, vertex_welded, *mesh, boundary, vertices, labels), tree = _patch_arrays(
+    (_, rows, faces, positions, vertex_welded, mesh, boundary, vertices, labels), tree = _patch_arrays(
         source.vertices, source.positions, source.labels, source.boundary, source.faces, face_ids)
     bvh = TriangleBVH.of_tree(tree, positions, faces)
     surface = _Surface(positions, faces, vertex_welded, WeldedMesh(*mesh), bvh, boundary, source.diagonal,
@@ -152,13 +152,16 @@ def patch_surface(source, face_ids) -> Patch:
 @kernel()
 def _patch_arrays(vertices, positions, labels, boundary, faces, face_ids):
     """The patch of the faces ``face_ids`` (increasing) of a source's arrays (as ``_patch_topology``
-    takes them, and its ``faces`` (m, 3)): its rows (p,) and faces (q, 3) over 0..p-1 (``_compact``),
-    ``_patch_topology``'s arrays (welded by rest position and label, as ``surface.tear_topology``: a
-    posed surface's copies of a vertex skin alike, but rounding could part them), and the fields of its
-    BVH's tree (``bvh._tree``). ``settle._settle`` runs it every round; ``patch_surface`` from Python."""
+    takes them, and its ``faces`` (m, 3)): ``records.PatchArrays`` as a tuple -- its rows (p,) and
+    faces (q, 3) over 0..p-1 (``_compact``), then ``_patch_topology``'s arrays (welded by rest position
+    and label, as ``surface.tear_topology``: a posed surface's copies of a vertex skin alike, but
+    rounding could part them) -- and the fields of its BVH's tree (``bvh._tree``). ``settle._settle``
+    runs it every round; ``patch_surface`` from Python."""
     rows, local = _compact(faces, face_ids)
-    topology = _patch_topology(vertices, positions, labels, boundary, rows, local)
-    return rows, local, topology, _tree(topology[0], local, ONE_LEAF)
+    positions, welded, mesh, flagged, patch_vertices, patch_labels = _patch_topology(
+        vertices, positions, labels, boundary, rows, local)
+    patch = (face_ids, rows, local, positions, welded, mesh, flagged, patch_vertices, patch_labels)
+    return patch, _tree(positions, local, ONE_LEAF)
 
 
 @helper

@@ -71,7 +71,7 @@ def _convex_fan(sub, flat, count, f, wfaces, wpos, path_float, out, n_out):
 
 
 @helper
-def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_float, out, on_edge, work):
+def _triangulate_face(f, nodes, path, welded, out, on_edge, work):
     """Split face ``f`` so that the path's pieces in it become edges.
 
     The face's boundary becomes a polygon: its corners (a path node where the corner is one) with the
@@ -85,9 +85,13 @@ def _triangulate_face(f, nodes, path_int, wfaces, face_edges, edges, wpos, path_
     ``nodes`` (increasing) are the path nodes that can concern f (``_face_nodes``): the others are not
     looked at, so that a long path costs what each face holds of it.
     Rows of ``out`` get element codes: -1-k for corner k, j >= 0 for path node j. Returns the row count.
-    ``work`` : (poly, flat, along, sub, subflat) scratch arrays of at least nodes + 3 entries (allocated
-    once per stroke: per face they cost more than the face's triangulation)
+    ``path`` : the fields of ``Path`` ; ``welded`` : the welded mesh's positions, faces, face edges and
+    edges (``WeldedMesh``'s first four fields) ; ``work`` : (poly, flat, along, sub, subflat) scratch
+    arrays of at least nodes + 3 entries (allocated once per stroke: per face they cost more than the
+    face's triangulation)
     """
+    path_int, path_float = path
+    wpos, wfaces, face_edges, edges = welded
     poly, flat, along, sub, subflat = work          # (every entry below ``count`` is set here)
     count = np.int64(0)
     for k in range(3):
@@ -278,14 +282,18 @@ def _segment_coordinates(a, b, c, p):
 
 
 @helper
-def _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges, wpos, new_node, new_src,
-                new_coef, n_new, head, chain):
-    """The new vertex of path node ``code`` as face ``f`` uses it: found among the first ``n_new`` (the
-    node's are chained from ``head[code]`` through ``chain``) or appended. An edge crossing has one per
+def _new_vertex(code, f, path, faces, welded, table, n_new):
+    """The new vertex of path node ``code`` as face ``f`` (of ``faces``) uses it: found among the first
+    ``n_new`` of ``table`` (new_node, new_src, new_coef, head, chain: the node's new vertices are chained
+    from ``head[code]`` through ``chain``) or appended there. An edge crossing has one per
     attribute-split copy of its edge (the pair of vertex ids
     of the face's corners there), with coefficients (1 - s, s) by the edge parameter from the face's
     own corner; a point inside the face has one, with its barycentric coordinates (generated
-    kernel). returns (index among the new vertices, new count)."""
+    kernel). ``path``, ``welded`` as ``_triangulate_face`` takes them.
+    returns (index among the new vertices, new count)."""
+    path_int, path_float = path
+    wpos, wfaces, face_edges, edges = welded
+    new_node, new_src, new_coef, head, chain = table
     if path_int[code, KIND] == EDGE:
         e = path_int[code, ID]
         k = 0
@@ -370,10 +378,11 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
     local = np.empty((k_nodes + 16, 3), np.int64)
     work = (np.empty(k_nodes + 3, np.int64), np.zeros(k_nodes + 3, np.bool_), np.empty(k_nodes + 3),
             np.empty(k_nodes + 3, np.int64), np.zeros(k_nodes + 3, np.bool_))
+    path, welded = (path_int, path_float), (wpos, wfaces, face_edges, edges)
     for a in range(n_aff):
         f = affected[a]
-        n_local = _triangulate_face(f, node_list[node_offsets[a]:node_offsets[a + 1]], path_int, wfaces,
-                                    face_edges, edges, wpos, path_float, local, on_edge, work)
+        n_local = _triangulate_face(f, node_list[node_offsets[a]:node_offsets[a + 1]], path, welded, local, on_edge,
+                                    work)
         for i in range(n_local):
             for c in range(3):
                 code = local[i, c]
@@ -390,8 +399,8 @@ def _retriangulate(path_int, path_float, faces, mesh, n_vertices, on_edge):
                         new_src = np.concatenate((new_src, np.zeros_like(new_src)))
                         new_coef = np.concatenate((new_coef, np.zeros_like(new_coef)))
                         chain = np.concatenate((chain, np.empty_like(chain)))
-                    vid, n_new = _new_vertex(code, f, path_int, path_float, faces, wfaces, face_edges, edges,
-                                             wpos, new_node, new_src, new_coef, n_new, head, chain)
+                    vid, n_new = _new_vertex(code, f, path, faces, welded,
+                                             (new_node, new_src, new_coef, head, chain), n_new)
                     tris[n_tris, c] = n_vertices + vid
             parent[n_tris] = a
             n_tris += 1

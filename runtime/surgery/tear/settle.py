@@ -45,23 +45,20 @@ def _settle(source, blades, plane, has_plane, margin, snap, min_sine, posing):
         lo, hi, query, delta = _region(blades, margin, plane, has_plane, snap, diagonal)
         _pose_region(bvh, posing, query, lo, hi, delta)        # what the region query below reaches
         face_ids = _faces_in_region(bvh, blades, margin, plane, has_plane, snap, diagonal)
-        rows, local, topology, tree = _patch_arrays(vertices, positions, labels, boundary, faces, face_ids)
-        (patch_positions, welded, wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces,
-         patch_boundary, patch_vertices, patch_labels) = topology
-        mesh = (wpos, wfaces, face_edges, edges, ef_offsets, ef_faces, vf_offsets, vf_faces)
+        patch, tree = _patch_arrays(vertices, positions, labels, boundary, faces, face_ids)
+        _, _, local, patch_positions, _, mesh, patch_boundary, _, _ = patch
         ends = _ends(tree + (patch_positions, local), a0, b0, a1, b1, patch_positions, local, mesh, patch_boundary,
                      snap, min_sine)
         status, _, points, _, hit_faces, located, _ = ends         # (the fields of ``Ends``)
         settled = status == OK
         if settled:
-            needed = _margin(wpos, wfaces, hit_faces, points[0], points[1])
+            welded_positions, welded_faces = mesh[0], mesh[1]          # (``WeldedMesh``'s first fields)
+            needed = _margin(welded_positions, welded_faces, hit_faces, points[0], points[1])
             same = has_plane
             for k in range(4):
                 same = same and located[k] == plane[k]
             settled = same and needed <= margin
             plane, has_plane, margin = located.copy(), True, max(margin, needed)
         if settled or status != OK or round_ == ROUNDS - 1:
-            patch = (face_ids, rows, local, patch_positions, welded, mesh, patch_boundary, patch_vertices,
-                     patch_labels)
             return settled, patch, tree, ends
     raise AssertionError("unreachable")

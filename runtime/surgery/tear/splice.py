@@ -179,8 +179,8 @@ def _splice_arrays(path, patch, plane, source, on_edge, opening):
     added = new_node.shape[0] + twins.shape[0]
     read, changed, out_vertices, out_labels, out_joints, out_weights = _stroke_rows(
         new_src, twins, moved, rows, vertices, labels, joints, weights, added)
-    residual = _vertex_data(out_vertices, out_joints, out_weights, out_labels, p, top_label, path_float, pieces, slit,
-                            opening, plane[:3].copy(), affines, posed, offsets)
+    residual = _vertex_data((out_vertices, out_joints, out_weights, out_labels), p, top_label, path_float, pieces,
+                            slit, (opening, plane[:3].copy(), offsets), affines, posed)
     boundary_rows, boundary_flags = _boundary_changes(out_vertices, out_labels, torn_faces, candidates, vertex_welded,
                                                       mesh[0].shape[0], path_int, p)
     removed, kept, kept_corners, new_faces, parents, (side_a, side_b, boundary_rows) = _in_source(

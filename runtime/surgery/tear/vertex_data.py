@@ -9,8 +9,7 @@ from .records import MOVED_NODE, MOVED_RANK, MOVED_SIDE, MOVED_VERTEX, POINT, TW
 
 
 @helper
-def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, opening, normal, affines, posed,
-                 offsets=None):
+def _vertex_data(rows, n, top, path_float, pieces, slit, opening, affines, posed):
     """Step 7 and the vertex arrays of the torn mesh: originals, new vertices, twins.
 
     New vertices get interpolated weights (``_blend_weights``) and, at rest, their path point as
@@ -18,19 +17,21 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
     weights, so that all copies of a node (one per attribute-split copy of a seam edge) keep one
     position and stay welded even where their weights differ a little. Twins copy their vertex. The
     far side of the slit gets the new tear label (``top + 1`` + rank, ``top`` the highest label of the
-    whole mesh, which the n rows here may be only a part of). With ``opening`` > 0
-    the near side of each split node moves along ``normal`` by ``offsets[j, 0]`` and the far side
-    against it by ``offsets[j, 1]`` (``opening._opening_offsets``: they sum to ``opening``; opening/2
-    each where no face around the path loses too much of its area; opening/2 each when ``offsets`` is
-    not given): in a pose, the offset goes through the inverse blended linear part of the node's first
-    copy on that side (again one offset per node and side, for the same reason).
+    whole mesh, which the n rows here may be only a part of). ``opening`` is (width, normal (3,),
+    offsets (k, 2)): with a width > 0 the near side of each split node moves along ``normal`` by
+    ``offsets[j, 0]`` and the far side against it by ``offsets[j, 1]`` (``opening._opening_offsets``:
+    they sum to the width; half of it each where no face around the path loses too much of its area):
+    in a pose, the offset goes through the inverse blended linear part of the node's first copy on
+    that side (again one offset per node and side, for the same reason).
 
-    out_v (N, 3) float64, out_j (N, 4) int64, out_w (N, 4) float64, out_l (N,) int64 with N = n + v + t:
-        the vertex arrays of the torn mesh, the originals in their first n rows (the caller copies
-        them: numpy's copy beats a compiled loop); filled here
-    path_float : (k, 4) Path.points ; pieces : Pieces, slit : Slit (as tuples) ; offsets : (k, 2) or None
+    rows : the vertex arrays of the torn mesh, (vertices (N, 3) float64, joints (N, 4) int64, weights
+        (N, 4) float64, labels (N,) int64) with N = n + v + t, the originals in their first n rows (the
+        caller copies them: numpy's copy beats a compiled loop); filled here
+    path_float : (k, 4) Path.points ; pieces : Pieces, slit : Slit (as tuples) ; affines (B, 12), posed
     returns the largest placement residual |skinned new vertex - its posed path point| (0 at rest)
     """
+    out_v, out_j, out_w, out_l = rows
+    width, normal, offsets = opening
     affected, tris, new_node, new_src, new_coef, _ = pieces
     split, twins, moved, side_a, side_b = slit
     v, t = new_node.shape[0], twins.shape[0]
@@ -67,7 +68,7 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
     for i in range(moved.shape[0]):
         if moved[i, MOVED_SIDE] < 0:
             out_l[moved[i, MOVED_VERTEX]] = top + 1 + moved[i, MOVED_RANK]
-    if opening > 0.0:
+    if width > 0.0:
         # (vertex, sign, node) of every vertex of a split node; offsets per (node, side)
         k = moved.shape[0] + t
         ids = np.empty(k, np.int64)
@@ -86,10 +87,7 @@ def _vertex_data(out_v, out_j, out_w, out_l, n, top, path_float, pieces, slit, o
             j = nodes[i]
             if not done[j, side]:
                 done[j, side] = True
-                if offsets is None:
-                    share = 0.5 * opening
-                else:
-                    share = offsets[j, side]
+                share = offsets[j, side]
                 for c in range(3):
                     delta[c] = signs[i] * (share * normal[c])
                 if posed:
