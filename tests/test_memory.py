@@ -1,5 +1,6 @@
 """``_shared.memory``: scratch written at scattered rows (``sparse_zeros``) holds only the pages written;
-recycled output arrays (``recycled_empty``) reuse only memory that no array uses any more."""
+recycled output arrays (``recycled_empty``) reuse only memory that no array uses any more; the garbage
+collector held off during an operation (``collection_paused``) runs again when the last one ends."""
 import sys
 from pathlib import Path
 
@@ -8,7 +9,8 @@ import pytest
 
 from cgaskin._shared import memory
 from cgaskin._shared.frozen import frozen, kernel_array
-from cgaskin._shared.memory import is_recycled, recycled_empty, release_free_memory, sparse_zeros
+from cgaskin._shared.memory import (collection_paused, is_recycled, recycled_empty, release_free_memory,
+                                     sparse_zeros)
 
 
 def _resident() -> int:
@@ -111,3 +113,52 @@ def test_outputs_made_in_threads_never_share_memory(recycle_small):
             arrays = list(pool.map(make, range(40)))
             assert all((a == i).all() for i, a in enumerate(arrays))
             del arrays
+
+
+# --- the collector held off during an operation -----------------------------------------------------
+
+def test_collection_is_paused_inside_and_resumed_after():
+    import gc
+    assert gc.isenabled()
+    with collection_paused():
+        assert not gc.isenabled()
+        with collection_paused():                   # nested (a session's drill runs the functional one)
+            assert not gc.isenabled()
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    with pytest.raises(ZeroDivisionError):          # an operation that raises resumes it too
+        with collection_paused():
+            1 / 0
+    assert gc.isenabled()
+
+
+def test_a_collector_the_caller_disabled_stays_disabled():
+    import gc
+    gc.disable()
+    try:
+        with collection_paused():
+            pass
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+
+
+def test_overlapping_operations_in_threads_resume_the_collector_once_all_end():
+    import gc
+    import threading
+    entered, leave = threading.Barrier(3), threading.Event()
+
+    def operation():
+        with collection_paused():
+            entered.wait()
+            leave.wait()
+
+    threads = [threading.Thread(target=operation) for _ in range(2)]
+    for t in threads:
+        t.start()
+    entered.wait()
+    assert not gc.isenabled()
+    leave.set()
+    for t in threads:
+        t.join()
+    assert gc.isenabled()

@@ -15,6 +15,12 @@ arrays, which the caller keeps, come from ``recycled_empty``: their memory, once
 is kept for the next operation's outputs (within ``KEPT_BYTES``) instead of going back to the operating
 system, so a repeated operation (a cut per sample of a dataset) finds its pages mapped.
 
+Python's own memory has a cost of its kind: an operation written with Python containers (a drill
+makes ~50k lists and tuples a hole) triggers the cyclic garbage collector, whose full collections
+walk every tracked object of the process (numba's own: ~130k after a few compiled calls, ~50 ms a
+walk). ``collection_paused`` holds the collector off for such an operation: its containers hold no
+cycles, reference counting frees them, and the collector runs again when it ends.
+
 Huge pages are the wrong choice for an array written *sparsely* (scratch indexed by node or vertex,
 where a stroke writes a few thousand scattered rows): each write there makes a whole 2 MB page resident,
 zeroed first (``np.empty`` of 64 MB, written every 512 kB: 62 MB resident; numpy's ``np.zeros`` takes
@@ -24,8 +30,10 @@ bytes over 300 strokes in new poses, 2.13x before (``python -m benchmarks._playi
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import ctypes.util
+import gc
 import math
 import mmap
 import threading
@@ -39,7 +47,7 @@ except ImportError:                 # Windows
     resource = None
 
 __all__ = ["release_free_memory", "minor_page_faults", "Reusable", "sparse_zeros", "recycled_empty",
-           "is_recycled", "KEPT_BYTES"]
+           "is_recycled", "KEPT_BYTES", "collection_paused"]
 
 
 def _trim():
@@ -173,3 +181,25 @@ class Reusable:
         """Keep ``arrays`` for the next ``take`` (unless a set is kept already)."""
         if not self._kept:
             self._kept.append(arrays)
+
+
+_PAUSES = [0, False]           # operations running with the collector paused; whether it was enabled
+_PAUSES_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def collection_paused():
+    """Hold the cyclic garbage collector off while the block runs (module docstring); operations that
+    overlap (threads) resume it when the last ends, and only if it was enabled before the first."""
+    with _PAUSES_LOCK:
+        if _PAUSES[0] == 0:
+            _PAUSES[1] = gc.isenabled()
+            gc.disable()
+        _PAUSES[0] += 1
+    try:
+        yield
+    finally:
+        with _PAUSES_LOCK:
+            _PAUSES[0] -= 1
+            if _PAUSES[0] == 0 and _PAUSES[1]:
+                gc.enable()

@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.cache import seed
-from .._shared.memory import minor_page_faults, release_free_memory
+from .._shared.memory import collection_paused, minor_page_faults, release_free_memory
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
 from .drill.api import checked_wall
@@ -204,7 +204,7 @@ class Surgery:
         its numbering; ``rig`` of the session is the whole mesh). The session's mesh is the functional
         drill's, but for the rows inside the bit, which it keeps unused. A drill that raises changes
         nothing."""
-        with self._costed("drill"):
+        with self._costed("drill"), collection_paused():     # (Python containers: see _shared/memory.py)
             the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
             posed = None if pose is None and self._pose is None else self._posed(pose)
             result, splice = session_drill(self, the_bit, wall, posed)
@@ -216,7 +216,7 @@ class Surgery:
         """Take back the last operation (raises InvalidInputError when there is none)."""
         if not self._history:
             raise InvalidInputError("nothing to undo: the session has no operation left to take back")
-        with self._costed("undo"):
+        with self._costed("undo"), collection_paused():
             record = self._history.pop()
             if record.replaced is None:
                 self._revert(record)

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..._shared.frozen import kernel_array
 from ..._shared.jit import F1, F2, I2, kernel
+from ..._shared.memory import collection_paused
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
 from ...errors import InvalidInputError, MissesMeshError, PlacementWarning
@@ -112,6 +113,11 @@ def drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagona
     scale), ``inside(point (3,)) -> bool`` whether a point is inside the whole model. ``rig`` may be a
     region of a larger mesh (an editing session's): the drill reads and changes only the faces it
     takes (``DrillResult.replaced``), and their neighbours across the edges it splits."""
+    with collection_paused():                   # (the patch's Python containers: see _shared/memory.py)
+        return _drill_region(rig, the_bit, wall, affines, positions, diagonal, inside)
+
+
+def _drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagonal: float, inside) -> DrillResult:
     faces = mesh_arrays(rig).faces
     step = RIM_STEP * the_bit.radius
     patch = Patch(positions, faces, rig_topology(rig))
