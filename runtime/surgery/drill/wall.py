@@ -105,6 +105,7 @@ class Loop:
         self.unwrapped = theta[0] + np.concatenate([[0.0], np.cumsum(turns[:-1])])
         self.winding = int(round(turns.sum() / (2 * math.pi)))
         self.theta = theta
+        self._by_angle = None           # (order, angles, rows): the angles sorted, made at the first search
 
     def height_at(self, theta: np.ndarray) -> np.ndarray:
         """σ of the loop at angles θ (linear between its corners, periodic)."""
@@ -113,9 +114,27 @@ class Loop:
         return np.interp(theta, np.concatenate([t - 2 * math.pi, t, t + 2 * math.pi]), np.tile(s, 3))
 
     def nearest_rows(self, theta) -> np.ndarray:
-        """The loop's rows (k,) nearest in angle to each of θ (k,)."""
-        gap = np.abs((self.theta[None, :] - theta[:, None] + math.pi) % (2 * math.pi) - math.pi)
-        return np.asarray(self.rows)[np.argmin(gap, axis=1)]
+        """The loop's rows (k,) nearest in angle to each of θ (k,), the first in the loop's order of the
+        rows at that angle (where two angles are as near, the first row of either). Searched among the loop's angles in increasing order, not in a (k, loop)
+        table of gaps (a tunnel asks once per ring): the nearest is the first of the angles equal to
+        the one at or after θ, or to the one before it, or -- the ends meet around the circle -- to
+        the smallest or the largest."""
+        if self._by_angle is None:
+            order = np.argsort(self.theta, kind="stable")
+            self._by_angle = order, self.theta[order], np.asarray(self.rows)
+        order, angles, rows = self._by_angle
+        n = len(order)
+        at = np.searchsorted(angles, theta)
+        candidates = np.stack([at % n, np.searchsorted(angles, angles[(at - 1) % n]), np.zeros_like(at),
+                               np.full_like(at, np.searchsorted(angles, angles[-1]))])
+        gaps = _gap(angles[candidates], theta)
+        nearest = np.where(gaps == gaps.min(axis=0), order[candidates], n).min(axis=0)
+        return rows[nearest]
+
+
+def _gap(a, b):
+    """|a - b| around the circle."""
+    return np.abs((a - b + math.pi) % (2 * math.pi) - math.pi)
 
 
 def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
