@@ -85,11 +85,12 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     position misses the surface.
     """
     posed = source.affines is not None
-    arrays = StrokeSource(source.bvh_arrays, source.boundary, source.vertices, source.positions, source.labels,
-                          source.faces, source.joints, source.weights,
-                          source.affines if posed else np.zeros((1, 12)), posed, source.top_label, source.diagonal)
-    status, hit_faces, located = _stroke(tuple(arrays), blades, tuple(Tolerances(tol.snap, tol.min_sine, tol.on_edge)),
-                                         opening, source.posing)
+    stroke_source = StrokeSource(source.bvh_arrays, source.boundary, source.vertices, source.positions,
+                                 source.labels, source.faces, source.joints, source.weights,
+                                 source.affines if posed else np.zeros((1, 12)), posed, source.top_label,
+                                 source.diagonal)
+    tolerances = Tolerances(tol.snap, tol.min_sine, tol.on_edge)
+    status, hit_faces, located = _stroke(tuple(stroke_source), blades, tuple(tolerances), opening, source.posing)
     source.check_hits(hit_faces)
     if status != OK:
         name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
