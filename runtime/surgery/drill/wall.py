@@ -76,8 +76,8 @@ class Frame:
         around = np.cos(theta)[:, None] * self.e1 + np.sin(theta)[:, None] * self.e2
         phi = np.where(sigma > self.length, np.minimum((sigma - self.length) / self.r, 0.5 * math.pi),
                        np.where(sigma < 0.0, -np.minimum(-sigma / self.r, 0.5 * math.pi), 0.0))
-        base = np.where((sigma > self.length)[:, None], self.end,
-                        np.where((sigma < 0.0)[:, None], self.start, self.start + np.clip(sigma, 0.0, None)[:, None] * self.u))
+        along = self.start + np.clip(sigma, 0.0, None)[:, None] * self.u
+        base = np.where((sigma > self.length)[:, None], self.end, np.where((sigma < 0.0)[:, None], self.start, along))
         return base + self.r * (np.sin(phi)[:, None] * self.u + np.cos(phi)[:, None] * around)
 
     def axis_point(self, sigma: float) -> np.ndarray:
@@ -114,11 +114,11 @@ class Loop:
         return np.interp(theta, np.concatenate([t - 2 * math.pi, t, t + 2 * math.pi]), np.tile(s, 3))
 
     def nearest_rows(self, theta) -> np.ndarray:
-        """The loop's rows (k,) nearest in angle to each of θ (k,), the first in the loop's order of the
-        rows at that angle (where two angles are as near, the first row of either). Searched among the loop's angles in increasing order, not in a (k, loop)
-        table of gaps (a tunnel asks once per ring): the nearest is the first of the angles equal to
-        the one at or after θ, or to the one before it, or -- the ends meet around the circle -- to
-        the smallest or the largest."""
+        """The loop's rows (k,) nearest in angle to each of θ (k,): of the rows at the nearest angle, the
+        first in the loop's order. Searched among the loop's angles in increasing order, not in a
+        (k, loop) table of gaps (a tunnel asks once per ring): the nearest is the first of the angles
+        equal to the one at or after θ, or to the one before it, or -- the ends meet around the circle --
+        to the smallest or the largest."""
         if self._by_angle is None:
             order = np.argsort(self.theta, kind="stable")
             self._by_angle = order, self.theta[order], np.asarray(self.rows)
