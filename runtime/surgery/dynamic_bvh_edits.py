@@ -168,18 +168,26 @@ def _put(st, s, leaf, face):
 
 @helper
 def _edit(st, faces, remove):
-    """Remove ``faces`` (``remove``) or refit their leaves to their corners now."""
-    _, _, _, _, _, start, count, _, slot_face, slot_leaf, _, _, face_slot, counts, _ = st
+    """Remove ``faces`` (``remove``) or refit their leaves to their corners now: each leaf they are in
+    refit once, after its faces are all removed (a hole removes a leaf's faces a dozen at a time)."""
+    nlo, nhi, _, _, _, start, count, _, slot_face, slot_leaf, _, _, face_slot, counts, sums = st
+    leaves = np.empty(faces.shape[0], np.int32)
     for i in range(faces.shape[0]):
         s = face_slot[faces[i]]
         leaf = slot_leaf[s]
+        leaves[i] = leaf
         if remove:
             last = start[leaf] + count[leaf] - 1
             if s != last:    # keep the leaf's live faces first: its last one fills the hole
                 _put(st, s, leaf, slot_face[last])
             slot_face[last] = face_slot[faces[i]] = -1
             counts[LIVE] -= 1
-        _refit(st, leaf, count[leaf] - 1 if remove else count[leaf])
+            sums[SAH] -= _area(nlo, nhi, leaf)        # one face less in the leaf's (old) box
+            count[leaf] -= 1
+    leaves.sort()
+    for i in range(leaves.shape[0]):
+        if i == 0 or leaves[i] != leaves[i - 1]:
+            _refit(st, leaves[i], count[leaves[i]])
 
 
 @helper

@@ -15,6 +15,7 @@ from cgaskin._shared.jit import kernel
 from cgaskin.errors import InvalidInputError
 from cgaskin.surgery.bvh import _first_hit as static_first_hit, _shear, _watertight
 from cgaskin.surgery.dynamic_bvh import DynamicBVH, dyn_faces_near_plane, dyn_first_hit
+from cgaskin.surgery.dynamic_bvh_edits import SAH
 
 
 @kernel()
@@ -124,10 +125,28 @@ def random_edits(bvh, model, rng, steps, scale):
             bvh.update(live[np.isin(model.faces[live], vertices).any(axis=1)], model.positions, model.faces)
 
 
+def check_sah_sum(bvh):
+    """The SAH sum the edits keep (``sums[SAH]``, what the rebuild test reads) equals the sum over the tree
+    as it is: inner nodes weigh 1, leaves their live count, each times its box's area."""
+    st = bvh._st
+    total, stack = 0.0, [0]
+    while stack:
+        node = stack.pop()
+        d = st.hi[node] - st.lo[node]
+        area = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]) if d[0] >= 0.0 else 0.0
+        if st.left[node] >= 0:
+            total += area
+            stack += [int(st.left[node]), int(st.right[node])]
+        else:
+            total += st.count[node] * area
+    assert st.sums[SAH] == pytest.approx(total, rel=1e-9, abs=1e-12)
+
+
 def check_queries(bvh, model, rng, n_segments=20):
     """Every query against brute force over the model's live triangles and against a fresh TriangleBVH."""
     ids, tri = model.arrays()
     assert bvh.n_faces == len(ids)
+    check_sah_sum(bvh)
     fresh = TriangleBVH(tri.reshape(-1, 3), np.arange(3 * len(ids)).reshape(-1, 3))
     lo, hi = tri.reshape(-1, 3).min(axis=0), tri.reshape(-1, 3).max(axis=0)
     for _ in range(n_segments):
