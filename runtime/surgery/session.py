@@ -136,7 +136,7 @@ class Surgery:
 
     def _state(self) -> SessionState:
         return SessionState(self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh,
-                      self._influences, self._used, self._pad, self.top_label, self._labelled, self._bounds)
+                            self._influences, self._used, self._pad, self.top_label, self._labelled, self._bounds)
 
     def _restore(self, state: SessionState) -> None:
         (self._template, self._arrays, self._attributes, self._faces, self._alive, self._bvh, self._influences,
@@ -309,7 +309,7 @@ class Surgery:
                        self.faces, moved, n, self.n_vertices)
         self._grow_bounds(moved, n, old_positions)
         return Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved,
-                     splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
+                    splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
 
     def _grow_bounds(self, moved, first_new, old) -> None:
         """The bounding box of the surface after the rows ``moved`` changed position (from ``old``) and

@@ -12,7 +12,7 @@ from cgaskin import capsule_arm, tear_stroke
 from cgaskin.errors import CgaskinError, InternalError
 from cgaskin.surgery.tear import splice
 from cgaskin.surgery.tear.guess import _guess
-from cgaskin.surgery.tear.records import OK, StrokeSource
+from cgaskin.surgery.tear.records import OK
 from cgaskin.surgery.tear.rig_source import RigSource
 from cgaskin.surgery.tear.settle import _settle
 from cgaskin.surgery.tear.walk import _walk_within
@@ -67,10 +67,8 @@ def _long_stroke():
 def test_walk_grows_its_node_table(capacities):
     rig, blades = _long_stroke()
     source = RigSource(rig, None, None)
-    arrays = StrokeSource(tuple(source.bvh_arrays), source.boundary, source.vertices, source.positions,
-                          source.labels, source.faces, source.joints, source.weights, np.zeros((1, 12)), False,
-                          source.top_label, source.diagonal)
-    walks = _walks(tuple(arrays), blades, tol.snap, tol.min_sine, source.posing, np.array(capacities, np.int64))
+    walks = _walks(tuple(splice.stroke_source(source)), blades, tol.snap, tol.min_sine, source.posing,
+                   np.array(capacities, np.int64))
     assert len(walks) == len(capacities) + 1          # the stroke's patch settled
     found, path_int, path_float = walks[-1]
     assert found and len(path_int) > 300            # the long way: far more nodes than a small table

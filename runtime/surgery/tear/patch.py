@@ -26,6 +26,7 @@ from ..bvh import TriangleBVH, _faces_near_plane, _tree
 from ..surface import WeldedMesh, _Surface
 from ..topology import _corner_pairs, _unique_pairs, incidence
 from ..weld import _weld_positions
+from .records import PatchArrays
 
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -141,12 +142,13 @@ def patch_surface(source, face_ids) -> Patch:
     source : a surgery source (``splice.py``): positions, faces, vertices, labels, boundary, diagonal,
         affines
     """
-    (_, rows, faces, positions, vertex_welded, mesh, boundary, vertices, labels), tree = _patch_arrays(
-        source.vertices, source.positions, source.labels, source.boundary, source.faces, face_ids)
-    bvh = TriangleBVH.of_tree(tree, positions, faces)
-    surface = _Surface(positions, faces, vertex_welded, WeldedMesh(*mesh), bvh, boundary, source.diagonal,
-                       source.affines)
-    return Patch(np.asarray(face_ids, np.int64), rows, surface, vertices, labels)
+    arrays, tree = _patch_arrays(source.vertices, source.positions, source.labels, source.boundary, source.faces,
+                                 face_ids)
+    patch = PatchArrays(*arrays)
+    bvh = TriangleBVH.of_tree(tree, patch.positions, patch.faces)
+    surface = _Surface(patch.positions, patch.faces, patch.welded, WeldedMesh(*patch.mesh), bvh, patch.boundary,
+                       source.diagonal, source.affines)
+    return Patch(np.asarray(face_ids, np.int64), patch.rows, surface, patch.vertices, patch.labels)
 
 
 @kernel()

@@ -84,13 +84,9 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     found no path (path None) or nothing to tear (no nodes). Raises MissesMeshError when a scalpel
     position misses the surface.
     """
-    posed = source.affines is not None
-    stroke_source = StrokeSource(source.bvh_arrays, source.boundary, source.vertices, source.positions,
-                                 source.labels, source.faces, source.joints, source.weights,
-                                 source.affines if posed else np.zeros((1, 12)), posed, source.top_label,
-                                 source.diagonal)
     tolerances = Tolerances(tol.snap, tol.min_sine, tol.on_edge)
-    status, hit_faces, located = _stroke(tuple(stroke_source), blades, tuple(tolerances), opening, source.posing)
+    status, hit_faces, located = _stroke(tuple(stroke_source(source)), blades, tuple(tolerances), opening,
+                                         source.posing)
     source.check_hits(hit_faces)
     if status != OK:
         name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
@@ -115,6 +111,14 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     stroke = dict(plane=ends.plane, points=points, kinds=kinds, side_a=side_a, side_b=side_b, split=split,
                   hits=ends.hits, jumps=jumps)
     return Splice(rows, *arrays, attributes, stroke)
+
+
+def stroke_source(source) -> StrokeSource:
+    """A source's arrays and values as the compiled stroke takes them (``affines`` zeros at rest)."""
+    posed = source.affines is not None
+    return StrokeSource(source.bvh_arrays, source.boundary, source.vertices, source.positions, source.labels,
+                        source.faces, source.joints, source.weights, source.affines if posed else np.zeros((1, 12)),
+                        posed, source.top_label, source.diagonal)
 
 
 @kernel((STROKE_SOURCE, F2, record(f8, f8, f8), f8, POSING), cost=13.0, fused=True)
