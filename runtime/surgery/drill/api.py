@@ -121,13 +121,12 @@ def _drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagon
     faces = mesh_arrays(rig).faces
     step = RIM_STEP * the_bit.radius
     patch = Patch(positions, faces, rig_topology(rig))
-    patch.take_all(faces_near_bit(positions, faces, the_bit))
+    patch.take(faces_near_bit(positions, faces, the_bit))
     tolerance = tol.on_plane * max(diagonal, the_bit.radius)
-    if patch.faces:
+    rim, opened = np.empty(0, np.int64), 0
+    if len(patch.faces):
         refine(patch, the_bit, step)
         rim, opened = open_hole(patch, the_bit, tolerance)
-    else:
-        rim, opened = [], 0
     if opened == 0:
         raise missed(the_bit, rig.name)
     walls = build_walls(patch, rim, the_bit, step, inside) if wall else 0
@@ -201,19 +200,18 @@ def _faces_near(positions, faces, lo, hi):
     return out[:count].copy()
 
 
-def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bit: Bit, tolerance: float, affines,
+def _assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, the_bit: Bit, tolerance: float, affines,
               diagonal: float) -> DrillResult:
     vertices, faces, joints, weights = mesh_arrays(rig)
     n = len(vertices)
     kept_faces = np.ones(len(faces), bool)
-    kept_faces[list(patch.taken)] = False
-    patch_faces = np.asarray(patch.faces, np.int64).reshape(-1, 3)
-    row_is_new = np.ones(len(patch.row_point), bool)
-    row_is_new[patch.input_rows] = False
+    kept_faces[patch.taken] = False
+    patch_faces = patch.faces
+    row_is_new = patch.row_vertex < 0
     # the rows' ids in the vertex table before compaction: input rows -> input vertex, new -> n + j
     new_rows = np.flatnonzero(row_is_new)
     row_ids = np.empty(len(row_is_new), np.int64)
-    row_ids[~row_is_new] = np.asarray(patch.row_vertex, np.int64)[~row_is_new]
+    row_ids[~row_is_new] = patch.row_vertex[~row_is_new]
     row_ids[new_rows] = n + np.arange(len(new_rows))
     all_faces = np.concatenate([faces[kept_faces], row_ids[patch_faces]])
     used = np.zeros(n + len(new_rows), bool)
@@ -224,7 +222,7 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
     new_rows = new_rows[kept_new]
     src, coef = patch.descriptions()
     new = NewVertices(src[new_rows], coef[new_rows])
-    new_points = np.asarray(patch.row_point, np.int64)[new_rows]
+    new_points = patch.row_point[new_rows]
     new_positions = patch.point_array()[new_points]
     # the copies of a new vertex at one point (a seam's sides, a wall's row at its rim) skin alike: their
     # weights and rest position are the first copy's (blended from other input rows, ties in the blend
@@ -249,8 +247,8 @@ def _assemble(rig: Rig, patch: Patch, rim: list, opened: int, walls: int, the_bi
     result = Rig._of_checked(out_vertices, renumber[all_faces], out_joints, out_weights, rig.skeleton, rig.clips,
                              attributes, f"{rig.name}_drilled")
     sources = np.concatenate([kept_input, np.full(len(new_rows), NEW_VERTEX, np.int64)])
-    rim_ids = renumber[row_ids[np.asarray(rim, np.int64)]] if rim else np.empty(0, np.int64)
-    made_in = np.maximum(np.asarray(patch.face_source, np.int64), -1)        # (wall and fill: -1)
+    rim_ids = renumber[row_ids[rim]]
+    made_in = np.maximum(patch.face_source, -1)        # (wall and fill: -1)
     return DrillResult(result, sources, new, len(kept_input), np.sort(rim_ids), new_positions, opened,
                        np.flatnonzero(~kept_faces), made_in, walls, the_bit, tolerance, residual)
 
@@ -259,9 +257,9 @@ def _wall_normals(normals, first_new: int, new_rows, patch: Patch, the_bit: Bit,
     """The wall rows' normals (in place, rows of ``normals``) pointing to the bit's axis; for a posed drill
     carried to rest by the transpose of each row's blended linear map (normals transform by its inverse
     transpose)."""
-    wall_rows = np.unique(np.asarray(patch.faces, np.int64)[np.asarray(patch.face_source) <= WALL])
+    wall_rows = np.unique(patch.faces[patch.face_source <= WALL])
     at = np.flatnonzero(np.isin(new_rows, wall_rows))
-    points = patch.point_array()[np.asarray(patch.row_point, np.int64)[new_rows[at]]]
+    points = patch.point_array()[patch.row_point[new_rows[at]]]
     inward = Frame(the_bit).inward(points)
     if affines is not None:
         linear = np.einsum("kb,kbij->kij", new_weights[at], affines[new_joints[at]].reshape(-1, 4, 3, 4)[..., :3])

@@ -5,156 +5,174 @@ Faces are rows of the vertex table (attribute-split copies kept apart: a seam ed
 row per copy, all at one position); points are the welded vertices (one position per place). A new row
 blends two earlier rows, (1 - t) a + t b (a midpoint, a rim's crossing, a wall's row between two rims);
 ``descriptions`` resolves every row into input vertices and coefficients, from which its weights and
-attributes are made (``new_vertices.py``).
+attributes are made (``new_vertices.py``). Everything is kept in arrays that grow (``_Growing``): the
+drill's steps read and make whole arrays of faces, rows and points at a time.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F1, I1, I2, kernel
+from ..._shared.jit import F1, I1, I2, helper, kernel
 from ..new_vertices import accumulate, largest_first
 
 #: input vertices a new vertex is described by at most: 3 in a face, 6 on a wall (between two rims)
 SOURCES = 6
+#: ``Patch.point_welded`` of a point the drill made
+NEW_POINT = -1
+#: the low 32 bits of a ``pair_codes`` code
+LOW_BITS = 0xFFFFFFFF
+
+
+def pair_codes(a, b) -> np.ndarray:
+    """One int64 for each unordered pair of ids a, b (arrays of one shape, ids below 2^31): the lower id in
+    the high 32 bits, the higher in the low (``LOW_BITS``); sorting the codes sorts the pairs."""
+    return (np.minimum(a, b) << 32) | np.maximum(a, b)
+
+
+def edge_codes(faces) -> np.ndarray:
+    """(F, 3) ``pair_codes`` of each corner edge k -> k+1 of ``faces`` (F, 3) (of rows or of points)."""
+    return pair_codes(faces, np.roll(faces, -1, axis=1))
+
+
+class _Growing:
+    """An array that rows are appended to, its capacity doubled when full; ``view()`` the rows so far."""
+
+    def __init__(self, dtype, tail: tuple = ()):
+        self._data, self.n = np.empty((64,) + tail, dtype), 0
+
+    def extend(self, rows) -> int:
+        """Append ``rows`` (k, *tail); the index of the first."""
+        k = len(rows)
+        if self.n + k > len(self._data):
+            grown = np.empty((max(2 * len(self._data), self.n + k),) + self._data.shape[1:], self._data.dtype)
+            grown[:self.n] = self._data[:self.n]
+            self._data = grown
+        self._data[self.n:self.n + k] = rows
+        self.n += k
+        return self.n - k
+
+    def replace(self, rows) -> None:
+        self.n = 0
+        self.extend(rows)
+
+    def view(self) -> np.ndarray:
+        """The rows so far (a view, valid until the next ``extend``)."""
+        return self._data[:self.n]
 
 
 class Patch:
     """The refined part of a mesh around a bit.
 
-    point_array() : (P, 3) float64, one position per welded vertex of the patch and per new point
-    point_of : dict welded id of the input -> point id (input vertices); point_welded : its inverse (new
-        points have no welded id)
-    row_point : list of point ids, the point of each row (rows: input vertex ids first as met, then new)
-    row_vertex : list, the input vertex of each row (-1 for a new one) ; row_parents : list of (a, b, t):
-        a new row blends earlier rows a and b as (1 - t) a + t b (``descriptions`` resolves them)
-    row_of : dict input vertex id -> row id ; input_rows : the input vertices' rows
-    faces : list of [row, row, row] ; face_source : list of the input face each descends from
-    edge_rows : dict (row, row) -> the row at the midpoint of that vertex edge (lower row first), and
-        ("rim", row, row) -> the row where that vertex edge crosses the bit's surface
-    midpoints : dict (point, point) -> the point at their midpoint ; taken : set of the input faces taken
+    point_array() : (P, 3) float64, the points: the welded vertices of the taken faces, then new ones
+    point_welded : (P,) int64, the input's welded id of each point (``NEW_POINT`` for a new one)
+    row_point : (R,) int64, the point of each row ; row_vertex : (R,) int64, the input vertex of each row
+        (-1 for a new one) ; row_parents : (R, 2) int64 and row_t : (R,): a new row blends earlier rows
+        as (1 - t) row_parents[:, 0] + t row_parents[:, 1] (``descriptions`` resolves them)
+    faces : (F, 3) int64 rows, wound as the input's ; face_source : (F,) int64, the input face each
+        descends from (a wall's: negative, ``wall.WALL``)
+    taken : (T,) int64, the input faces taken, in the order taken
     fill_params : dict point id -> (θ, σ) on the bit's surface, for the points of a wall's fill
     """
 
     def __init__(self, positions, faces, topology):
         self.positions, self.mesh_faces, self.topology = positions, faces, topology
-        self._points, self.n_points, self.point_of, self.point_welded = np.empty((64, 3)), 0, {}, {}
-        self.row_point, self.row_vertex, self.row_parents, self.row_of, self.input_rows = [], [], [], {}, []
-        self.faces, self.face_source, self.edge_rows, self.midpoints = [], [], {}, {}
-        self.taken = set()
+        self._points, self._point_welded = _Growing(np.float64, (3,)), _Growing(np.int64)
+        self._row_point, self._row_vertex = _Growing(np.int64), _Growing(np.int64)
+        self._row_parents, self._row_t = _Growing(np.int64, (2,)), _Growing(np.float64)
+        self._faces, self._face_source, self._taken = _Growing(np.int64, (3,)), _Growing(np.int64), _Growing(np.int64)
         self.fill_params = {}
 
+    point_welded = property(lambda self: self._point_welded.view())
+    row_point = property(lambda self: self._row_point.view())
+    row_vertex = property(lambda self: self._row_vertex.view())
+    row_parents = property(lambda self: self._row_parents.view())
+    row_t = property(lambda self: self._row_t.view())
+    faces = property(lambda self: self._faces.view())
+    face_source = property(lambda self: self._face_source.view())
+    taken = property(lambda self: self._taken.view())
+    n_points = property(lambda self: self._points.n)
+    n_rows = property(lambda self: self._row_point.n)
+
     # -- building ------------------------------------------------------------------------------------
-    def row(self, v: int) -> int:
-        """The row of input vertex v (added on first use)."""
-        r = self.row_of.get(v)
-        if r is None:
-            w = int(self.topology.welded[v])
-            p = self.point_of.get(w)
-            if p is None:
-                p = self.point_of[w] = self.add_point(self.positions[v])
-                self.point_welded[p] = w
-            r = self.row_of[v] = len(self.row_point)
-            self.row_point.append(p)
-            self.row_vertex.append(v)
-            self.row_parents.append((r, r, 0.0))
-            self.input_rows.append(r)
-        return r
-
-    def take_all(self, faces) -> None:
-        """Add the input faces ``faces`` (k,) to the empty patch: what ``take`` of each would make (rows
-        in ascending vertex order, points in the order their first vertex comes), in whole arrays."""
-        assert not self.row_point, "take_all starts a patch"
+    def take(self, faces) -> int:
+        """Add the input faces ``faces`` (k,) not taken yet, in ascending order: rows for their vertices
+        that have none (in ascending vertex order), points for their welded vertices that have none (in
+        the order of their first vertex). Returns how many faces were added."""
+        faces = np.setdiff1d(np.asarray(faces, np.int64), self.taken)
+        if not len(faces):
+            return 0
         corners = self.mesh_faces[faces]
-        vertices = np.unique(corners)
-        welded, first, point = np.unique(self.topology.welded[vertices], return_index=True, return_inverse=True)
-        order = np.argsort(first)                   # the points by their first vertex
-        renumber = np.empty(len(order), np.int64)
-        renumber[order] = np.arange(len(order))
-        point = renumber[point.ravel()]
-        self.add_points(self.positions[vertices[first[order]]])
-        welded = welded[order].tolist()
-        self.point_of, self.point_welded = dict(zip(welded, range(len(welded)))), dict(enumerate(welded))
-        rows = list(range(len(vertices)))
-        self.row_of = dict(zip(vertices.tolist(), rows))
-        self.row_point, self.row_vertex, self.input_rows = point.tolist(), vertices.tolist(), rows[:]
-        self.row_parents = [(r, r, 0.0) for r in rows]
-        self.faces.extend(np.searchsorted(vertices, corners).tolist())
-        self.face_source.extend(faces.tolist())
-        self.taken.update(faces.tolist())
+        input_rows = np.flatnonzero(self.row_vertex >= 0)
+        vertices = np.setdiff1d(corners, self.row_vertex[input_rows])
+        welded = self.topology.welded[vertices]
+        known = np.flatnonzero(self.point_welded != NEW_POINT)
+        fresh, first = np.unique(welded, return_index=True)
+        is_fresh = ~np.isin(fresh, self.point_welded[known])
+        order = np.sort(first[is_fresh])                         # new points by their first vertex
+        self._add_points(self.positions[vertices[order]], welded[order])
+        known = np.flatnonzero(self.point_welded != NEW_POINT)
+        by_welded = known[np.argsort(self.point_welded[known])]
+        points = by_welded[np.searchsorted(self.point_welded[by_welded], welded)]
+        first_row = self.new_rows(points, 0, 0, 0.0, vertices)
+        rows = first_row + np.arange(len(vertices))
+        self._row_parents.view()[rows] = rows[:, None]          # (an input row is itself)
+        input_rows = np.flatnonzero(self.row_vertex >= 0)
+        by_vertex = input_rows[np.argsort(self.row_vertex[input_rows])]
+        self.add_faces(by_vertex[np.searchsorted(self.row_vertex[by_vertex], corners)], faces)
+        self._taken.extend(faces)
+        return len(faces)
 
-    def take(self, face: int) -> bool:
-        """Add input face ``face`` to the patch (once); whether it was added."""
-        if face in self.taken:
-            return False
-        self.taken.add(face)
-        self.faces.append([self.row(int(v)) for v in self.mesh_faces[face]])
-        self.face_source.append(face)
-        return True
+    def new_rows(self, points, a, b, t, vertices=-1) -> int:
+        """New rows at ``points`` (k,) whose weights and attributes blend rows a and b (k,) (or scalars)
+        as (1 - t) a + t b; ``vertices`` (k,) the input vertex of each (-1: a new row). The first's id."""
+        points = np.asarray(points, np.int64).reshape(-1)
+        k = len(points)
+        first = self._row_point.extend(points)
+        self._row_vertex.extend(np.broadcast_to(np.asarray(vertices, np.int64), (k,)))
+        self._row_parents.extend(np.column_stack([np.broadcast_to(a, (k,)), np.broadcast_to(b, (k,))]))
+        self._row_t.extend(np.broadcast_to(np.asarray(t, np.float64), (k,)))
+        return first
 
-    def midpoint_row(self, a: int, b: int, place=None) -> int:
-        """The row at the midpoint of vertex edge a-b (made once; a seam edge's copies share its point);
-        ``place(point, point)``, when given, says where the midpoint of two points goes instead (a
-        wall's, on the bit's surface) and is called just before the new point is added."""
-        key = (a, b) if a < b else (b, a)
-        r = self.edge_rows.get(key)
-        if r is not None:
-            return r
-        pa, pb = self.row_point[a], self.row_point[b]
-        point_key = (pa, pb) if pa < pb else (pb, pa)
-        p = self.midpoints.get(point_key)
-        if p is None:
-            points = self._points
-            p = self.midpoints[point_key] = self.add_point(
-                0.5 * (points[point_key[0]] + points[point_key[1]]) if place is None else place(*point_key))
-        return self.new_row(p, a, b, 0.5, key)
+    def new_row(self, point: int, a: int, b: int, t: float) -> int:
+        """One new row (``new_rows``); its id."""
+        return self.new_rows([point], a, b, t)
 
-    def new_row(self, point: int, a: int, b: int, t: float, key: tuple | None = None) -> int:
-        """A new row at ``point`` whose weights and attributes blend rows a and b as (1 - t) a + t b; kept
-        under ``key`` in ``edge_rows`` if given."""
-        r = len(self.row_point)
-        if key is not None:
-            self.edge_rows[key] = r
-        self.row_point.append(point)
-        self.row_vertex.append(-1)
-        self.row_parents.append((a, b, t))
-        return r
+    def add_faces(self, rows, sources) -> None:
+        """Append faces ``rows`` (k, 3) descending from input faces ``sources`` (k,) (or one for all)."""
+        rows = np.asarray(rows, np.int64).reshape(-1, 3)
+        self._faces.extend(rows)
+        self._face_source.extend(np.broadcast_to(np.asarray(sources, np.int64), (len(rows),)))
+
+    def replace_faces(self, rows, sources) -> None:
+        """The patch's faces are now ``rows`` (k, 3) descending from ``sources`` (k,)."""
+        self._faces.replace(np.asarray(rows, np.int64).reshape(-1, 3))
+        self._face_source.replace(np.asarray(sources, np.int64))
 
     def descriptions(self) -> tuple:
         """(src (R, SOURCES) int64, coef (R, SOURCES) float64): each row as input vertices and their
         coefficients (``_descriptions``)."""
-        parents = np.array([(a, b) for a, b, _ in self.row_parents], np.int64).reshape(-1, 2)
-        t = np.array([t for _, _, t in self.row_parents], np.float64)
-        return _descriptions(np.array(self.row_vertex, np.int64), parents, t)
-
-    def point_edge(self, a: int, b: int) -> tuple:
-        pa, pb = self.row_point[a], self.row_point[b]
-        return (pa, pb) if pa < pb else (pb, pa)
+        return _descriptions(self.row_vertex, self.row_parents, self.row_t)
 
     # -- arrays --------------------------------------------------------------------------------------
     def point_array(self) -> np.ndarray:
         """(P, 3) the points so far (a view, valid until the next point is added)."""
-        return self._points[:self.n_points]
+        return self._points.view()
 
     def add_point(self, position) -> int:
         """A new point at ``position`` (3,); its id."""
-        if self.n_points == len(self._points):
-            self._points = np.concatenate([self._points, np.empty_like(self._points)])
-        self._points[self.n_points] = position
-        self.n_points += 1
-        return self.n_points - 1
+        return self.add_points(np.asarray(position, np.float64).reshape(1, 3))
 
     def add_points(self, positions) -> int:
         """New points at ``positions`` (k, 3); the id of the first (the others follow)."""
-        k = len(positions)
-        while self.n_points + k > len(self._points):
-            self._points = np.concatenate([self._points, np.empty_like(self._points)])
-        self._points[self.n_points:self.n_points + k] = positions
-        self.n_points += k
-        return self.n_points - k
+        return self._add_points(positions, np.full(len(positions), NEW_POINT, np.int64))
+
+    def _add_points(self, positions, welded) -> int:
+        self._point_welded.extend(welded)
+        return self._points.extend(positions)
 
     def face_points(self) -> np.ndarray:
-        rp = np.asarray(self.row_point, np.int64)
-        return rp[np.asarray(self.faces, np.int64).reshape(-1, 3)]
+        """(F, 3) the faces' corners as point ids."""
+        return self.row_point[self.faces]
 
 
 @kernel((I1, I2, F1), cost=0.4)
@@ -189,3 +207,12 @@ def _descriptions(vertex, parents, t):
             src[r, slot] = keys[slot] if slot < kept else keys[0]
             coef[r, slot] = values[slot] / total if slot < kept else 0.0
     return src, coef
+
+
+@helper
+def put_face(out, made_from, count, f, a, b, c):
+    """Write face (a, b, c) made from face f at row ``count`` of ``out`` (k, 3) and ``made_from`` (k,);
+    the next row."""
+    out[count, 0], out[count, 1], out[count, 2] = a, b, c
+    made_from[count] = f
+    return count + 1

@@ -10,30 +10,20 @@ no face the surface passes through is longer than ``step``: the rim's edges are 
 long, and a face left outside the bit reaches into it by no more than such an edge's sagitta.
 
 The faces are the patch's (``patch.py``); edges are marked by their welded points, so that the
-bisection of a seam edge is seen from both sides.
+bisection of a seam edge is seen from both sides. Each round works on whole arrays: the faces near the
+surface, the closure of the marked edges (``_closure``) and the faces' children (``_children``).
 """
 from __future__ import annotations
 
 import numpy as np
 
+from ..._shared.jit import I1, I2, helper, kernel
 from ...errors import InternalError
 from .bit import near_faces
-from .patch import Patch
+from .patch import LOW_BITS, NEW_POINT, Patch, edge_codes, pair_codes, put_face
 
 #: refinement rounds before giving up (each halves the faces near the rim: 2^60 is beyond any model)
 MAX_ROUNDS = 60
-
-
-def _edge_codes(face_points) -> np.ndarray:
-    """(F, 3) int64: each corner edge k -> k+1 of the faces (F, 3) of point ids, as one integer (the lower
-    id in the high 32 bits)."""
-    a, b = face_points, np.roll(face_points, -1, axis=1)
-    return (np.minimum(a, b) << 32) | np.maximum(a, b)
-
-
-def _edge_pairs(codes) -> set:
-    """The (lower, higher) point-id pairs of edge codes."""
-    return set(zip((codes >> 32).tolist(), (codes & 0xFFFFFFFF).tolist()))
 
 
 def _longest(points, face_points) -> tuple:
@@ -49,6 +39,7 @@ def refine(patch: Patch, bit, step: float) -> None:
     """Bisect the patch's faces that the bit's surface passes through until none is longer than ``step``
     (module docstring), taking in the input faces beyond the patch that share a bisected edge."""
     start, end, radius = bit
+    border = _border_edges(patch)
     for _ in range(MAX_ROUNDS):
         points, face_points = patch.point_array(), patch.face_points()
         low, high = near_faces(points, face_points, start, end, radius)
@@ -56,82 +47,142 @@ def refine(patch: Patch, bit, step: float) -> None:
         chosen = np.flatnonzero((low < 0.0) & (high > 0.0) & (squared > step * step))    # the bit's surface meets it
         if not len(chosen):
             return
-        marked = _close(patch, np.unique(_edge_codes(face_points)[chosen, k[chosen]]))
+        codes = edge_codes(face_points)
+        longest = codes[np.arange(len(k)), k]
+        marked, border = _close(patch, np.unique(longest[chosen]), codes, longest, border)
         bisect_marked(patch, marked)
     raise InternalError(f"the faces near the bit did not become shorter than {step:g} in {MAX_ROUNDS} rounds")
 
 
-def _close(patch: Patch, marked) -> np.ndarray:
-    """The edge codes ``marked`` and the longest edge of every face that has a marked edge, until none
-    is added; input faces beyond the patch on a marked input edge join it first."""
-    topology, welded = patch.topology, patch.point_welded
-    seen = set()
-    codes = None
+def _close(patch: Patch, marked, codes, longest, border) -> tuple:
+    """(the edge codes ``marked`` and the longest edge of every face that has a marked edge, until none
+    is added; the patch's border edges). ``codes`` (F, 3) are the faces' edges, ``longest`` (F,) the
+    longest of each; where a marked edge is a ``border`` edge (``_border_edges``), the input faces
+    beyond it join the patch first."""
     while True:
-        grown = False
-        for a, b in _edge_pairs(marked):
-            if (a, b) in seen:
-                continue
-            seen.add((a, b))
-            if a in welded and b in welded:
-                for face in _input_faces(topology, welded[a], welded[b]):
-                    grown |= patch.take(int(face))
-        if grown or codes is None:          # (the faces' edges and longest edges, again when faces came in)
-            points, face_points = patch.point_array(), patch.face_points()
-            codes = _edge_codes(face_points)
-            k, _ = _longest(points, face_points)
-        has = np.isin(codes, marked).any(axis=1)
-        added = np.setdiff1d(codes[has, k[has]], marked)
-        if not len(added) and not grown:
-            return marked
-        marked = np.union1d(marked, added)
+        marked = _closure(codes, longest, marked)
+        across = marked[np.isin(marked, border)]
+        if not len(across):
+            return marked, border
+        before = len(patch.faces)
+        patch.take(np.concatenate([_input_faces(patch, code) for code in across.tolist()]))
+        face_points = patch.face_points()[before:]          # (the faces taken come last)
+        k, _ = _longest(patch.point_array(), face_points)
+        taken_codes = edge_codes(face_points)
+        codes = np.concatenate([codes, taken_codes])
+        longest = np.concatenate([longest, taken_codes[np.arange(len(k)), k]])
+        border = _border_edges(patch)
 
 
-def _input_faces(topology, wa: int, wb: int) -> np.ndarray:
-    """The input faces on welded edge wa-wb (empty when it is not an input edge)."""
+def _points_of_welded(patch: Patch, welded) -> np.ndarray:
+    """The patch's point (same shape) of each of the input's welded ids ``welded`` (all in the patch)."""
+    known = np.flatnonzero(patch.point_welded != NEW_POINT)
+    by_welded = known[np.argsort(patch.point_welded[known])]
+    return by_welded[np.searchsorted(patch.point_welded[by_welded], welded)]
+
+
+def _border_edges(patch: Patch) -> np.ndarray:
+    """Sorted codes (point pairs) of the taken faces' input edges that faces not taken share too."""
+    topology, taken = patch.topology, patch.taken
+    edges, counts = np.unique(topology.face_edges[taken], return_counts=True)
+    offsets = topology.edge_face_offsets
+    open_edges = edges[counts < offsets[edges + 1] - offsets[edges]]
+    points = _points_of_welded(patch, topology.edges[open_edges])
+    return np.unique(pair_codes(points[:, 0], points[:, 1]))
+
+
+def _input_faces(patch: Patch, code: int) -> np.ndarray:
+    """The input faces on the input edge between the points of ``code``."""
+    wa, wb = patch.point_welded[[code >> 32, code & LOW_BITS]].tolist()
     lo, hi = min(wa, wb), max(wa, wb)
+    topology = patch.topology
     edges = topology.edges
     first, last = np.searchsorted(edges[:, 0], lo, "left"), np.searchsorted(edges[:, 0], lo, "right")
-    for e in range(first, last):
-        if edges[e, 1] == hi:
-            offsets = topology.edge_face_offsets
-            return topology.edge_face_faces[offsets[e]:offsets[e + 1]]
-    return np.empty(0, np.int64)
+    e = first + int(np.flatnonzero(edges[first:last, 1] == hi)[0])
+    offsets = topology.edge_face_offsets
+    return topology.edge_face_faces[offsets[e]:offsets[e + 1]]
 
 
 def bisect_marked(patch: Patch, marked, place=None) -> None:
-    """Split every face with marked edges (codes): on its longest edge where it is marked (``_close``
-    sees to it), then each half on the marked edge it keeps; ``place`` as for ``Patch.midpoint_row``.
-    The faces split go, their halves come after the others."""
-    points, face_points = patch.point_array(), patch.face_points()
-    k, _ = _longest(points, face_points)
-    split = np.isin(_edge_codes(face_points), marked)
-    pairs = _edge_pairs(marked)
+    """Split every face with marked edges (sorted codes of point pairs): on its longest edge where it is
+    marked (``_close`` sees to it), then each half on the marked edge it keeps. Each marked edge gets one
+    new point, at its midpoint or, when given, where ``place(a (k,), b (k,)) -> (k, 3)`` says for the
+    edges between points a and b (called just before the k points are added); each vertex edge on it
+    gets one new row (a seam's copies share the point). The faces split go, their halves come after the
+    others."""
+    rows, sources = patch.faces, patch.face_source
+    face_points = patch.row_point[rows]
+    k, _ = _longest(patch.point_array(), face_points)
+    split = np.isin(edge_codes(face_points), marked)
     splitting = split.any(axis=1)
-    faces = [rows for rows, s in zip(patch.faces, splitting.tolist()) if not s]
-    sources = [source for source, s in zip(patch.face_source, splitting.tolist()) if not s]
-    for f in np.flatnonzero(splitting).tolist():
-        children = _split(patch, patch.faces[f], int(k[f]), split[f].tolist(), pairs, place)
-        faces.extend(children)
-        sources.extend([patch.face_source[f]] * len(children))
-    patch.faces, patch.face_source = faces, sources
+    row_edges, row_edge_of = np.unique(edge_codes(rows)[split], return_inverse=True)
+    row_a, row_b = row_edges >> 32, row_edges & LOW_BITS
+    point_edges, point_edge_of = np.unique(pair_codes(patch.row_point[row_a], patch.row_point[row_b]),
+                                           return_inverse=True)
+    a, b = point_edges >> 32, point_edges & LOW_BITS
+    points = patch.point_array()
+    first_point = patch.add_points(0.5 * (points[a] + points[b]) if place is None else place(a, b))
+    first_row = patch.new_rows(first_point + point_edge_of, row_a, row_b, 0.5)
+    midpoint = np.full(rows.shape, -1, np.int64)
+    midpoint[split] = first_row + row_edge_of
+    children, parent = _children(rows[splitting], midpoint[splitting], k[splitting])
+    patch.replace_faces(np.concatenate([rows[~splitting], children]),
+                        np.concatenate([sources[~splitting], sources[splitting][parent]]))
 
 
-def _split(patch: Patch, rows, longest: int, marks: list, pairs: set, place=None) -> list:
-    """The faces that replace ``rows`` (3 rows, wound as the input face) when its marked edges (``marks``
-    per corner edge; ``pairs`` every marked point pair) are bisected: 2 to 4 faces, wound as the face."""
-    k = longest if marks[longest] else marks.index(True)
-    a, b, c = rows[k], rows[(k + 1) % 3], rows[(k + 2) % 3]
-    m = patch.midpoint_row(a, b, place)
-    # each half keeps one of the face's other two edges (c-a, b-c): bisected too where it is marked
-    if patch.point_edge(c, a) in pairs:
-        n = patch.midpoint_row(c, a, place)
-        out = [[a, m, n], [m, c, n]]
-    else:
-        out = [[a, m, c]]
-    if patch.point_edge(b, c) in pairs:
-        n = patch.midpoint_row(b, c, place)
-        out += [[m, b, n], [m, n, c]]
-    else:
-        out.append([m, b, c])
-    return out
+@kernel((I2, I1, I1), cost=0.3)
+def _closure(codes, longest, marked):
+    """The sorted edge codes ``marked`` (k,) with ``longest[f]`` (F,), the longest edge of face f, added
+    for every face f with a marked edge among ``codes[f]`` (F, 3), until none is added (sorted)."""
+    while True:
+        added = np.empty(codes.shape[0], np.int64)
+        count = 0
+        for f in range(codes.shape[0]):
+            if _holds(marked, longest[f]):
+                continue
+            for k in range(3):
+                if _holds(marked, codes[f, k]):
+                    added[count] = longest[f]
+                    count += 1
+                    break
+        if count == 0:
+            return marked
+        marked = np.unique(np.concatenate((marked, added[:count])))
+
+
+@helper
+def _holds(sorted_codes, code):
+    at = np.searchsorted(sorted_codes, code)
+    return at < sorted_codes.shape[0] and sorted_codes[at] == code
+
+
+@kernel((I2, I2, I1), cost=0.3)
+def _children(rows, midpoint, longest):
+    """The faces that replace faces ``rows`` (F, 3) whose corner edges k -> k+1 with ``midpoint[f, k]``
+    >= 0 (F, 3) are bisected at that row: on the longest edge ``longest[f]`` (F,) if it is bisected
+    (else the first that is), then each half on the other edge it keeps, if that is bisected: 2 to 4
+    faces, wound as the face. Returns faces (C, 3) and the face (C,) each replaces."""
+    n = rows.shape[0]
+    out, parent = np.empty((4 * n, 3), np.int64), np.empty(4 * n, np.int64)
+    count = 0
+    for f in range(n):
+        k = longest[f]
+        if midpoint[f, k] < 0:
+            k = 0
+            while midpoint[f, k] < 0:
+                k += 1
+        a, b, c = rows[f, k], rows[f, (k + 1) % 3], rows[f, (k + 2) % 3]
+        m, on_ca, on_bc = midpoint[f, k], midpoint[f, (k + 2) % 3], midpoint[f, (k + 1) % 3]
+        # each half keeps one of the face's other two edges (c-a, b-c): bisected too where it is marked
+        if on_ca >= 0:
+            count = put_face(out, parent, count, f, a, m, on_ca)
+            count = put_face(out, parent, count, f, m, c, on_ca)
+        else:
+            count = put_face(out, parent, count, f, a, m, c)
+        if on_bc >= 0:
+            count = put_face(out, parent, count, f, m, b, on_bc)
+            count = put_face(out, parent, count, f, m, on_bc, c)
+        else:
+            count = put_face(out, parent, count, f, m, b, c)
+    return out[:count].copy(), parent[:count].copy()
+

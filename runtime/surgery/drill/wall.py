@@ -32,7 +32,7 @@ from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
 from ..topology import directed_loops
-from .patch import Patch
+from .patch import LOW_BITS, Patch, edge_codes
 from .refine import MAX_ROUNDS, bisect_marked
 
 #: the winding about the bit's travel of a rim where it enters an outward-facing surface
@@ -137,7 +137,7 @@ def _gap(a, b):
     return np.abs((a - b + math.pi) % (2 * math.pi) - math.pi)
 
 
-def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
+def build_walls(patch: Patch, rim, bit, step: float, inside) -> int:
     """Add the holes' walls to the patch (module docstring); ``inside(point (3,)) -> bool`` says whether a
     point is inside the input model. Returns the number of wall faces."""
     frame = Frame(bit)
@@ -161,16 +161,16 @@ def build_walls(patch: Patch, rim: list, bit, step: float, inside) -> int:
     return len(patch.faces) - before
 
 
-def _rim_loops(patch: Patch, rim: list, frame: Frame) -> list:
-    """The loops of boundary edges between rim points, as ``Loop``s (point ids welded: seams are one)."""
-    rows = np.asarray(patch.faces, np.int64).reshape(-1, 3)
-    row_point = np.asarray(patch.row_point, np.int64)
+def _rim_loops(patch: Patch, rim, frame: Frame) -> list:
+    """The loops of boundary edges between rim points (rows ``rim``), as ``Loop``s (point ids welded:
+    seams are one)."""
+    rows, row_point = patch.faces, patch.row_point
     tails, heads = rows.ravel(), np.roll(rows, -1, axis=1).ravel()          # each face's corner edges
     a, b = row_point[tails], row_point[heads]
     codes = (np.minimum(a, b) << 32) | np.maximum(a, b)
     unique, counts = np.unique(codes, return_counts=True)
     on_rim = np.zeros(patch.n_points, bool)
-    on_rim[row_point[np.asarray(rim, np.int64)]] = True
+    on_rim[row_point[rim]] = True
     boundary = (counts[np.searchsorted(unique, codes)] == 1) & on_rim[a] & on_rim[b]
     row_of_edge = {(int(p), int(q)): int(r) for p, q, r in zip(a[boundary], b[boundary], tails[boundary])}
     points = patch.point_array()
@@ -182,14 +182,17 @@ def _rim_loops(patch: Patch, rim: list, frame: Frame) -> list:
     return out
 
 
-def _wall_rows(patch: Patch, frame: Frame, theta, sigma, a: Loop, b: Loop | None, weight: float) -> list:
-    """New wall rows at (θ, σ) (k,) between loop a and loop b (or the tip: None), their weights and
-    attributes blended from their rim rows nearest in angle (``weight``: b's share)."""
-    ra = a.nearest_rows(theta)
-    rb = ra if b is None else b.nearest_rows(theta)
-    first = patch.add_points(frame.points(theta, sigma))
-    t = 0.0 if b is None else weight
-    return [patch.new_row(first + i, x, y, t) for i, (x, y) in enumerate(zip(ra.tolist(), rb.tolist()))]
+def _wall_rings(patch: Patch, frame: Frame, columns, sigma, a: Loop, b: Loop | None, weights) -> np.ndarray:
+    """New wall rows (k, c) in rings at angles ``columns`` (c,) and heights ``sigma`` (k, c) between loop
+    a and loop b (or the tip: None), their weights and attributes blended from the rim rows nearest in
+    angle on the two loops (``weights`` (k,): b's share in each ring)."""
+    ra = a.nearest_rows(columns)
+    rb = ra if b is None else b.nearest_rows(columns)
+    shape = sigma.shape
+    first = patch.add_points(frame.points(np.tile(columns, shape[0]), sigma.ravel()))
+    t = 0.0 if b is None else np.repeat(weights, shape[1])
+    first_row = patch.new_rows(first + np.arange(sigma.size), np.tile(ra, shape[0]), np.tile(rb, shape[0]), t)
+    return (first_row + np.arange(sigma.size)).reshape(shape)
 
 
 def _pole_row(patch: Patch, frame: Frame, sigma: float, loop: Loop) -> int:
@@ -209,10 +212,8 @@ def _surface_row(patch: Patch, position, a: int, b: int, t: float) -> int:
 
 def _loop_rows(patch: Patch, loop: Loop) -> list:
     """Wall rows at the loop's own corners (the rim's points, rows of their own)."""
-    out = []
-    for row, point in zip(loop.rows, loop.points):
-        out.append(patch.new_row(int(point), row, row, 0.0))
-    return out
+    first = patch.new_rows(loop.points, loop.rows, loop.rows, 0.0)
+    return list(range(first, first + len(loop.rows)))
 
 
 def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) -> None:
@@ -224,20 +225,31 @@ def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) ->
     low = a.height_at(columns)
     high = b.height_at(columns) if b is not None else np.full(len(columns), frame.top)
     rings_between = max(1, int(math.ceil(float(np.max(np.abs(high - low))) / step)))
-    rings = [_loop_ring(patch, a)]
-    for k in range(1, rings_between):
-        w = k / rings_between
-        rings.append((_wall_rows(patch, frame, columns, (1 - w) * low + w * high, a, b, w), columns))
-    if b is not None:
-        rings.append(_loop_ring(patch, b))
-    for lower, upper in zip(rings[:-1], rings[1:]):
-        for tri in _zip_rings(*lower, *upper):
-            _add(patch, (tri[0], tri[2], tri[1]))
+    weights = np.arange(1, rings_between) / rings_between
+    bottom = _loop_ring(patch, a)
+    inner = _wall_rings(patch, frame, columns, (1 - weights)[:, None] * low + weights[:, None] * high, a, b, weights)
+    top = _loop_ring(patch, b) if b is not None else None
+    if len(inner):
+        triangles = _zip_rings(*bottom, inner[0], columns) + _grid(inner)
+        if top is not None:
+            triangles += _zip_rings(inner[-1], columns, *top)
+    else:
+        triangles = _zip_rings(*bottom, *top) if top is not None else []
     if b is None:
         pole = _pole_row(patch, frame, frame.top, a)
-        rows = rings[-1][0]
-        for i in range(len(rows)):
-            _add(patch, (rows[i], pole, rows[(i + 1) % len(rows)]))
+        rows = inner[-1] if len(inner) else bottom[0]
+        triangles += [(rows[(i + 1) % len(rows)], pole, rows[i]) for i in range(len(rows))]
+    patch.add_faces(np.asarray(triangles, np.int64)[:, [0, 2, 1]], WALL)
+
+
+def _grid(rings) -> list:
+    """The triangles between each ring of ``rings`` (k, c) and the next, all at the same angles (as
+    ``_zip_rings`` makes them: (a, a', b) then (a', b', b) at each column)."""
+    lower, upper = rings[:-1], rings[1:]
+    lower_next, upper_next = np.roll(lower, -1, axis=1), np.roll(upper, -1, axis=1)
+    pairs = np.stack([np.stack([lower, lower_next, upper], axis=-1),
+                      np.stack([lower_next, upper_next, upper], axis=-1)], axis=2)
+    return pairs.reshape(-1, 3).tolist()
 
 
 def _loop_ring(patch: Patch, loop: Loop) -> tuple:
@@ -267,11 +279,6 @@ def _zip_rings(ra, ua, rb, ub) -> list:
             out.append((ra[i % na], rb[(k + 1) % nb], rb[k]))
             k += 1
     return out
-
-
-def _add(patch: Patch, rows) -> None:
-    patch.faces.append(list(rows))
-    patch.face_source.append(WALL)
 
 
 def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
@@ -313,9 +320,7 @@ def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
     turn = (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (y[:, 1] - y[:, 0]) * (x[:, 2] - x[:, 0])
     # counter-clockwise in (r θ, σ) faces away from the axis (∂θ × ∂σ is the outward radial): reversed
     triangles[turn > 0.0] = triangles[turn > 0.0][:, [0, 2, 1]]
-    for tri in triangles.tolist():
-        patch.faces.append([rows[i] for i in tri])
-        patch.face_source.append(WALL_FILL)
+    patch.add_faces(np.asarray(rows, np.int64)[triangles], WALL_FILL)
 
 
 def _chains_between(patch: Patch, frame: Frame, loop: Loop, rows: list, chains: list, step: float) -> tuple:
@@ -335,9 +340,10 @@ def _chains_between(patch: Patch, frame: Frame, loop: Loop, rows: list, chains: 
         t = j / count
         ring_theta, ring_sigma = theta[inner] + t * across[1:-1], sigma[inner]
         first = patch.add_points(frame.points(ring_theta, ring_sigma))
-        start = len(rows)
-        for i, (a, b) in enumerate(zip(inner, nearest.tolist())):
-            rows.append(patch.new_row(first + i, rows[a], rows[b], t))
+        start, row_of = len(rows), np.asarray(rows, np.int64)
+        first_row = patch.new_rows(first + np.arange(len(inner)), row_of[inner], row_of[nearest], t)
+        rows.extend(range(first_row, first_row + len(inner)))
+        for i in range(len(inner)):
             patch.fill_params[first + i] = np.array([ring_theta[i], ring_sigma[i]])
         out.append([lower[0]] + list(range(start, len(rows))) + [lower[-1]])
         thetas.append(ring_theta)
@@ -382,19 +388,17 @@ def _refine_fills(patch: Patch, frame: Frame, step: float) -> None:
     surface is lost), until the fills follow the surface as closely as the rims do."""
     params = patch.fill_params
 
-    def place(a: int, b: int) -> np.ndarray:
-        theta, sigma = 0.5 * (params[a] + params[b])
-        params[patch.n_points] = np.array([theta, sigma])
-        return frame.point(theta, sigma)
+    def place(a, b) -> np.ndarray:
+        halfway = 0.5 * (np.array([params[p] for p in a.tolist()]) + np.array([params[p] for p in b.tolist()]))
+        params.update(zip(range(patch.n_points, patch.n_points + len(a)), halfway))
+        return frame.points(halfway[:, 0], halfway[:, 1])
 
     for _ in range(MAX_ROUNDS):
-        fill, other = set(), set()
-        for rows, source in zip(patch.faces, patch.face_source):
-            for k in range(3):
-                (fill if source == WALL_FILL else other).add(patch.point_edge(rows[k], rows[(k + 1) % 3]))
-        marked = [(a << 32) | b for a, b in fill - other      # a fill's inner edge (its loop's are the rim's)
-                  if _curved_extent(frame, params[a], params[b]) > step]
+        codes, fill = edge_codes(patch.face_points()), patch.face_source == WALL_FILL
+        inner = np.setdiff1d(codes[fill], codes[~fill])         # a fill's inner edges (its loop's are the rim's)
+        marked = [code for code in inner.tolist()
+                  if _curved_extent(frame, params[code >> 32], params[code & LOW_BITS]) > step]
         if not marked:
             return
-        bisect_marked(patch, np.unique(np.array(marked, np.int64)), place)
+        bisect_marked(patch, np.array(marked, np.int64), place)
     raise InternalError(f"a hole's wall did not become finer than {step:g} in {MAX_ROUNDS} rounds")
