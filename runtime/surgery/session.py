@@ -309,7 +309,7 @@ class Surgery:
                        self.faces, moved, n, self.n_vertices)
         self._grow_bounds(moved, n, old_positions)
         return Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved,
-                    splice.removed, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
+                    splice.removed, _piece_in_each(splice.removed, splice.parents, m), splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
 
     def _grow_bounds(self, moved, first_new, old) -> None:
         """The bounding box of the surface after the rows ``moved`` changed position (from ``old``) and
@@ -343,8 +343,19 @@ class Surgery:
         self._set_bounds(bounds)
         # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
         # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
-        self._edit_bvh(np.arange(record.m, m), record.removed, np.full(len(record.removed), -1), record.moved_faces,
+        self._edit_bvh(np.arange(record.m, m), record.removed, record.removed_near, record.moved_faces,
                        self._arrays["vertices"].data, self._faces.data, record.moved, record.n, n)
+
+
+def _piece_in_each(removed, parents, first_piece: int) -> np.ndarray:
+    """(r,) for each face of ``removed`` (r,) a piece made inside it (face id ``first_piece + i`` for the
+    piece i whose ``parents[i]`` it is), -1 where none was."""
+    out = np.full(len(removed), -1, np.int64)
+    order = np.argsort(removed)
+    at = np.minimum(np.searchsorted(removed, parents, sorter=order), max(len(removed) - 1, 0))
+    found = np.flatnonzero((parents >= 0) & (removed[order[at]] == parents)) if len(removed) else at[:0]
+    out[order[at[found]]] = first_piece + found
+    return out
 
 
 def _joined(positive, negative):

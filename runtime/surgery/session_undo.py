@@ -28,8 +28,9 @@ class SessionState(NamedTuple):
 class Undo(NamedTuple):
     """What one operation changed, to take it back (the undo log's one record type). An operation
     spliced in place (a stroke, a hole): the counts before it and the old values of the rows it
-    rewrote. An operation that replaced the whole mesh (a cut): ``replaced``, the session's whole
-    state before it (``Undo.of_state``)."""
+    rewrote, ``removed`` the faces it took out and ``removed_near`` (r,) a face it made inside each
+    (-1: none), whose BVH leaf takes it back. An operation that replaced the whole mesh (a cut):
+    ``replaced``, the session's whole state before it (``Undo.of_state``)."""
 
     n: int
     m: int
@@ -37,6 +38,7 @@ class Undo(NamedTuple):
     old_rows: dict
     moved: np.ndarray
     removed: np.ndarray
+    removed_near: np.ndarray
     kept: np.ndarray
     old_kept: np.ndarray
     moved_faces: np.ndarray
@@ -48,4 +50,4 @@ class Undo(NamedTuple):
     @classmethod
     def of_state(cls, state: SessionState) -> "Undo":
         none = np.empty(0, np.int64)
-        return cls(0, 0, none, {}, none, none, none, none, none, none, none, (), state)
+        return cls(0, 0, none, {}, none, none, none, none, none, none, none, none, (), state)
