@@ -78,7 +78,7 @@ def session_drill(session, the_bit, wall: bool, posed) -> tuple:
         mesh = mesh_arrays(rig)        # (the kernels' arrays: writable buffers, as the functional drill's)
         positions = mesh.vertices if affines is None else skin_affine(mesh.vertices, mesh.joints, mesh.weights, affines)
         result = drill_region(rig, the_bit, wall, affines, positions, diagonal, inside)
-        if whole or not _border(session, region, rows)[result.replaced].any():
+        if whole or not _border(session, region, rows, mesh.faces)[result.replaced].any():
             return result, _splice(session, result, region, rows)
         margin *= 2.0
 
@@ -86,8 +86,8 @@ def session_drill(session, the_bit, wall: bool, posed) -> tuple:
 def _largest_face(session, posed, faces) -> float:
     """The largest side of the (posed) boxes of ``faces`` (k,): a margin that holds a ring of faces."""
     positions = session.vertices if posed is None else posed.positions
-    corners = positions[session.faces[faces]]
-    return float((corners.max(axis=1) - corners.min(axis=1)).max())
+    a, b, c = (positions[session.faces[faces, k]] for k in range(3))
+    return float((np.maximum(np.maximum(a, b), c) - np.minimum(np.minimum(a, b), c)).max())
 
 
 def _faces_in(session, posed, lo, hi) -> np.ndarray:
@@ -112,16 +112,17 @@ def _region_rig(session, region, rows) -> Rig:
                            attributes, template.name)
 
 
-def _border(session, region, rows) -> np.ndarray:
-    """(r,) bool: the region's faces with a corner at a point (rest position) where a live face outside
-    the region has a corner."""
+def _border(session, region, rows, region_faces) -> np.ndarray:
+    """(r,) bool: the region's faces (``region_faces`` (r, 3), corners as indices of ``rows``) with a
+    corner at a point (rest position) where a live face outside the region has a corner."""
     vertices, faces = session.vertices, session.faces
     corners = vertices[rows]
     outside = np.setdiff1d(session._bvh.faces_in_box(corners.min(axis=0), corners.max(axis=0)), region,
                            assume_unique=True)
     welded, _ = _weld(np.concatenate((corners, vertices[np.unique(faces[outside])])), None)   # as the drill welds
     at_border = np.isin(welded[:len(rows)], welded[len(rows):])
-    return at_border[np.searchsorted(rows, faces[region])].any(axis=1)
+    corner_at_border = at_border[region_faces]
+    return corner_at_border[:, 0] | corner_at_border[:, 1] | corner_at_border[:, 2]
 
 
 def _inside(session, affines):

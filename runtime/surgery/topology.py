@@ -255,7 +255,7 @@ def directed_loops(start, end, choose=None) -> list:
     outgoing: dict = {}
     for i, s in enumerate(start.tolist()):
         outgoing.setdefault(s, []).append(i)
-    used = np.zeros(len(start), bool)
+    used = [False] * len(start)            # (a list: read an element at a time)
     loops = []
     end_list = end.tolist()
     start_list = start.tolist()

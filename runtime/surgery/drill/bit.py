@@ -6,7 +6,7 @@ The distance of a point from the segment is the distance from its axis line (gen
 ``point_line_distance``: the outer product (x - a) ^ u, relative to a point of the axis) where the point
 projects inside the travel, else from the nearer end. ``f(x) = distance - radius`` is negative inside
 the bit and convex, so along a mesh edge whose ends lie on either side it has exactly one root, found
-by bisection to the last bit of the edge parameter: a rim vertex lies on the bit's surface to rounding.
+to the last bit of the edge parameter (``crossings``): a rim vertex lies on the bit's surface to rounding.
 """
 from __future__ import annotations
 
@@ -143,29 +143,46 @@ def signed_distances(positions, start, end, radius):
     return out
 
 
+#: every how many steps of ``crossings``' root search one is a bisection (so that the bracket at least
+#: halves that often whatever the secant steps do)
+BISECT_EVERY = 4
+
+
 @kernel((F2, I2, F1, F1, f8))
 def crossings(positions, edges, start, end, radius):
     """The parameter t (k,) where each edge p -> q (rows of ``edges`` (k, 2) into ``positions``), one
-    end inside the bit and the other outside, meets the bit's surface; by bisection until the bracket
-    cannot shrink. Returns t (k,), points (k, 3)."""
+    end inside the bit and the other outside, meets the bit's surface; the bracket [0, 1] narrowed by
+    regula falsi steps (Illinois: an end kept twice has its value halved, so both ends close in) and a
+    bisection every ``BISECT_EVERY`` steps, until it cannot shrink. Returns t (k,), points (k, 3)."""
     k = edges.shape[0]
     ts, points = np.empty(k), np.empty((k, 3))
     for i in range(k):
         p, q = positions[edges[i, 0]], positions[edges[i, 1]]
-        inside_at_p = _distance(start, end, p) < radius
         lo, hi = 0.0, 1.0
+        f_lo, f_hi = _distance(start, end, p) - radius, _distance(start, end, q) - radius
+        g_lo, g_hi = f_lo, f_hi                 # (the values the secant uses: Illinois halves them)
+        kept, step = 0, 0
         while True:
-            mid = 0.5 * (lo + hi)
-            if mid <= lo or mid >= hi:
+            step += 1
+            t = 0.5 * (lo + hi)
+            if step % BISECT_EVERY != 0 and g_hi != g_lo:
+                secant = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+                if lo < secant < hi:
+                    t = secant
+            if t <= lo or t >= hi:
                 break
-            if (_distance(start, end, _on_edge(p, q, mid)) < radius) == inside_at_p:
-                lo = mid
+            f = _distance(start, end, _on_edge(p, q, t)) - radius
+            if (f < 0.0) == (f_lo < 0.0):
+                lo, f_lo, g_lo = t, f, f
+                if kept == -1:
+                    g_hi *= 0.5
+                kept = -1
             else:
-                hi = mid
-        # the end of the bracket nearer the surface
-        f_lo = abs(_distance(start, end, _on_edge(p, q, lo)) - radius)
-        f_hi = abs(_distance(start, end, _on_edge(p, q, hi)) - radius)
-        ts[i] = lo if f_lo <= f_hi else hi
+                hi, f_hi, g_hi = t, f, f
+                if kept == 1:
+                    g_lo *= 0.5
+                kept = 1
+        ts[i] = lo if abs(f_lo) <= abs(f_hi) else hi        # the end of the bracket nearer the surface
         x = _on_edge(p, q, ts[i])
         points[i, 0], points[i, 1], points[i, 2] = x[0], x[1], x[2]
     return ts, points

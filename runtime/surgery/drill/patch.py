@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F1, I1, I2, helper, kernel
+from ..._shared.jit import F1, I1, I2, helper, i8, kernel
 from ..new_vertices import accumulate, largest_first
 
 #: input vertices a new vertex is described by at most: 3 in a face, 6 on a wall (between two rims)
@@ -71,6 +71,8 @@ class Patch:
     faces : (F, 3) int64 rows, wound as the input's ; face_source : (F,) int64, the input face each
         descends from (a wall's: negative, ``wall.WALL``)
     taken : (T,) int64, the input faces taken, in the order taken
+    row_of : (n,) int64, the row of each input vertex (-1: none) ; point_of : (w,) int64, the point of
+        each of the input's welded vertices (-1: none)
     fill_params : dict point id -> (θ, σ) on the bit's surface, for the points of a wall's fill
     """
 
@@ -80,6 +82,8 @@ class Patch:
         self._row_point, self._row_vertex = _Growing(np.int64), _Growing(np.int64)
         self._row_parents, self._row_t = _Growing(np.int64, (2,)), _Growing(np.float64)
         self._faces, self._face_source, self._taken = _Growing(np.int64, (3,)), _Growing(np.int64), _Growing(np.int64)
+        self.row_of, self.point_of = np.full(len(positions), -1, np.int64), np.full(topology.n_welded, -1, np.int64)
+        self._is_taken = np.zeros(len(faces), bool)
         self.fill_params = {}
 
     point_welded = property(lambda self: self._point_welded.view())
@@ -95,31 +99,21 @@ class Patch:
 
     # -- building ------------------------------------------------------------------------------------
     def take(self, faces) -> int:
-        """Add the input faces ``faces`` (k,) not taken yet, in ascending order: rows for their vertices
-        that have none (in ascending vertex order), points for their welded vertices that have none (in
-        the order of their first vertex). Returns how many faces were added."""
-        faces = np.setdiff1d(np.asarray(faces, np.int64), self.taken)
+        """Add the input faces ``faces`` (k,) (distinct) not taken yet: rows for their vertices that have
+        none and points for their welded vertices that have none, in the order their corners come.
+        Returns how many faces were added."""
+        faces = faces[~self._is_taken[faces]]
         if not len(faces):
             return 0
         corners = self.mesh_faces[faces]
-        input_rows = np.flatnonzero(self.row_vertex >= 0)
-        vertices = np.setdiff1d(corners, self.row_vertex[input_rows])
-        welded = self.topology.welded[vertices]
-        known = np.flatnonzero(self.point_welded != NEW_POINT)
-        fresh, first = np.unique(welded, return_index=True)
-        is_fresh = ~np.isin(fresh, self.point_welded[known])
-        order = np.sort(first[is_fresh])                         # new points by their first vertex
-        self._add_points(self.positions[vertices[order]], welded[order])
-        known = np.flatnonzero(self.point_welded != NEW_POINT)
-        by_welded = known[np.argsort(self.point_welded[known])]
-        points = by_welded[np.searchsorted(self.point_welded[by_welded], welded)]
-        first_row = self.new_rows(points, 0, 0, 0.0, vertices)
-        rows = first_row + np.arange(len(vertices))
+        vertices, vertex_points, point_vertices = _new_rows_and_points(
+            corners, self.topology.welded, self.row_of, self.point_of, self.n_rows, self.n_points)
+        self._add_points(self.positions[point_vertices], self.topology.welded[point_vertices])
+        rows = self.new_rows(vertex_points, 0, 0, 0.0, vertices) + np.arange(len(vertices))
         self._row_parents.view()[rows] = rows[:, None]          # (an input row is itself)
-        input_rows = np.flatnonzero(self.row_vertex >= 0)
-        by_vertex = input_rows[np.argsort(self.row_vertex[input_rows])]
-        self.add_faces(by_vertex[np.searchsorted(self.row_vertex[by_vertex], corners)], faces)
+        self.add_faces(self.row_of[corners], faces)
         self._taken.extend(faces)
+        self._is_taken[faces] = True
         return len(faces)
 
     def new_rows(self, points, a, b, t, vertices=-1) -> int:
@@ -207,6 +201,31 @@ def _descriptions(vertex, parents, t):
             src[r, slot] = keys[slot] if slot < kept else keys[0]
             coef[r, slot] = values[slot] / total if slot < kept else 0.0
     return src, coef
+
+
+@kernel((I2, I1, I1, I1, i8, i8), cost=0.3)
+def _new_rows_and_points(corners, welded, row_of, point_of, first_row, first_point):
+    """The rows and points that faces with ``corners`` (k, 3) (input vertices) add to a patch, in the
+    order the corners come: ``row_of`` (n,) and ``point_of`` (w,) (-1: none yet) get the new ids (rows
+    from ``first_row``, points from ``first_point``) in place. Returns the new rows' vertices (v,), their
+    points (v,), and the first vertex (p,) of each new point (``welded`` (n,) the welded id of each
+    vertex)."""
+    flat = corners.ravel()
+    vertices, vertex_points, point_vertices = np.empty(flat.size, np.int64), np.empty(flat.size, np.int64), \
+        np.empty(flat.size, np.int64)
+    rows = points = 0
+    for v in flat:
+        if row_of[v] >= 0:
+            continue
+        row_of[v] = first_row + rows
+        w = welded[v]
+        if point_of[w] < 0:
+            point_of[w] = first_point + points
+            point_vertices[points] = v
+            points += 1
+        vertices[rows], vertex_points[rows] = v, point_of[w]
+        rows += 1
+    return vertices[:rows].copy(), vertex_points[:rows].copy(), point_vertices[:points].copy()
 
 
 @helper

@@ -17,34 +17,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import I1, I2, helper, kernel
+from ..._shared.jit import F2, I1, I2, helper, kernel
 from ...errors import InternalError
 from .bit import near_faces
-from .patch import LOW_BITS, NEW_POINT, Patch, edge_codes, pair_codes, put_face
+from .patch import LOW_BITS, Patch, edge_codes, pair_codes, put_face
 
 #: refinement rounds before giving up (each halves the faces near the rim: 2^60 is beyond any model)
 MAX_ROUNDS = 60
-
-
-def _longest(points, face_points) -> tuple:
-    """(F,) the corner k whose edge k -> k+1 is longest in each face (the first on a tie), (F,) its
-    squared length."""
-    d = points[np.roll(face_points, -1, axis=1)] - points[face_points]
-    squared = np.einsum("fkc,fkc->fk", d, d)
-    k = np.argmax(squared, axis=1)
-    return k, squared[np.arange(len(k)), k]
 
 
 def refine(patch: Patch, bit, step: float) -> None:
     """Bisect the patch's faces that the bit's surface passes through until none is longer than ``step``
     (module docstring), taking in the input faces beyond the patch that share a bisected edge."""
     start, end, radius = bit
-    border = _border_edges(patch)
+    border = None                       # (made when a closure first needs it)
     for _ in range(MAX_ROUNDS):
         points, face_points = patch.point_array(), patch.face_points()
-        low, high = near_faces(points, face_points, start, end, radius)
         k, squared = _longest(points, face_points)
-        chosen = np.flatnonzero((low < 0.0) & (high > 0.0) & (squared > step * step))    # the bit's surface meets it
+        long = np.flatnonzero(squared > step * step)
+        low, high = near_faces(points, face_points[long], start, end, radius)
+        chosen = long[(low < 0.0) & (high > 0.0)]           # the bit's surface passes through them
         if not len(chosen):
             return
         codes = edge_codes(face_points)
@@ -57,15 +49,16 @@ def refine(patch: Patch, bit, step: float) -> None:
 def _close(patch: Patch, marked, codes, longest, border) -> tuple:
     """(the edge codes ``marked`` and the longest edge of every face that has a marked edge, until none
     is added; the patch's border edges). ``codes`` (F, 3) are the faces' edges, ``longest`` (F,) the
-    longest of each; where a marked edge is a ``border`` edge (``_border_edges``), the input faces
-    beyond it join the patch first."""
+    longest of each; where a marked edge is a ``border`` edge (``_border_edges``; None: not made yet),
+    the input faces beyond it join the patch first."""
+    border = _border_edges(patch) if border is None else border
     while True:
         marked = _closure(codes, longest, marked)
-        across = marked[np.isin(marked, border)]
+        across = marked[_in_sorted(marked, border)]
         if not len(across):
             return marked, border
         before = len(patch.faces)
-        patch.take(np.concatenate([_input_faces(patch, code) for code in across.tolist()]))
+        patch.take(np.unique(np.concatenate([_input_faces(patch, code) for code in across.tolist()])))
         face_points = patch.face_points()[before:]          # (the faces taken come last)
         k, _ = _longest(patch.point_array(), face_points)
         taken_codes = edge_codes(face_points)
@@ -74,20 +67,13 @@ def _close(patch: Patch, marked, codes, longest, border) -> tuple:
         border = _border_edges(patch)
 
 
-def _points_of_welded(patch: Patch, welded) -> np.ndarray:
-    """The patch's point (same shape) of each of the input's welded ids ``welded`` (all in the patch)."""
-    known = np.flatnonzero(patch.point_welded != NEW_POINT)
-    by_welded = known[np.argsort(patch.point_welded[known])]
-    return by_welded[np.searchsorted(patch.point_welded[by_welded], welded)]
-
-
 def _border_edges(patch: Patch) -> np.ndarray:
     """Sorted codes (point pairs) of the taken faces' input edges that faces not taken share too."""
     topology, taken = patch.topology, patch.taken
     edges, counts = np.unique(topology.face_edges[taken], return_counts=True)
     offsets = topology.edge_face_offsets
     open_edges = edges[counts < offsets[edges + 1] - offsets[edges]]
-    points = _points_of_welded(patch, topology.edges[open_edges])
+    points = patch.point_of[topology.edges[open_edges]]
     return np.unique(pair_codes(points[:, 0], points[:, 1]))
 
 
@@ -113,7 +99,7 @@ def bisect_marked(patch: Patch, marked, place=None) -> None:
     rows, sources = patch.faces, patch.face_source
     face_points = patch.row_point[rows]
     k, _ = _longest(patch.point_array(), face_points)
-    split = np.isin(edge_codes(face_points), marked)
+    split = _in_sorted(edge_codes(face_points), marked)
     splitting = split.any(axis=1)
     row_edges, row_edge_of = np.unique(edge_codes(rows)[split], return_inverse=True)
     row_a, row_b = row_edges >> 32, row_edges & LOW_BITS
@@ -128,6 +114,30 @@ def bisect_marked(patch: Patch, marked, place=None) -> None:
     children, parent = _children(rows[splitting], midpoint[splitting], k[splitting])
     patch.replace_faces(np.concatenate([rows[~splitting], children]),
                         np.concatenate([sources[~splitting], sources[splitting][parent]]))
+
+
+@kernel((F2, I2), cost=0.2)
+def _longest(points, face_points):
+    """(F,) the corner k whose edge k -> k+1 is longest in each face (F, 3) of ``points`` (P, 3) (the
+    first on a tie), (F,) its squared length."""
+    n = face_points.shape[0]
+    longest, squared = np.zeros(n, np.int64), np.full(n, -1.0)
+    for f in range(n):
+        for k in range(3):
+            a, b = face_points[f, k], face_points[f, (k + 1) % 3]
+            d = (points[b, 0] - points[a, 0]) ** 2 + (points[b, 1] - points[a, 1]) ** 2 \
+                + (points[b, 2] - points[a, 2]) ** 2
+            if d > squared[f]:
+                longest[f], squared[f] = k, d
+    return longest, squared
+
+
+def _in_sorted(values, sorted_values) -> np.ndarray:
+    """(same shape as ``values``) whether each value is one of ``sorted_values`` (k,) (ascending)."""
+    if not len(sorted_values):
+        return np.zeros(values.shape, bool)
+    at = np.minimum(np.searchsorted(sorted_values, values), len(sorted_values) - 1)
+    return sorted_values[at] == values
 
 
 @kernel((I2, I1, I1), cost=0.3)

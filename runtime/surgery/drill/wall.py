@@ -32,7 +32,7 @@ from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
 from ..topology import directed_loops
-from .patch import LOW_BITS, Patch, edge_codes
+from .patch import LOW_BITS, Patch, edge_codes, pair_codes
 from .refine import MAX_ROUNDS, bisect_marked
 
 #: the winding about the bit's travel of a rim where it enters an outward-facing surface
@@ -165,13 +165,15 @@ def _rim_loops(patch: Patch, rim, frame: Frame) -> list:
     """The loops of boundary edges between rim points (rows ``rim``), as ``Loop``s (point ids welded:
     seams are one)."""
     rows, row_point = patch.faces, patch.row_point
-    tails, heads = rows.ravel(), np.roll(rows, -1, axis=1).ravel()          # each face's corner edges
-    a, b = row_point[tails], row_point[heads]
-    codes = (np.minimum(a, b) << 32) | np.maximum(a, b)
-    unique, counts = np.unique(codes, return_counts=True)
     on_rim = np.zeros(patch.n_points, bool)
     on_rim[row_point[rim]] = True
-    boundary = (counts[np.searchsorted(unique, codes)] == 1) & on_rim[a] & on_rim[b]
+    tails, heads = rows.ravel(), np.roll(rows, -1, axis=1).ravel()          # each face's corner edges
+    a, b = row_point[tails], row_point[heads]
+    between = np.flatnonzero(on_rim[a] & on_rim[b])          # (all of an edge's sides are among these)
+    tails, a, b = tails[between], a[between], b[between]
+    codes = pair_codes(a, b)
+    unique, counts = np.unique(codes, return_counts=True)
+    boundary = counts[np.searchsorted(unique, codes)] == 1
     row_of_edge = {(int(p), int(q)): int(r) for p, q, r in zip(a[boundary], b[boundary], tails[boundary])}
     points = patch.point_array()
     out = []
