@@ -202,13 +202,18 @@ def _face_box(positions, faces, f, pad, box):
 @helper
 def _insert(st, inserted, near):
     """Insert the faces ``inserted``, each into the leaf of the live face ``near[i]`` (a piece of it:
-    no descent) or, where near[i] is -1, into the leaf the least-growth descent finds."""
+    no descent) or, where near[i] is -1, into the leaf the least-growth descent finds from the lowest
+    node above the previous face's leaf that holds the face's box (the root when none does): faces
+    inserted together usually lie together, and a node that holds a box grows by nothing for it."""
     (nlo, nhi, left, right, parent, start, count, cap, slot_face, slot_leaf, positions, faces, face_slot, counts,
      sums) = st
     box = np.empty((2, 3))
+    previous = 0
     for i in range(inserted.shape[0]):
         _face_box(positions, faces, inserted[i], sums[PADDING], box)
-        node = 0 if near[i] < 0 else slot_leaf[face_slot[near[i]]]
+        node = previous if near[i] < 0 else slot_leaf[face_slot[near[i]]]
+        while near[i] < 0 and node != 0 and not _holds_box(nlo, nhi, node, box):
+            node = parent[node]
         while left[node] >= 0:
             gl, al = _growth(nlo, nhi, left[node], box)
             gr, ar = _growth(nlo, nhi, right[node], box)
@@ -231,6 +236,14 @@ def _insert(st, inserted, near):
             _put(st, start[node] + n, node, inserted[i])
             _refit(st, node, n + 1)
         counts[LIVE] += 1
+        previous = slot_leaf[face_slot[inserted[i]]]
+
+
+@helper
+def _holds_box(lo, hi, i, box):
+    """Whether node i's box (rows of lo, hi (N, 3)) holds box (2, 3)."""
+    return (lo[i, 0] <= box[0, 0] and lo[i, 1] <= box[0, 1] and lo[i, 2] <= box[0, 2]
+            and hi[i, 0] >= box[1, 0] and hi[i, 1] >= box[1, 1] and hi[i, 2] >= box[1, 2])
 
 
 @helper
