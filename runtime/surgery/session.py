@@ -308,8 +308,9 @@ class Surgery:
         self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
                        self.faces, moved, n, self.n_vertices)
         self._grow_bounds(moved, n, old_positions)
-        return Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved,
-                    splice.removed, _piece_in_each(splice.removed, splice.parents, m), splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
+        return Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, splice.removed,
+                    _piece_in_each(splice.removed, splice.parents, m), splice.kept, old_kept, moved_faces,
+                    splice.boundary_rows, old_flags, scalars)
 
     def _grow_bounds(self, moved, first_new, old) -> None:
         """The bounding box of the surface after the rows ``moved`` changed position (from ``old``) and

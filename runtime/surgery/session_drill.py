@@ -22,6 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.ids import distinct
 from ..animation.rig import Rig
 from ..animation.skinning import skin_affine
 from .drill.api import DrillResult, bit_reach, drill_region, missed
@@ -73,7 +74,7 @@ def session_drill(session, the_bit, wall: bool, posed) -> tuple:
     for attempt in range(MAX_TRIES + 1):
         whole = attempt == MAX_TRIES
         region = np.flatnonzero(session._alive.view) if whole else _faces_in(session, posed, lo - margin, hi + margin)
-        rows = np.unique(faces[region])
+        rows = distinct(faces[region])
         rig = _region_rig(session, region, rows)
         mesh = mesh_arrays(rig)        # (the kernels' arrays: writable buffers, as the functional drill's)
         positions = mesh.vertices if affines is None else skin_affine(mesh.vertices, mesh.joints, mesh.weights, affines)
@@ -96,7 +97,7 @@ def _faces_in(session, posed, lo, hi) -> np.ndarray:
         return session._bvh.faces_in_box(lo, hi)
     none = np.zeros(3)
     pose_region(posed.bvh_arrays, posed.posing, np.zeros(4), lo, hi, 0.0)      # what the box reaches, posed
-    return np.sort(dyn_faces_near_plane(posed.bvh_arrays, lo, hi, none, 0.0, 0.0))
+    return distinct(dyn_faces_near_plane(posed.bvh_arrays, lo, hi, none, 0.0, 0.0))
 
 
 def _region_rig(session, region, rows) -> Rig:
@@ -117,10 +118,10 @@ def _border(session, region, rows, region_faces) -> np.ndarray:
     corner at a point (rest position) where a live face outside the region has a corner."""
     vertices, faces = session.vertices, session.faces
     corners = vertices[rows]
-    outside = np.setdiff1d(session._bvh.faces_in_box(corners.min(axis=0), corners.max(axis=0)), region,
-                           assume_unique=True)
-    welded, _ = _weld(np.concatenate((corners, vertices[np.unique(faces[outside])])), None)   # as the drill welds
-    at_border = np.isin(welded[:len(rows)], welded[len(rows):])
+    near = session._bvh.faces_in_box(corners.min(axis=0), corners.max(axis=0))
+    outside = near[~np.isin(near, region, kind="table")]       # (a table over the ids' span: no sort)
+    welded, _ = _weld(np.concatenate((corners, vertices[distinct(faces[outside])])), None)   # as the drill welds
+    at_border = np.isin(welded[:len(rows)], welded[len(rows):], kind="table")
     corner_at_border = at_border[region_faces]
     return corner_at_border[:, 0] | corner_at_border[:, 1] | corner_at_border[:, 2]
 
@@ -149,7 +150,7 @@ def _splice(session, result: DrillResult, region, rows) -> DrillSplice:
     pieces = row_of[out.faces[n_kept:]]
     labels = _labels(result.rig)
     flags = boundary_flags(out.vertices, out.faces, labels)
-    touched = np.unique(out.faces[n_kept:])
+    touched = distinct(out.faces[n_kept:])
     attributes = {name: np.array(result.rig.attributes[name][first:], np.float64).reshape(n_new, -1)
                   for name in session.attributes}
     none = np.empty(0, np.int64)

@@ -257,8 +257,9 @@ def _wall_normals(normals, first_new: int, new_rows, patch: Patch, the_bit: Bit,
     """The wall rows' normals (in place, rows of ``normals``) pointing to the bit's axis; for a posed drill
     carried to rest by the transpose of each row's blended linear map (normals transform by its inverse
     transpose)."""
-    wall_rows = np.unique(patch.faces[patch.face_source <= WALL])
-    at = np.flatnonzero(np.isin(new_rows, wall_rows))
+    on_wall = np.zeros(patch.n_rows, bool)
+    on_wall[patch.faces[patch.face_source <= WALL]] = True
+    at = np.flatnonzero(on_wall[new_rows])
     points = patch.point_array()[patch.row_point[new_rows[at]]]
     inward = Frame(the_bit).inward(points)
     if affines is not None:

@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from ..._shared.jit import F1, F2, I2, kernel
 
 

@@ -5,9 +5,9 @@ model's faces are often larger than the hole. So before the rim is placed, every
 surface passes through (part of it inside the bit, part outside: ``bit.near_faces``) and whose longest
 edge is longer than ``step`` is bisected on its longest edge, and a face that shares a bisected edge is
 bisected too (on its longest edge first, then on the shared one: Rivara's longest-edge bisection, which
-keeps the angles of the refined faces bounded and leaves no vertex in the middle of a neighbour's edge). Rounds repeat until
-no face the surface passes through is longer than ``step``: the rim's edges are then at most ``step``
-long, and a face left outside the bit reaches into it by no more than such an edge's sagitta.
+keeps the angles of the refined faces bounded and leaves no vertex in the middle of a neighbour's edge).
+Rounds repeat until no face the surface passes through is longer than ``step``: the rim's edges are then
+at most ``step`` long, and a face left outside the bit reaches into it by no more than such an edge's sagitta.
 
 The faces are the patch's (``patch.py``); edges are marked by their welded points, so that the
 bisection of a seam edge is seen from both sides. Each round works on whole arrays: the faces near the

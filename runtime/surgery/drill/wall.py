@@ -34,6 +34,7 @@ from ..cut.cap import _ear_clip
 from ..topology import directed_loops
 from .patch import LOW_BITS, Patch, edge_codes, pair_codes
 from .refine import MAX_ROUNDS, bisect_marked
+from .strips import grid, zip_chains, zip_rings
 
 #: the winding about the bit's travel of a rim where it enters an outward-facing surface
 ENTRY = 1
@@ -231,56 +232,24 @@ def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) ->
     bottom = _loop_ring(patch, a)
     inner = _wall_rings(patch, frame, columns, (1 - weights)[:, None] * low + weights[:, None] * high, a, b, weights)
     top = _loop_ring(patch, b) if b is not None else None
-    if len(inner):
-        triangles = _zip_rings(*bottom, inner[0], columns) + _grid(inner)
-        if top is not None:
-            triangles += _zip_rings(inner[-1], columns, *top)
+    if len(inner):          # the loops zipped to the first and last ring, the rings between as a grid
+        strips = [zip_rings(*bottom, inner[0], columns), grid(inner)]
+        last = (inner[-1], columns)
     else:
-        triangles = _zip_rings(*bottom, *top) if top is not None else []
+        strips, last = [], bottom
+    if top is not None:
+        strips.append(zip_rings(*last, *top))
     if b is None:
         pole = _pole_row(patch, frame, frame.top, a)
-        rows = inner[-1] if len(inner) else bottom[0]
-        triangles += [(rows[(i + 1) % len(rows)], pole, rows[i]) for i in range(len(rows))]
-    patch.add_faces(np.asarray(triangles, np.int64)[:, [0, 2, 1]], WALL)
-
-
-def _grid(rings) -> list:
-    """The triangles between each ring of ``rings`` (k, c) and the next, all at the same angles (as
-    ``_zip_rings`` makes them: (a, a', b) then (a', b', b) at each column)."""
-    lower, upper = rings[:-1], rings[1:]
-    lower_next, upper_next = np.roll(lower, -1, axis=1), np.roll(upper, -1, axis=1)
-    pairs = np.stack([np.stack([lower, lower_next, upper], axis=-1),
-                      np.stack([lower_next, upper_next, upper], axis=-1)], axis=2)
-    return pairs.reshape(-1, 3).tolist()
+        rows = np.asarray(last[0], np.int64)
+        strips.append(np.column_stack([np.roll(rows, -1), np.full(len(rows), pole), rows]))
+    patch.add_faces(np.concatenate(strips)[:, [0, 2, 1]], WALL)
 
 
 def _loop_ring(patch: Patch, loop: Loop) -> tuple:
     """(rows, unwrapped angles) of a winding loop's own wall rows, in the direction of increasing angle."""
     rows, angles = _loop_rows(patch, loop), loop.unwrapped
     return (rows, angles) if loop.winding > 0 else (rows[::-1], angles[::-1])
-
-
-def _zip_rings(ra, ua, rb, ub) -> list:
-    """Triangles (a, a', b) and (a, b', b) between two rings of rows, each once around the axis in the
-    direction of increasing angle (``ua``, ``ub`` unwrapped; a rim may step back a little), advancing
-    on the ring whose next corner comes first. Every edge of either ring is used once, whatever the
-    angles: the strip is closed. In (θ, σ), with ring a below ring b, they are counter-clockwise."""
-    na, nb = len(ra), len(rb)
-    ua, ub = np.asarray(ua, np.float64), np.asarray(ub, np.float64)
-    j = int(np.argmin(np.abs((ub - ua[0] + math.pi) % (2 * math.pi) - math.pi)))    # b starts near a
-    rb = list(rb[j:]) + list(rb[:j])
-    ub = np.concatenate([ub[j:], ub[:j] + 2 * math.pi])
-    ub -= 2 * math.pi * round((ub[0] - ua[0]) / (2 * math.pi))
-    ua, ub = np.append(ua, ua[0] + 2 * math.pi), np.append(ub, ub[0] + 2 * math.pi)
-    out, i, k = [], 0, 0
-    while i < na or k < nb:
-        if k == nb or (i < na and ua[i + 1] <= ub[k + 1]):
-            out.append((ra[i], ra[(i + 1) % na], rb[k % nb]))
-            i += 1
-        else:
-            out.append((ra[i % na], rb[(k + 1) % nb], rb[k]))
-            k += 1
-    return out
 
 
 def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
@@ -307,11 +276,11 @@ def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
         # (along the axis a chain may step across at one height: the rim crossing a ring of edges)
         if all(np.all(d >= 0.0) if key is loop.sigma else np.all(d > 0.0) for d in steps):
             if key is loop.unwrapped:
-                triangles = _zip_chains(key, *chains)
+                triangles = zip_chains(key, *chains)
             else:
                 chains, theta, sigma = _chains_between(patch, frame, loop, rows, chains, step)
                 triangles = [tri for lower, upper in zip(chains, chains[1:])
-                             for tri in _zip_chains(sigma, lower, upper)]
+                             for tri in zip_chains(sigma, lower, upper)]
             break
     if triangles is None:
         xy = np.column_stack([frame.r * loop.unwrapped, loop.sigma])
@@ -352,20 +321,6 @@ def _chains_between(patch: Patch, frame: Frame, loop: Loop, rows: list, chains: 
         sigmas.append(ring_sigma)
     out.append(upper)
     return out, np.concatenate(thetas), np.concatenate(sigmas)
-
-
-def _zip_chains(key, lower: list, upper: list) -> list:
-    """Triangles (corner indices) between two chains from one corner to another, ``key`` (an angle or a
-    height per corner) increasing along both, advancing the chain whose next corner comes first."""
-    out, i, k = [], 0, 0
-    while i < len(lower) - 1 or k < len(upper) - 1:
-        if k == len(upper) - 1 or (i < len(lower) - 1 and key[lower[i + 1]] <= key[upper[k + 1]]):
-            out.append((lower[i], lower[i + 1], upper[k]))
-            i += 1
-        else:
-            out.append((lower[i], upper[k + 1], upper[k]))
-            k += 1
-    return [tri for tri in out if len(set(tri)) == 3]
 
 
 def _area(xy) -> float:
