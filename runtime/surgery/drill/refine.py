@@ -11,7 +11,7 @@ at most ``step`` long, and a face left outside the bit reaches into it by no mor
 
 The faces are the patch's (``patch.py``); edges are marked by their welded points, so that the
 bisection of a seam edge is seen from both sides. Each round works on whole arrays: the faces near the
-surface, the closure of the marked edges (``_closure``) and the faces' children (``_children``).
+surface, the closure of the marked edges (``_closure_step``) and the faces' children (``_children``).
 """
 from __future__ import annotations
 
@@ -53,7 +53,10 @@ def _close(patch: Patch, marked, codes, longest, border) -> tuple:
     the input faces beyond it join the patch first."""
     border = _border_edges(patch) if border is None else border
     while True:
-        marked = _closure(codes, longest, marked)
+        added = _closure_step(codes, longest, marked)
+        while len(added):
+            marked = np.union1d(marked, added)
+            added = _closure_step(codes, longest, marked)
         across = marked[_in_sorted(marked, border)]
         if not len(across):
             return marked, border
@@ -140,30 +143,34 @@ def _in_sorted(values, sorted_values) -> np.ndarray:
     return sorted_values[at] == values
 
 
-@kernel((I2, I1, I1), cost=0.3)
-def _closure(codes, longest, marked):
-    """The sorted edge codes ``marked`` (k,) with ``longest[f]`` (F,), the longest edge of face f, added
-    for every face f with a marked edge among ``codes[f]`` (F, 3), until none is added (sorted)."""
-    while True:
-        added = np.empty(codes.shape[0], np.int64)
-        count = 0
-        for f in range(codes.shape[0]):
-            if _holds(marked, longest[f]):
-                continue
-            for k in range(3):
-                if _holds(marked, codes[f, k]):
-                    added[count] = longest[f]
-                    count += 1
-                    break
-        if count == 0:
-            return marked
-        marked = np.unique(np.concatenate((marked, added[:count])))
+@kernel((I2, I1, I1), cost=0.2)
+def _closure_step(codes, longest, marked):
+    """The longest edges ``longest[f]`` (F,) not among the sorted edge codes ``marked`` (k,) of the faces
+    f with a marked edge among ``codes[f]`` (F, 3) (with repeats): what the closure adds next."""
+    added = np.empty(codes.shape[0], np.int64)
+    count = 0
+    for f in range(codes.shape[0]):
+        if _holds(marked, longest[f]):
+            continue
+        for k in range(3):
+            if _holds(marked, codes[f, k]):
+                added[count] = longest[f]
+                count += 1
+                break
+    return added[:count].copy()
 
 
 @helper
 def _holds(sorted_codes, code):
-    at = np.searchsorted(sorted_codes, code)
-    return at < sorted_codes.shape[0] and sorted_codes[at] == code
+    """Whether ``code`` is one of ``sorted_codes`` (ascending): a binary search."""
+    lo, hi = 0, sorted_codes.shape[0]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if sorted_codes[mid] < code:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo < sorted_codes.shape[0] and sorted_codes[lo] == code
 
 
 @kernel((I2, I2, I1), cost=0.3)
