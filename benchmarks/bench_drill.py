@@ -9,10 +9,11 @@ Rows (medians; ratios within this run):
   against ``cgaskin.cut`` of the same rig through the same point (the issue's bar: a drill at most 8x a
   cut);
 * the capsule arm of the playing-model issue (``capsule_arm(rings_per_segment=410, segments_around=512)``,
-  about 1.5M faces): a hole in a ``Surgery`` (the bar: 20 ms, and growing with the faces near the bit,
-  not with the mesh: the same holes in a capsule a third as long, as finely meshed), the functional ``drill`` of the rig, and manifold3d's difference of the welded
-  mesh and a 64-sided bit (the mesh converted to a Manifold and back, as a user of it would), when
-  manifold3d is installed (``pip install manifold3d``).
+  about 1.5M faces): a hole in a ``Surgery`` then its undo, at rest and in a new pose each hole (the
+  bar: 20 ms, growing with the faces near the bit, not with the mesh: the same holes in a capsule a
+  third as long, as finely meshed), the functional ``drill`` of the rig, and manifold3d's difference of
+  the welded mesh and a 64-sided bit (the mesh converted to a Manifold and back, as a user of it would),
+  when manifold3d is installed (``pip install manifold3d``).
 """
 from __future__ import annotations
 
@@ -69,6 +70,20 @@ def _session_hole_ms(rig, places, travel, radius, repeat: int) -> float:
     return median_seconds(holes, max(1, repeat // 3), warmup=1) * 1e3 / len(places)
 
 
+def _posed_session_hole_ms(rig, places, travel, radius, repeat: int) -> float:
+    """Median ms of a walled hole in a ``Surgery`` of ``rig`` then its undo, at each of ``places``, each
+    hole in a pose the session has not drilled in before (the elbow turned a little more each time)."""
+    session = cgaskin.Surgery(rig)
+    turns = iter(range(1, 1_000_000))
+
+    def holes():
+        for p in places:
+            pose = rig.rest_pose().rotate("elbow", [0, 0, 1], np.radians(0.01 * next(turns)))
+            session.drill(p, p + travel, radius, pose=pose)
+            session.undo()
+    return median_seconds(holes, max(1, repeat // 3), warmup=1) * 1e3 / len(places)
+
+
 def large_rows(rings: int, around: int, repeat: int) -> list:
     """The large capsule: holes across it at several places, in a session (undone after each), the same
     holes in a capsule a third as long (the same faces near the bit, a third of the mesh), as a
@@ -85,6 +100,9 @@ def large_rows(rings: int, around: int, repeat: int) -> list:
     session_ms = _session_hole_ms(rig, places, travel, radius, repeat)
     rows.append([f"capsule_arm({rings}, {around})", rig.n_faces, "Surgery.drill, a walled hole, then undo", session_ms,
                  1.0])
+    posed_ms = _posed_session_hole_ms(rig, places, travel, radius, repeat)
+    rows.append([f"capsule_arm({rings}, {around})", rig.n_faces, "the same, each hole in a new pose", posed_ms,
+                 posed_ms / session_ms])
     short = cgaskin.capsule_arm(n_joints=1, length=1.0, rings_per_segment=rings, segments_around=around)
     short_ms = _session_hole_ms(short, [p * [1.0 / 3.0, 1.0, 1.0] for p in places], travel, radius, repeat)
     rows.append([f"capsule_arm(1 joint, length 1, {rings}, {around})", short.n_faces,

@@ -47,7 +47,14 @@ def bit(start, end, radius) -> Bit:
 @helper
 def _distance(start, end, x):
     """Distance of x (3,) from the segment start -> end."""
-    dx, dy, dz = end[0] - start[0], end[1] - start[1], end[2] - start[2]
+    return _segment_distance(start, end, end - start, x)
+
+
+@helper
+def _segment_distance(start, end, axis, x):
+    """Distance of x (3,) from the segment start -> end, ``axis`` = end - start (3,) (made once by a
+    caller that measures many points)."""
+    dx, dy, dz = axis[0], axis[1], axis[2]
     wx, wy, wz = x[0] - start[0], x[1] - start[1], x[2] - start[2]
     along = wx * dx + wy * dy + wz * dz
     if along <= 0.0:
@@ -55,13 +62,12 @@ def _distance(start, end, x):
     if along >= dx * dx + dy * dy + dz * dz:
         ex, ey, ez = x[0] - end[0], x[1] - end[1], x[2] - end[2]
         return math.sqrt(ex * ex + ey * ey + ez * ez)
-    return point_line_distance(start, end - start, x)
+    return point_line_distance(start, axis, x)
 
 
 @helper
-def _on_edge(p, q, t):
-    """The point p + t (q - p) (3,)."""
-    out = np.empty(3)
+def _put_on_edge(p, q, t, out):
+    """out (3,) := p + t (q - p); out."""
     for k in range(3):
         out[k] = p[k] + t * (q[k] - p[k])
     return out
@@ -99,21 +105,24 @@ def _closest_on_edge(start, end, p, q):
 
 
 @helper
-def _closest_on_face(start, end, a, b, c):
+def _closest_on_face(start, end, a, b, c, x):
     """The least distance of triangle abc from the bit's segment: over its edges, the segment's ends
-    projected inside it, and 0 where the segment pierces it."""
+    projected inside it, and 0 where the segment pierces it (``x`` (3,): scratch)."""
     best = min(_closest_on_edge(start, end, a, b), min(_closest_on_edge(start, end, b, c),
                                                        _closest_on_edge(start, end, c, a)))
     for e in (start, end):
         la, lb, lc = barycentric(a, b, c, e)
         if la >= 0.0 and lb >= 0.0 and lc >= 0.0:
-            foot = la * a + lb * b + lc * c
-            best = min(best, math.sqrt(((e - foot) ** 2).sum()))
+            fx, fy, fz = (la * a[0] + lb * b[0] + lc * c[0] - e[0], la * a[1] + lb * b[1] + lc * c[1] - e[1],
+                          la * a[2] + lb * b[2] + lc * c[2] - e[2])
+            best = min(best, math.sqrt(fx * fx + fy * fy + fz * fz))
     # the segment's crossing of the triangle's plane, if it lies inside the triangle
-    n = np.cross(b - a, c - a)
-    da, db = ((start - a) * n).sum(), ((end - a) * n).sum()
+    ux, uy, uz, vx, vy, vz = b[0] - a[0], b[1] - a[1], b[2] - a[2], c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    da = (start[0] - a[0]) * nx + (start[1] - a[1]) * ny + (start[2] - a[2]) * nz
+    db = (end[0] - a[0]) * nx + (end[1] - a[1]) * ny + (end[2] - a[2]) * nz
     if (da < 0.0) != (db < 0.0) and da != db:
-        la, lb, lc = barycentric(a, b, c, _on_edge(start, end, da / (da - db)))
+        la, lb, lc = barycentric(a, b, c, _put_on_edge(start, end, da / (da - db), x))
         if la >= 0.0 and lb >= 0.0 and lc >= 0.0:
             best = 0.0
     return best
@@ -126,20 +135,21 @@ def near_faces(positions, faces, start, end, radius):
 
     positions (w, 3) ; faces (m, 3) over them ; returns low (m,), high (m,) float64"""
     m = faces.shape[0]
-    low, high = np.empty(m), np.empty(m)
+    low, high, axis, x = np.empty(m), np.empty(m), end - start, np.empty(3)
     for i in range(m):
         a, b, c = positions[faces[i, 0]], positions[faces[i, 1]], positions[faces[i, 2]]
-        low[i] = _closest_on_face(start, end, a, b, c) - radius
-        high[i] = max(_distance(start, end, a), max(_distance(start, end, b), _distance(start, end, c))) - radius
+        low[i] = _closest_on_face(start, end, a, b, c, x) - radius
+        high[i] = max(_segment_distance(start, end, axis, a), max(_segment_distance(start, end, axis, b),
+                                                                 _segment_distance(start, end, axis, c))) - radius
     return low, high
 
 
 @kernel((F2, F1, F1, f8))
 def signed_distances(positions, start, end, radius):
     """f = distance - radius (w,) of each point (w, 3): negative inside the bit."""
-    out = np.empty(positions.shape[0])
+    out, axis = np.empty(positions.shape[0]), end - start
     for i in range(positions.shape[0]):
-        out[i] = _distance(start, end, positions[i]) - radius
+        out[i] = _segment_distance(start, end, axis, positions[i]) - radius
     return out
 
 
@@ -156,10 +166,11 @@ def crossings(positions, edges, start, end, radius):
     bisection every ``BISECT_EVERY`` steps, until it cannot shrink. Returns t (k,), points (k, 3)."""
     k = edges.shape[0]
     ts, points = np.empty(k), np.empty((k, 3))
+    axis, x = end - start, np.empty(3)
     for i in range(k):
         p, q = positions[edges[i, 0]], positions[edges[i, 1]]
         lo, hi = 0.0, 1.0
-        f_lo, f_hi = _distance(start, end, p) - radius, _distance(start, end, q) - radius
+        f_lo, f_hi = _segment_distance(start, end, axis, p) - radius, _segment_distance(start, end, axis, q) - radius
         g_lo, g_hi = f_lo, f_hi                 # (the values the secant uses: Illinois halves them)
         kept, step = 0, 0
         while True:
@@ -171,7 +182,7 @@ def crossings(positions, edges, start, end, radius):
                     t = secant
             if t <= lo or t >= hi:
                 break
-            f = _distance(start, end, _on_edge(p, q, t)) - radius
+            f = _segment_distance(start, end, axis, _put_on_edge(p, q, t, x)) - radius
             if (f < 0.0) == (f_lo < 0.0):
                 lo, f_lo, g_lo = t, f, f
                 if kept == -1:
@@ -183,6 +194,5 @@ def crossings(positions, edges, start, end, radius):
                     g_lo *= 0.5
                 kept = 1
         ts[i] = lo if abs(f_lo) <= abs(f_hi) else hi        # the end of the bracket nearer the surface
-        x = _on_edge(p, q, ts[i])
-        points[i, 0], points[i, 1], points[i, 2] = x[0], x[1], x[2]
+        _put_on_edge(p, q, ts[i], points[i])
     return ts, points
