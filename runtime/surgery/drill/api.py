@@ -14,7 +14,8 @@ The bit (``bit.py``) is the solid within ``radius`` of the segment start -> end,
    they lie between (``new_vertices.py``); a posed drill places them in rest space so that skinning the
    result in ``pose`` puts them where they were made (as a posed cut does).
 5. The result keeps the input vertices it uses in their order (attributes and weights bit for bit),
-   then the new vertices; faces away from the bit keep their order, then come the patch's.
+   then the new vertices; the faces it did not split, cut or take away keep their order, then come the
+   faces it made.
 
 6. ``wall=True``: where the bit passes inside the model, the hole gets a wall on the bit's surface
    (``wall.py``), so that a closed model stays closed; ``wall=False`` leaves the rims as boundaries.
@@ -65,8 +66,8 @@ class DrillResult:
     rim : (r,) int64, the output vertices on the bit's surface
     new_positions : (k, 3) float64, the new vertices in the space that was drilled (rest, or posed)
     removed_faces : int, input faces (after refinement) taken away or cut by the bit
-    replaced : (t,) int64, the input faces the drill replaced (ascending): the result's faces are the
-        other input faces, in their order, then the faces made in their place
+    replaced : (t,) int64, the input faces the drill replaced (split, cut or taken away; ascending): the
+        result's faces are the other input faces, in their order, then the faces made in their place
     made_in : (k,) int64, for each face made (the last k of the result's), the input face it lies in
         (-1: a wall's)
     wall_faces : int, the walls' faces: the last ``wall_faces`` rows of ``rig.faces``
@@ -112,7 +113,8 @@ def drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagona
     (rest, or skinned by ``affines``), ``diagonal`` the size of the whole model there (the tolerances'
     scale), ``inside(point (3,)) -> bool`` whether a point is inside the whole model. ``rig`` may be a
     region of a larger mesh (an editing session's): the drill reads and changes only the faces it
-    takes (``DrillResult.replaced``), and their neighbours across the edges it splits."""
+    changes (``DrillResult.replaced``: of the faces it takes, those it splits or cuts), and their
+    neighbours across the edges it splits."""
     with collection_paused():                   # (the patch's Python containers: see _shared/memory.py)
         return _drill_region(rig, the_bit, wall, affines, positions, diagonal, inside)
 
@@ -204,9 +206,11 @@ def _assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, the_bit: Bit
               diagonal: float) -> DrillResult:
     vertices, faces, joints, weights = mesh_arrays(rig)
     n = len(vertices)
+    unchanged = _unchanged(patch, faces)         # taken, but neither split nor cut: kept in their place
     kept_faces = np.ones(len(faces), bool)
     kept_faces[patch.taken] = False
-    patch_faces = patch.faces
+    kept_faces[patch.face_source[unchanged]] = True
+    patch_faces, face_source = patch.faces[~unchanged], patch.face_source[~unchanged]
     row_is_new = patch.row_vertex < 0
     # the rows' ids in the vertex table before compaction: input rows -> input vertex, new -> n + j
     new_rows = np.flatnonzero(row_is_new)
@@ -248,9 +252,18 @@ def _assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, the_bit: Bit
                              attributes, f"{rig.name}_drilled")
     sources = np.concatenate([kept_input, np.full(len(new_rows), NEW_VERTEX, np.int64)])
     rim_ids = renumber[row_ids[rim]]
-    made_in = np.maximum(patch.face_source, -1)        # (wall and fill: -1)
+    made_in = np.maximum(face_source, -1)        # (wall and fill: -1)
     return DrillResult(result, sources, new, len(kept_input), np.sort(rim_ids), new_positions, opened,
                        np.flatnonzero(~kept_faces), made_in, walls, the_bit, tolerance, residual)
+
+
+def _unchanged(patch: Patch, faces) -> np.ndarray:
+    """(F,) bool: the patch's faces that are their input face as it was (its corners, in its order)."""
+    source, corners = patch.face_source, patch.row_vertex[patch.faces]
+    taken = source >= 0
+    same = taken & (corners >= 0).all(axis=1)
+    same[same] = (corners[same] == faces[source[same]]).all(axis=1)
+    return same
 
 
 def _wall_normals(normals, first_new: int, new_rows, patch: Patch, the_bit: Bit, new_joints, new_weights, affines):
