@@ -42,14 +42,17 @@ class _Growing:
 
     def extend(self, rows) -> int:
         """Append ``rows`` (k, *tail); the index of the first."""
-        k = len(rows)
+        self.add(len(rows))[:] = rows
+        return self.n - len(rows)
+
+    def add(self, k: int) -> np.ndarray:
+        """Append k rows, unwritten; returns them (a view) for the caller to fill."""
         if self.n + k > len(self._data):
             grown = np.empty((max(2 * len(self._data), self.n + k),) + self._data.shape[1:], self._data.dtype)
             grown[:self.n] = self._data[:self.n]
             self._data = grown
-        self._data[self.n:self.n + k] = rows
         self.n += k
-        return self.n - k
+        return self._data[self.n - k:self.n]
 
     def replace(self, rows) -> None:
         self.n = 0
@@ -122,9 +125,10 @@ class Patch:
         points = np.asarray(points, np.int64).reshape(-1)
         k = len(points)
         first = self._row_point.extend(points)
-        self._row_vertex.extend(np.broadcast_to(np.asarray(vertices, np.int64), (k,)))
-        self._row_parents.extend(np.column_stack([np.broadcast_to(a, (k,)), np.broadcast_to(b, (k,))]))
-        self._row_t.extend(np.broadcast_to(np.asarray(t, np.float64), (k,)))
+        self._row_vertex.add(k)[:] = vertices
+        parents = self._row_parents.add(k)
+        parents[:, 0], parents[:, 1] = a, b
+        self._row_t.add(k)[:] = t
         return first
 
     def new_row(self, point: int, a: int, b: int, t: float) -> int:
@@ -135,7 +139,7 @@ class Patch:
         """Append faces ``rows`` (k, 3) descending from input faces ``sources`` (k,) (or one for all)."""
         rows = np.asarray(rows, np.int64).reshape(-1, 3)
         self._faces.extend(rows)
-        self._face_source.extend(np.broadcast_to(np.asarray(sources, np.int64), (len(rows),)))
+        self._face_source.add(len(rows))[:] = sources
 
     def replace_faces(self, rows, sources) -> None:
         """The patch's faces are now ``rows`` (k, 3) descending from ``sources`` (k,)."""

@@ -11,16 +11,16 @@ at most ``step`` long, and a face left outside the bit reaches into it by no mor
 
 The faces are the patch's (``patch.py``); edges are marked by their welded points, so that the
 bisection of a seam edge is seen from both sides. Each round works on whole arrays: the faces near the
-surface, the closure of the marked edges (``_closure_step``) and the faces' children (``_children``).
+surface, the closure of the marked edges and the faces' halves (``bisection.py``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F2, I1, I2, helper, kernel
 from ...errors import InternalError
 from .bit import near_faces
-from .patch import LOW_BITS, Patch, edge_codes, pair_codes, put_face
+from .bisection import closure, longest_edges, split_marked
+from .patch import LOW_BITS, Patch, edge_codes, pair_codes
 
 #: refinement rounds before giving up (each halves the faces near the rim: 2^60 is beyond any model)
 MAX_ROUNDS = 60
@@ -33,7 +33,7 @@ def refine(patch: Patch, bit, step: float) -> None:
     border = None                       # (made when a closure first needs it)
     for _ in range(MAX_ROUNDS):
         points, face_points = patch.point_array(), patch.face_points()
-        k, squared = _longest(points, face_points)
+        k, squared = longest_edges(points, face_points)
         long = np.flatnonzero(squared > step * step)
         low, high = near_faces(points, face_points[long], start, end, radius)
         chosen = long[(low < 0.0) & (high > 0.0)]           # the bit's surface passes through them
@@ -41,29 +41,26 @@ def refine(patch: Patch, bit, step: float) -> None:
             return
         codes = edge_codes(face_points)
         longest = codes[np.arange(len(k)), k]
-        marked, border = _close(patch, np.unique(longest[chosen]), codes, longest, border)
+        marked, border = _close(patch, longest[chosen], codes, longest, border)
         bisect_marked(patch, marked)
     raise InternalError(f"the faces near the bit did not become shorter than {step:g} in {MAX_ROUNDS} rounds")
 
 
 def _close(patch: Patch, marked, codes, longest, border) -> tuple:
-    """(the edge codes ``marked`` and the longest edge of every face that has a marked edge, until none
-    is added; the patch's border edges). ``codes`` (F, 3) are the faces' edges, ``longest`` (F,) the
-    longest of each; where a marked edge is a ``border`` edge (``_border_edges``; None: not made yet),
-    the input faces beyond it join the patch first."""
+    """(the sorted edge codes ``marked`` and the longest edge of every face that has a marked edge,
+    until none is added (``bisection.closure``); the patch's border edges). ``codes`` (F, 3) are the
+    faces' edges, ``longest`` (F,) the longest of each; where a marked edge is a ``border`` edge
+    (``_border_edges``; None: not made yet), the input faces beyond it join the patch first."""
     border = _border_edges(patch) if border is None else border
     while True:
-        added = _closure_step(codes, longest, marked)
-        while len(added):
-            marked = np.union1d(marked, added)
-            added = _closure_step(codes, longest, marked)
+        marked = np.sort(closure(codes, longest, marked))
         across = marked[_in_sorted(marked, border)]
         if not len(across):
             return marked, border
         before = len(patch.faces)
         patch.take(np.unique(np.concatenate([_input_faces(patch, code) for code in across.tolist()])))
         face_points = patch.face_points()[before:]          # (the faces taken come last)
-        k, _ = _longest(patch.point_array(), face_points)
+        k, _ = longest_edges(patch.point_array(), face_points)
         taken_codes = edge_codes(face_points)
         codes = np.concatenate([codes, taken_codes])
         longest = np.concatenate([longest, taken_codes[np.arange(len(k)), k]])
@@ -93,46 +90,19 @@ def _input_faces(patch: Patch, code: int) -> np.ndarray:
 
 
 def bisect_marked(patch: Patch, marked, place=None) -> None:
-    """Split every face with marked edges (sorted codes of point pairs): on its longest edge where it is
-    marked (``_close`` sees to it), then each half on the marked edge it keeps. Each marked edge gets one
-    new point, at its midpoint or, when given, where ``place(a (k,), b (k,)) -> (k, 3)`` says for the
-    edges between points a and b (called just before the k points are added); each vertex edge on it
-    gets one new row (a seam's copies share the point). The faces split go, their halves come after the
-    others."""
-    rows, sources = patch.faces, patch.face_source
-    face_points = patch.row_point[rows]
-    k, _ = _longest(patch.point_array(), face_points)
-    split = _in_sorted(edge_codes(face_points), marked)
-    splitting = split.any(axis=1)
-    row_edges, row_edge_of = np.unique(edge_codes(rows)[split], return_inverse=True)
-    row_a, row_b = row_edges >> 32, row_edges & LOW_BITS
-    point_edges, point_edge_of = np.unique(pair_codes(patch.row_point[row_a], patch.row_point[row_b]),
-                                           return_inverse=True)
-    a, b = point_edges >> 32, point_edges & LOW_BITS
+    """Split every face with marked edges (codes of point pairs): on its longest edge where it is marked
+    (``_close`` sees to it), then each half on the marked edge it keeps (``bisection.split_marked``).
+    Each marked edge gets one new point, at its midpoint or, when given, where ``place(a (k,), b (k,))
+    -> (k, 3)`` says for the edges between points a and b (called just before the k points are added);
+    each vertex edge on it gets one new row (a seam's copies share the point). The faces split go, their
+    halves come after the others."""
+    faces, made_from, row_parents, row_points, point_parents = split_marked(
+        patch.faces, patch.row_point, patch.point_array(), marked, patch.n_rows, patch.n_points)
+    a, b = point_parents[:, 0], point_parents[:, 1]
     points = patch.point_array()
-    first_point = patch.add_points(0.5 * (points[a] + points[b]) if place is None else place(a, b))
-    first_row = patch.new_rows(first_point + point_edge_of, row_a, row_b, 0.5)
-    midpoint = np.full(rows.shape, -1, np.int64)
-    midpoint[split] = first_row + row_edge_of
-    children, parent = _children(rows[splitting], midpoint[splitting], k[splitting])
-    patch.replace_faces(np.concatenate([rows[~splitting], children]),
-                        np.concatenate([sources[~splitting], sources[splitting][parent]]))
-
-
-@kernel((F2, I2), cost=0.2)
-def _longest(points, face_points):
-    """(F,) the corner k whose edge k -> k+1 is longest in each face (F, 3) of ``points`` (P, 3) (the
-    first on a tie), (F,) its squared length."""
-    n = face_points.shape[0]
-    longest, squared = np.zeros(n, np.int64), np.full(n, -1.0)
-    for f in range(n):
-        for k in range(3):
-            a, b = face_points[f, k], face_points[f, (k + 1) % 3]
-            d = (points[b, 0] - points[a, 0]) ** 2 + (points[b, 1] - points[a, 1]) ** 2 \
-                + (points[b, 2] - points[a, 2]) ** 2
-            if d > squared[f]:
-                longest[f], squared[f] = k, d
-    return longest, squared
+    patch.add_points(0.5 * (points[a] + points[b]) if place is None else place(a, b))
+    patch.new_rows(row_points, row_parents[:, 0], row_parents[:, 1], 0.5)
+    patch.replace_faces(faces, patch.face_source[made_from])
 
 
 def _in_sorted(values, sorted_values) -> np.ndarray:
@@ -141,65 +111,3 @@ def _in_sorted(values, sorted_values) -> np.ndarray:
         return np.zeros(values.shape, bool)
     at = np.minimum(np.searchsorted(sorted_values, values), len(sorted_values) - 1)
     return sorted_values[at] == values
-
-
-@kernel((I2, I1, I1), cost=0.2)
-def _closure_step(codes, longest, marked):
-    """The longest edges ``longest[f]`` (F,) not among the sorted edge codes ``marked`` (k,) of the faces
-    f with a marked edge among ``codes[f]`` (F, 3) (with repeats): what the closure adds next."""
-    added = np.empty(codes.shape[0], np.int64)
-    count = 0
-    for f in range(codes.shape[0]):
-        if _holds(marked, longest[f]):
-            continue
-        for k in range(3):
-            if _holds(marked, codes[f, k]):
-                added[count] = longest[f]
-                count += 1
-                break
-    return added[:count].copy()
-
-
-@helper
-def _holds(sorted_codes, code):
-    """Whether ``code`` is one of ``sorted_codes`` (ascending): a binary search."""
-    lo, hi = 0, sorted_codes.shape[0]
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if sorted_codes[mid] < code:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo < sorted_codes.shape[0] and sorted_codes[lo] == code
-
-
-@kernel((I2, I2, I1), cost=0.3)
-def _children(rows, midpoint, longest):
-    """The faces that replace faces ``rows`` (F, 3) whose corner edges k -> k+1 with ``midpoint[f, k]``
-    >= 0 (F, 3) are bisected at that row: on the longest edge ``longest[f]`` (F,) if it is bisected
-    (else the first that is), then each half on the other edge it keeps, if that is bisected: 2 to 4
-    faces, wound as the face. Returns faces (C, 3) and the face (C,) each replaces."""
-    n = rows.shape[0]
-    out, parent = np.empty((4 * n, 3), np.int64), np.empty(4 * n, np.int64)
-    count = 0
-    for f in range(n):
-        k = longest[f]
-        if midpoint[f, k] < 0:
-            k = 0
-            while midpoint[f, k] < 0:
-                k += 1
-        a, b, c = rows[f, k], rows[f, (k + 1) % 3], rows[f, (k + 2) % 3]
-        m, on_ca, on_bc = midpoint[f, k], midpoint[f, (k + 2) % 3], midpoint[f, (k + 1) % 3]
-        # each half keeps one of the face's other two edges (c-a, b-c): bisected too where it is marked
-        if on_ca >= 0:
-            count = put_face(out, parent, count, f, a, m, on_ca)
-            count = put_face(out, parent, count, f, m, c, on_ca)
-        else:
-            count = put_face(out, parent, count, f, a, m, c)
-        if on_bc >= 0:
-            count = put_face(out, parent, count, f, m, b, on_bc)
-            count = put_face(out, parent, count, f, m, on_bc, c)
-        else:
-            count = put_face(out, parent, count, f, m, b, c)
-    return out[:count].copy(), parent[:count].copy()
-
