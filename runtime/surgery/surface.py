@@ -20,6 +20,14 @@ from .topology import Topology, rig_topology, topology
 TEAR_LABEL = "_TEAR"
 
 
+def box_diagonal(points) -> float:
+    """The length of the diagonal of the bounding box of ``points`` (n, 3) (0 for none), column by
+    column (numpy reduces an (n, 3) array over its first axis ~20x slower than its three columns)."""
+    if not len(points):
+        return 0.0
+    return float(np.linalg.norm([points[:, k].max() - points[:, k].min() for k in range(3)]))
+
+
 def _labels(rig) -> np.ndarray:
     """(n,) int64 tear labels of the rig's vertices (0 without the attribute): whole numbers, any sign."""
     values = rig.attributes.get(TEAR_LABEL)

@@ -37,7 +37,7 @@ from ...errors import InvalidInputError, MissesMeshError, PlacementWarning
 from ..._shared.warn import warn
 from ...tolerances import tol
 from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute, place_in_rest
-from ..surface import mesh_arrays
+from ..surface import box_diagonal, mesh_arrays
 from ..topology import rig_topology
 from .bit import Bit, bit as checked_bit
 from .patch import Patch
@@ -96,7 +96,7 @@ def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) ->
     the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
     affines = None if pose is None else check_pose(rig, pose).bone_affines()
     positions = vertices if affines is None else skin_affine(vertices, joints, weights, affines)
-    diagonal = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0))) if len(positions) else 0.0
+    diagonal = box_diagonal(positions)
     return drill_region(rig, the_bit, wall, affines, positions, diagonal,
                         lambda p: winding_number(positions, faces, p) > 0.5)
 

@@ -20,7 +20,7 @@ from ..bvh import TriangleBVH
 from ..bone_influences import posed_scale, tree_influences, weight_summary
 from ..posed_bounds import PosedScratch, no_posing
 from ..posed_source import PosedSource, bone_affines_of
-from ..surface import TEAR_LABEL, _labels, mesh_arrays
+from ..surface import TEAR_LABEL, _labels, box_diagonal, mesh_arrays
 from ..topology import boundary_flags
 
 NO_POSING = no_posing()
@@ -57,7 +57,7 @@ class _Rest:
     def __init__(self, rig):
         mesh = mesh_arrays(rig)
         self.positions, self._faces, self._bvh = mesh.vertices, mesh.faces, None
-        self.diagonal = float(np.linalg.norm(self.positions.max(axis=0) - self.positions.min(axis=0)))
+        self.diagonal = box_diagonal(self.positions)
         self._mesh, self._n_bones = mesh, rig.skeleton.n_bones
 
     @cached_property
