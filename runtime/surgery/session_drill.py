@@ -2,10 +2,10 @@
 
 The drill (``drill/api.py``) changes only the faces it takes into its patch and splits edges only of
 faces it takes: so it is run on a region, a rig of the session's faces whose (posed) boxes meet the
-bit's reach widened by a margin, and it is exact there when it took no *border* face of the region (a
-face with a corner where a face outside the region has one: across it, the drill could have wanted to
-split an edge whose other faces it cannot see). The first margin is the largest face in the bit's reach
-(about a ring of faces); while the drill takes a border face, the margin doubles and the region is
+bit's reach widened by a margin, and it is exact there when it replaced no *border* face of the region
+(a face with a corner where a face outside the region has one: across it, the drill could have wanted
+to split an edge whose other faces it cannot see). The first margin is the largest face in the bit's
+reach (about a ring of faces); while the drill replaces a border face, the margin doubles and the region is
 drilled again, and after ``MAX_TRIES`` the region is the whole mesh, which has no border. In a region
 the drill is the functional drill of the session's mesh (``cgaskin.drill_details(session.rig, ...)``),
 which sees the same faces in the same order: its faces and new vertices are the same; the session keeps
@@ -79,7 +79,7 @@ def session_drill(session, the_bit, wall: bool, posed) -> tuple:
         mesh = mesh_arrays(rig)        # (the kernels' arrays: writable buffers, as the functional drill's)
         positions = mesh.vertices if affines is None else skin_affine(mesh.vertices, mesh.joints, mesh.weights, affines)
         result = drill_region(rig, the_bit, wall, affines, positions, diagonal, inside)
-        if whole or not _border(session, region, rows, mesh.faces)[result.replaced].any():
+        if whole or not _at_border(session, region, rows[distinct(mesh.faces[result.replaced])]):
             return result, _splice(session, result, region, rows)
         margin *= 2.0
 
@@ -113,17 +113,17 @@ def _region_rig(session, region, rows) -> Rig:
                            attributes, template.name)
 
 
-def _border(session, region, rows, region_faces) -> np.ndarray:
-    """(r,) bool: the region's faces (``region_faces`` (r, 3), corners as indices of ``rows``) with a
-    corner at a point (rest position) where a live face outside the region has a corner."""
+def _at_border(session, region, corners) -> bool:
+    """Whether a live face outside the faces ``region`` (r,) has a corner at the point (rest position) of
+    one of the rows ``corners`` (k,) (a replaced face's)."""
     vertices, faces = session.vertices, session.faces
-    corners = vertices[rows]
-    near = session._bvh.faces_in_box(corners.min(axis=0), corners.max(axis=0))
+    points = vertices[corners]
+    near = session._bvh.faces_in_box(points.min(axis=0), points.max(axis=0))
     outside = near[~np.isin(near, region, kind="table")]       # (a table over the ids' span: no sort)
-    welded, _ = _weld(np.concatenate((corners, vertices[distinct(faces[outside])])), None)   # as the drill welds
-    at_border = np.isin(welded[:len(rows)], welded[len(rows):], kind="table")
-    corner_at_border = at_border[region_faces]
-    return corner_at_border[:, 0] | corner_at_border[:, 1] | corner_at_border[:, 2]
+    if not len(outside):
+        return False
+    welded, _ = _weld(np.concatenate((points, vertices[distinct(faces[outside])])), None)   # as the drill welds
+    return bool(np.isin(welded[:len(points)], welded[len(points):], kind="table").any())
 
 
 def _inside(session, affines):
