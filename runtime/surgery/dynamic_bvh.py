@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.checks import float_array, index_array, real_number
-from .._shared.ids import distinct
+from .._shared.ids import ascending
 from ..errors import InvalidInputError
 from .bvh import BOX_PADDING, TriangleBVH, _all_hits, _faces_near_plane, _first_hit
 from .bvh_build import _build
@@ -312,8 +312,8 @@ class DynamicBVH:
                           for x, name in ((lo, "lo"), (hi, "hi"), (normal, "normal")))
         if real_number(delta, "delta") < 0:
             raise InvalidInputError(f"delta must be >= 0, got {delta}")
-        return distinct(dyn_faces_near_plane(self.arrays, lo, hi, normal, real_number(offset, "offset"),
-                                             float(delta)))
+        return ascending(dyn_faces_near_plane(self.arrays, lo, hi, normal, real_number(offset, "offset"),
+                                              float(delta)))
 
     def faces_in_box(self, lo, hi) -> np.ndarray:
         """Sorted live faces whose triangle box meets the closed box [lo, hi]."""

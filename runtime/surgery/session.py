@@ -309,8 +309,7 @@ class Surgery:
                        self.faces, moved, n, self.n_vertices)
         self._grow_bounds(moved, n, old_positions)
         return Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, splice.removed,
-                    _piece_in_each(splice.removed, splice.parents, m), splice.kept, old_kept, moved_faces,
-                    splice.boundary_rows, old_flags, scalars)
+                    splice.parents, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
 
     def _grow_bounds(self, moved, first_new, old) -> None:
         """The bounding box of the surface after the rows ``moved`` changed position (from ``old``) and
@@ -344,7 +343,8 @@ class Surgery:
         self._set_bounds(bounds)
         # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
         # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
-        self._edit_bvh(np.arange(record.m, m), record.removed, record.removed_near, record.moved_faces,
+        near = _piece_in_each(record.removed, record.piece_parents, record.m)     # (its leaf takes the face back)
+        self._edit_bvh(np.arange(record.m, m), record.removed, near, record.moved_faces,
                        self._arrays["vertices"].data, self._faces.data, record.moved, record.n, n)
 
 

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._shared.ids import distinct
+from .._shared.ids import ascending, distinct
 from ..animation.rig import Rig
 from ..animation.skinning import skin_affine
 from .drill.api import DrillResult, bit_reach, drill_region, missed
@@ -97,7 +97,7 @@ def _faces_in(session, posed, lo, hi) -> np.ndarray:
         return session._bvh.faces_in_box(lo, hi)
     none = np.zeros(3)
     pose_region(posed.bvh_arrays, posed.posing, np.zeros(4), lo, hi, 0.0)      # what the box reaches, posed
-    return distinct(dyn_faces_near_plane(posed.bvh_arrays, lo, hi, none, 0.0, 0.0))
+    return ascending(dyn_faces_near_plane(posed.bvh_arrays, lo, hi, none, 0.0, 0.0))
 
 
 def _region_rig(session, region, rows) -> Rig:

@@ -28,8 +28,9 @@ class SessionState(NamedTuple):
 class Undo(NamedTuple):
     """What one operation changed, to take it back (the undo log's one record type). An operation
     spliced in place (a stroke, a hole): the counts before it and the old values of the rows it
-    rewrote, ``removed`` the faces it took out and ``removed_near`` (r,) a face it made inside each
-    (-1: none), whose BVH leaf takes it back. An operation that replaced the whole mesh (a cut):
+    rewrote, ``removed`` the faces it took out and ``piece_parents`` (k,) the removed face each face it
+    made (ids from ``m`` on) lies in (-1: none), whose BVH leaves take the removed faces back. An
+    operation that replaced the whole mesh (a cut):
     ``replaced``, the session's whole state before it (``Undo.of_state``)."""
 
     n: int
@@ -38,7 +39,7 @@ class Undo(NamedTuple):
     old_rows: dict
     moved: np.ndarray
     removed: np.ndarray
-    removed_near: np.ndarray
+    piece_parents: np.ndarray
     kept: np.ndarray
     old_kept: np.ndarray
     moved_faces: np.ndarray
