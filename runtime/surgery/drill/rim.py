@@ -41,11 +41,11 @@ def open_hole(patch: Patch, bit, tolerance: float) -> tuple:
                                     patch.row_point)
     faces = np.concatenate([rows[kept], parts])
     patch.replace_faces(faces, np.concatenate([sources[kept], sources[crossing][part_of]]))
-    on_surface = np.ones(patch.n_points, bool)         # (the points after the classified ones: crossings)
-    on_surface[:len(side)] = side == ON
+    on_bit = np.ones(patch.n_points, bool)         # (the points after the classified ones: crossings)
+    on_bit[:len(side)] = side == ON
     used = np.zeros(patch.n_rows, bool)
     used[faces] = True
-    return np.flatnonzero(used & on_surface[patch.row_point]), opened
+    return np.flatnonzero(used & on_bit[patch.row_point]), opened
 
 
 def _centres_outside(points, patch: Patch, rows, bit) -> np.ndarray:

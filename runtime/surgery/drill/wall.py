@@ -311,8 +311,8 @@ def _chains_between(patch: Patch, frame: Frame, loop: Loop, rows: list, chains: 
         t = j / count
         ring_theta, ring_sigma = theta[inner] + t * across[1:-1], sigma[inner]
         first = patch.add_points(frame.points(ring_theta, ring_sigma))
-        start, row_of = len(rows), np.asarray(rows, np.int64)
-        first_row = patch.new_rows(first + np.arange(len(inner)), row_of[inner], row_of[nearest], t)
+        start, row_ids = len(rows), np.asarray(rows, np.int64)
+        first_row = patch.new_rows(first + np.arange(len(inner)), row_ids[inner], row_ids[nearest], t)
         rows.extend(range(first_row, first_row + len(inner)))
         for i in range(len(inner)):
             patch.fill_params[first + i] = np.array([ring_theta[i], ring_sigma[i]])
