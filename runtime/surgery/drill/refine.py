@@ -17,10 +17,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._shared.ids import distinct
 from ...errors import InternalError
 from .bit import near_faces
 from .bisection import closure, longest_edges, split_marked
-from .patch import LOW_BITS, Patch, edge_codes, pair_codes
+from .patch import Patch, edge_codes, pair_codes
 
 #: refinement rounds before giving up (each halves the faces near the rim: 2^60 is beyond any model)
 MAX_ROUNDS = 60
@@ -48,45 +49,44 @@ def refine(patch: Patch, bit, step: float) -> None:
 
 def _close(patch: Patch, marked, codes, longest, border) -> tuple:
     """(the sorted edge codes ``marked`` and the longest edge of every face that has a marked edge,
-    until none is added (``bisection.closure``); the patch's border edges). ``codes`` (F, 3) are the
-    faces' edges, ``longest`` (F,) the longest of each; where a marked edge is a ``border`` edge
-    (``_border_edges``; None: not made yet), the input faces beyond it join the patch first."""
-    border = _border_edges(patch) if border is None else border
+    until none is added (``bisection.closure``); the patch's border). ``codes`` (F, 3) are the faces'
+    edges, ``longest`` (F,) the longest of each; where a marked edge is an edge of the ``border``
+    (``_border``; None: not made yet), the input faces beyond the whole border join the patch first (a
+    ring at a time: the closure, having crossed once, usually crosses again nearby)."""
+    border = _border(patch) if border is None else border
     while True:
         marked = np.sort(closure(codes, longest, marked))
-        across = marked[_in_sorted(marked, border)]
-        if not len(across):
+        if not _in_sorted(marked, border[0]).any():
             return marked, border
         before = len(patch.faces)
-        patch.take(np.unique(np.concatenate([_input_faces(patch, code) for code in across.tolist()])))
+        patch.take(_faces_on(patch.topology, border[1]))
         face_points = patch.face_points()[before:]          # (the faces taken come last)
         k, _ = longest_edges(patch.point_array(), face_points)
         taken_codes = edge_codes(face_points)
         codes = np.concatenate([codes, taken_codes])
         longest = np.concatenate([longest, taken_codes[np.arange(len(k)), k]])
-        border = _border_edges(patch)
+        border = _border(patch)
 
 
-def _border_edges(patch: Patch) -> np.ndarray:
-    """Sorted codes (point pairs) of the taken faces' input edges that faces not taken share too."""
+def _border(patch: Patch) -> tuple:
+    """The taken faces' input edges that faces not taken share too: (sorted codes (b,) of their point
+    pairs, their ids (b,) in the input's topology)."""
     topology, taken = patch.topology, patch.taken
     edges, counts = np.unique(topology.face_edges[taken], return_counts=True)
     offsets = topology.edge_face_offsets
     open_edges = edges[counts < offsets[edges + 1] - offsets[edges]]
     points = patch.point_of[topology.edges[open_edges]]
-    return np.unique(pair_codes(points[:, 0], points[:, 1]))
+    codes = pair_codes(points[:, 0], points[:, 1])
+    order = np.argsort(codes)
+    return codes[order], open_edges[order]
 
 
-def _input_faces(patch: Patch, code: int) -> np.ndarray:
-    """The input faces on the input edge between the points of ``code``."""
-    wa, wb = patch.point_welded[[code >> 32, code & LOW_BITS]].tolist()
-    lo, hi = min(wa, wb), max(wa, wb)
-    topology = patch.topology
-    edges = topology.edges
-    first, last = np.searchsorted(edges[:, 0], lo, "left"), np.searchsorted(edges[:, 0], lo, "right")
-    e = first + int(np.flatnonzero(edges[first:last, 1] == hi)[0])
+def _faces_on(topology, edges) -> np.ndarray:
+    """The distinct input faces (k,) on the input edges ``edges`` (e,) (ids in ``topology``)."""
     offsets = topology.edge_face_offsets
-    return topology.edge_face_faces[offsets[e]:offsets[e + 1]]
+    starts, counts = offsets[edges], offsets[edges + 1] - offsets[edges]
+    runs = np.repeat(starts - (np.cumsum(counts) - counts), counts)       # (each edge's run of incidences)
+    return distinct(topology.edge_face_faces[runs + np.arange(counts.sum())])
 
 
 def bisect_marked(patch: Patch, marked, place=None) -> None:
