@@ -129,19 +129,31 @@ def _closest_on_face(start, end, a, b, c, x):
 
 
 @kernel((F2, I2, F1, F1, f8))
-def near_faces(positions, faces, start, end, radius):
-    """Per face (m,): the least of f = distance - radius over the face and the largest over its corners
-    (the largest over the face, f being convex).
+def crossed_faces(positions, faces, start, end, radius):
+    """(m,) bool: whether the bit's surface passes through each face, f = distance - radius being below 0
+    somewhere on it (the least over the face, ``_closest_on_face``) and above 0 at a corner (the largest
+    over the face, f being convex). The least is computed only where a bound leaves it open: f is
+    1-Lipschitz and every point of a face lies within its longest edge of a corner.
 
-    positions (w, 3) ; faces (m, 3) over them ; returns low (m,), high (m,) float64"""
+    positions (w, 3) ; faces (m, 3) over them"""
     m = faces.shape[0]
-    low, high, axis, x = np.empty(m), np.empty(m), end - start, np.empty(3)
+    out, axis, x = np.zeros(m, np.bool_), end - start, np.empty(3)
     for i in range(m):
         a, b, c = positions[faces[i, 0]], positions[faces[i, 1]], positions[faces[i, 2]]
-        low[i] = _closest_on_face(start, end, a, b, c, x) - radius
-        high[i] = max(_segment_distance(start, end, axis, a), max(_segment_distance(start, end, axis, b),
-                                                                 _segment_distance(start, end, axis, c))) - radius
-    return low, high
+        fa, fb, fc = (_segment_distance(start, end, axis, a) - radius, _segment_distance(start, end, axis, b) - radius,
+                      _segment_distance(start, end, axis, c) - radius)
+        if max(fa, max(fb, fc)) <= 0.0:
+            continue
+        longest = math.sqrt(max(_squared(a, b), max(_squared(b, c), _squared(c, a))))
+        if min(fa, min(fb, fc)) - longest > 0.0:
+            continue
+        out[i] = _closest_on_face(start, end, a, b, c, x) - radius < 0.0
+    return out
+
+
+@helper
+def _squared(p, q):
+    return (p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2
 
 
 @kernel((F2, F1, F1, f8))

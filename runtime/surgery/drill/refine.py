@@ -2,7 +2,7 @@
 
 A hole is round only if the mesh has vertices close together where the bit's surface crosses it; a real
 model's faces are often larger than the hole. So before the rim is placed, every face that the bit's
-surface passes through (part of it inside the bit, part outside: ``bit.near_faces``) and whose longest
+surface passes through (part of it inside the bit, part outside: ``bit.crossed_faces``) and whose longest
 edge is longer than ``step`` is bisected on its longest edge, and a face that shares a bisected edge is
 bisected too (on its longest edge first, then on the shared one: Rivara's longest-edge bisection, which
 keeps the angles of the refined faces bounded and leaves no vertex in the middle of a neighbour's edge).
@@ -19,7 +19,7 @@ import numpy as np
 
 from ..._shared.ids import distinct
 from ...errors import InternalError
-from .bit import near_faces
+from .bit import crossed_faces
 from .bisection import closure, longest_edges, split_marked
 from .patch import Patch, edge_codes, pair_codes
 
@@ -36,8 +36,7 @@ def refine(patch: Patch, bit, step: float) -> None:
         points, face_points = patch.point_array(), patch.face_points()
         k, squared = longest_edges(points, face_points)
         long = np.flatnonzero(squared > step * step)
-        low, high = near_faces(points, face_points[long], start, end, radius)
-        chosen = long[(low < 0.0) & (high > 0.0)]           # the bit's surface passes through them
+        chosen = long[crossed_faces(points, face_points[long], start, end, radius)]
         if not len(chosen):
             return
         codes = edge_codes(face_points)
