@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._shared.jit import F2, I1, I2, helper, i8, kernel
-from .patch import put_face
+from .patch import put_face, squared_distance
 
 #: an empty slot of a ``_table``
 EMPTY = -1
@@ -50,15 +50,10 @@ def longest_edges(points, face_points):
     longest, squared = np.zeros(n, np.int64), np.full(n, -1.0)
     for f in range(n):
         for k in range(3):
-            d = _squared(points, face_points[f, k], face_points[f, (k + 1) % 3])
+            d = squared_distance(points, face_points[f, k], face_points[f, (k + 1) % 3])
             if d > squared[f]:
                 longest[f], squared[f] = k, d
     return longest, squared
-
-
-@helper
-def _squared(points, a, b):
-    return (points[b, 0] - points[a, 0]) ** 2 + (points[b, 1] - points[a, 1]) ** 2 + (points[b, 2] - points[a, 2]) ** 2
 
 
 @kernel((I2, I1, I1), cost=0.3)
@@ -152,7 +147,7 @@ def _halves(out, made_from, made, f, rows, row_point, points, midpoint):
     """Write the faces that replace face f (``split_marked``) at row ``made`` of ``out``; the next row."""
     k, longest = -1, -1.0
     for j in range(3):
-        d = _squared(points, row_point[rows[f, j]], row_point[rows[f, (j + 1) % 3]])
+        d = squared_distance(points, row_point[rows[f, j]], row_point[rows[f, (j + 1) % 3]])
         if d > longest:
             k, longest = j, d
     if midpoint[f, k] < 0:

@@ -19,6 +19,7 @@ from ..._shared.checks import float_array, real_number
 from ..._shared.jit import F1, F2, I2, f8, helper, kernel
 from ...errors import InvalidInputError
 from ...generated.kernels import barycentric, point_line_distance
+from .patch import squared_distance
 
 __all__ = ["Bit", "bit"]
 
@@ -144,16 +145,13 @@ def crossed_faces(positions, faces, start, end, radius):
                       _segment_distance(start, end, axis, c) - radius)
         if max(fa, max(fb, fc)) <= 0.0:
             continue
-        longest = math.sqrt(max(_squared(a, b), max(_squared(b, c), _squared(c, a))))
+        p, q, r = faces[i, 0], faces[i, 1], faces[i, 2]
+        longest = math.sqrt(max(squared_distance(positions, p, q), max(squared_distance(positions, q, r),
+                                                                        squared_distance(positions, r, p))))
         if min(fa, min(fb, fc)) - longest > 0.0:
             continue
         out[i] = _closest_on_face(start, end, a, b, c, x) - radius < 0.0
     return out
-
-
-@helper
-def _squared(p, q):
-    return (p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2
 
 
 @kernel((F2, F1, F1, f8))

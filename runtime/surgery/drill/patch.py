@@ -239,3 +239,9 @@ def put_face(out, made_from, count, f, a, b, c):
     out[count, 0], out[count, 1], out[count, 2] = a, b, c
     made_from[count] = f
     return count + 1
+
+
+@helper
+def squared_distance(points, a, b):
+    """The squared distance between rows a and b of ``points`` (P, 3)."""
+    return (points[a, 0] - points[b, 0]) ** 2 + (points[a, 1] - points[b, 1]) ** 2 + (points[a, 2] - points[b, 2]) ** 2

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F2, I1, I2, helper, kernel
+from ..._shared.jit import F2, I1, I2, kernel
 from .bit import crossings, signed_distances
-from .patch import LOW_BITS, Patch, edge_codes, pair_codes, put_face
+from .patch import LOW_BITS, Patch, edge_codes, pair_codes, put_face, squared_distance
 
 OUTSIDE, ON, INSIDE = 1, 0, -1
 
@@ -96,17 +96,11 @@ def _outside_parts(rows, sides, crossing_rows, points, row_point):
         if corners == 3:
             count = put_face(out, part_of, count, f, polygon[0], polygon[1], polygon[2])
             continue
-        if _squared(points, row_point[polygon[0]], row_point[polygon[2]]) <= \
-                _squared(points, row_point[polygon[1]], row_point[polygon[3]]):
+        if squared_distance(points, row_point[polygon[0]], row_point[polygon[2]]) <= \
+                squared_distance(points, row_point[polygon[1]], row_point[polygon[3]]):
             count = put_face(out, part_of, count, f, polygon[0], polygon[1], polygon[2])
             count = put_face(out, part_of, count, f, polygon[0], polygon[2], polygon[3])
         else:
             count = put_face(out, part_of, count, f, polygon[0], polygon[1], polygon[3])
             count = put_face(out, part_of, count, f, polygon[1], polygon[2], polygon[3])
     return out[:count].copy(), part_of[:count].copy()
-
-
-@helper
-def _squared(points, a, b):
-    """The squared distance between points a and b (rows of ``points`` (P, 3))."""
-    return (points[a, 0] - points[b, 0]) ** 2 + (points[a, 1] - points[b, 1]) ** 2 + (points[a, 2] - points[b, 2]) ** 2
