@@ -352,10 +352,12 @@ def _piece_in_each(removed, parents, first_piece: int) -> np.ndarray:
     """(r,) for each face of ``removed`` (r,) a piece made inside it (face id ``first_piece + i`` for the
     piece i whose ``parents[i]`` it is), -1 where none was."""
     out = np.full(len(removed), -1, np.int64)
+    if not len(removed):
+        return out
     order = np.argsort(removed)
-    at = np.minimum(np.searchsorted(removed, parents, sorter=order), max(len(removed) - 1, 0))
-    found = np.flatnonzero((parents >= 0) & (removed[order[at]] == parents)) if len(removed) else at[:0]
-    out[order[at[found]]] = first_piece + found
+    at = order[np.minimum(np.searchsorted(removed, parents, sorter=order), len(removed) - 1)]
+    found = np.flatnonzero(removed[at] == parents)          # (a wall piece's parent, -1, is no face)
+    out[at[found]] = first_piece + found
     return out
 
 
