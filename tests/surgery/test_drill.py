@@ -586,7 +586,7 @@ def test_a_wall_row_takes_the_loop_row_nearest_in_angle(data):
     whole table of angular gaps finds (exactly: the same float gap), the first in the loop's order of
     the rows at that angle: angles drawn from a few values (ties, and both -π and π) or anywhere,
     asked at the loop's own angles and elsewhere."""
-    from cgaskin.surgery.drill.wall import Loop
+    from cgaskin.surgery.drill.bit_surface import Loop
     grid = st.sampled_from(np.linspace(-math.pi, math.pi, data.draw(st.integers(2, 13))).tolist())
     angle = grid | st.floats(-math.pi, math.pi)
     theta = np.array(data.draw(st.lists(angle, min_size=1, max_size=24)))

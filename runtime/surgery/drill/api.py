@@ -28,30 +28,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..._shared.frozen import kernel_array
 from ..._shared.jit import F1, F2, I2, kernel
 from ..._shared.memory import collection_paused
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
-from ...errors import InvalidInputError, MissesMeshError, PlacementWarning
-from ..._shared.warn import warn
+from ...errors import InvalidInputError, MissesMeshError
 from ...tolerances import tol
-from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute, place_in_rest
+from ..new_vertices import NewVertices
 from ..surface import box_diagonal, mesh_arrays
 from ..topology import rig_topology
+from .assemble import NEW_VERTEX, assemble
 from .bit import Bit, bit as checked_bit
+from .inside import winding_number
 from .patch import Patch
 from .refine import refine
 from .rim import open_hole
-from .wall import WALL, Frame, build_walls
-from .inside import winding_number
+from .wall import build_walls
 
 __all__ = ["drill", "drill_details", "DrillResult", "RIM_STEP", "NEW_VERTEX"]
 
 #: the longest edge near a rim, as a fraction of the radius: 2 sin(pi / 25), about 25 edges around a hole
 RIM_STEP = 2.0 * np.sin(np.pi / 25)
-#: ``DrillResult.sources`` of a vertex the drill made
-NEW_VERTEX = -1
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,7 +129,9 @@ def _drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagon
     if opened == 0:
         raise missed(the_bit, rig.name)
     walls = build_walls(patch, rim, the_bit, step, inside) if wall else 0
-    return _assemble(rig, patch, rim, opened, walls, the_bit, tolerance, affines, diagonal)
+    made = assemble(rig, patch, rim, the_bit, affines, diagonal)
+    return DrillResult(made.rig, made.sources, made.new, made.first_new, made.rim, made.new_positions, opened,
+                       made.replaced, made.made_in, walls, the_bit, tolerance, made.residual)
 
 
 def missed(the_bit: Bit, name: str) -> MissesMeshError:
@@ -200,97 +199,3 @@ def _faces_near(positions, faces, lo, hi):
             out[count] = f
             count += 1
     return out[:count].copy()
-
-
-def _assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, the_bit: Bit, tolerance: float, affines,
-              diagonal: float) -> DrillResult:
-    vertices, faces, joints, weights = mesh_arrays(rig)
-    n = len(vertices)
-    unchanged = _unchanged(patch, faces)         # taken, but neither split nor cut: kept in their place
-    kept_faces = np.ones(len(faces), bool)
-    kept_faces[patch.taken] = False
-    kept_faces[patch.face_source[unchanged]] = True
-    patch_faces, face_source = patch.faces[~unchanged], patch.face_source[~unchanged]
-    row_is_new = patch.row_vertex < 0
-    # the rows' ids in the vertex table before compaction: input rows -> input vertex, new -> n + j
-    new_rows = np.flatnonzero(row_is_new)
-    row_ids = np.empty(len(row_is_new), np.int64)
-    row_ids[~row_is_new] = patch.row_vertex[~row_is_new]
-    row_ids[new_rows] = n + np.arange(len(new_rows))
-    all_faces = np.concatenate([faces[kept_faces], row_ids[patch_faces]])
-    used = np.zeros(n + len(new_rows), bool)
-    used[all_faces.ravel()] = True
-    renumber = np.cumsum(used) - 1
-    kept_input = np.flatnonzero(used[:n])
-    kept_new = np.flatnonzero(used[n:])
-    new_rows = new_rows[kept_new]
-    src, coef = patch.descriptions()
-    new = NewVertices(src[new_rows], coef[new_rows])
-    new_points = patch.row_point[new_rows]
-    new_positions = patch.point_array()[new_points]
-    # the copies of a new vertex at one point (a seam's sides, a wall's row at its rim) skin alike: their
-    # weights and rest position are the first copy's (blended from other input rows, ties in the blend
-    # could pick other bones), their attributes their own
-    _, first, copy_of = np.unique(new_points, return_index=True, return_inverse=True)
-    one = NewVertices(new.src[first], new.coef[first])
-    new_joints, new_weights = blend_weight_rows(one.src, one.coef, joints, weights)
-    new_rest, residual = new_positions[first], 0.0
-    if affines is not None and len(new_rows):
-        new_rest, residual = _placed(vertices, one, new_rest, new_joints, new_weights, affines, diagonal)
-    new_joints, new_weights, new_rest = new_joints[copy_of], new_weights[copy_of], new_rest[copy_of]
-    out_vertices = np.concatenate([vertices[kept_input], new_rest])
-    out_joints = np.concatenate([joints[kept_input], new_joints])
-    out_weights = np.concatenate([weights[kept_input], new_weights])
-    attributes = {}
-    for name, values in rig.attributes.items():
-        values = kernel_array(np.asarray(values))     # (read-only: its writeable buffer, one kernel type)
-        attributes[name] = np.concatenate([values[kept_input], interpolate_attribute(name, values, new)])
-    if walls and "NORMAL" in attributes:
-        _wall_normals(attributes["NORMAL"], len(kept_input), new_rows, patch, the_bit, new_joints, new_weights,
-                      affines)
-    result = Rig._of_checked(out_vertices, renumber[all_faces], out_joints, out_weights, rig.skeleton, rig.clips,
-                             attributes, f"{rig.name}_drilled")
-    sources = np.concatenate([kept_input, np.full(len(new_rows), NEW_VERTEX, np.int64)])
-    rim_ids = renumber[row_ids[rim]]
-    made_in = np.maximum(face_source, -1)        # (wall and fill: -1)
-    return DrillResult(result, sources, new, len(kept_input), np.sort(rim_ids), new_positions, opened,
-                       np.flatnonzero(~kept_faces), made_in, walls, the_bit, tolerance, residual)
-
-
-def _unchanged(patch: Patch, faces) -> np.ndarray:
-    """(F,) bool: the patch's faces that are their input face as it was (its corners, in its order)."""
-    source, corners = patch.face_source, patch.row_vertex[patch.faces]
-    taken = source >= 0
-    same = taken & (corners >= 0).all(axis=1)
-    same[same] = (corners[same] == faces[source[same]]).all(axis=1)
-    return same
-
-
-def _wall_normals(normals, first_new: int, new_rows, patch: Patch, the_bit: Bit, new_joints, new_weights, affines):
-    """The wall rows' normals (in place, rows of ``normals``) pointing to the bit's axis; for a posed drill
-    carried to rest by the transpose of each row's blended linear map (normals transform by its inverse
-    transpose)."""
-    on_wall = np.zeros(patch.n_rows, bool)
-    on_wall[patch.faces[patch.face_source <= WALL]] = True
-    at = np.flatnonzero(on_wall[new_rows])
-    points = patch.point_array()[patch.row_point[new_rows[at]]]
-    inward = Frame(the_bit).inward(points)
-    if affines is not None:
-        linear = np.einsum("kb,kbij->kij", new_weights[at], affines[new_joints[at]].reshape(-1, 4, 3, 4)[..., :3])
-        inward = np.einsum("kji,kj->ki", linear, inward)
-        inward /= np.linalg.norm(inward, axis=1, keepdims=True)
-    normals[first_new + at] = inward.astype(normals.dtype)
-
-
-def _placed(vertices, new: NewVertices, targets, new_joints, new_weights, affines, diagonal: float):
-    """Rest positions of the new vertices of a posed drill (``place_in_rest``), and the largest residual
-    (a ``PlacementWarning`` when some miss where they were made)."""
-    guess = interpolate_attribute("POSITION", vertices, new)
-    rest, residuals = place_in_rest(targets, guess, new_joints, new_weights, affines)
-    residual = float(residuals.max()) if len(residuals) else 0.0
-    if residual > tol.placement * diagonal:
-        warn(f"{int(np.count_nonzero(residuals > tol.placement * diagonal))} new vertices of the drill miss "
-             f"where they were made in the pose by more than {tol.placement:g} of the diagonal (largest "
-             f"{residual:.3g}): a singular blended transform; they keep their interpolated rest positions",
-             PlacementWarning)
-    return rest, residual

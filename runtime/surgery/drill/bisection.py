@@ -1,23 +1,23 @@
-"""One round of longest-edge bisection in compiled code (``refine.py`` runs the rounds): each face's
-longest edge, the closure of the marked edges (a face with a marked edge marks its longest), and the
-faces split on their marked edges, with one new row per vertex edge and one new point per welded edge.
+"""Longest-edge bisection in compiled code (``refine.py`` explains it): each face's longest edge, the
+closure of the marked edges (a face with a marked edge marks its longest), and the faces split on their
+marked edges, with one new row per vertex edge and one new point per welded edge.
 
 Edges are ``patch.pair_codes`` of their two point ids (welded: a seam's copies are one edge) or row ids;
-the sets and maps of codes are open-addressing hash tables (``_table``, ``_slot``): no sort.
+the sets and maps of codes are open-addressing hash tables (``code_table``, ``slot``): no sort.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F2, I1, I2, helper, i8, kernel
+from ..._shared.jit import F2, I1, I2, helper, i8, inlined, kernel
 from .patch import put_face, squared_distance
 
-#: an empty slot of a ``_table``
+#: an empty slot of a ``code_table``
 EMPTY = -1
 
 
 @helper
-def _table(count):
+def code_table(count):
     """An empty table (a power of two >= 2 count + 2 slots of ``EMPTY``) for up to ``count`` codes."""
     size = 4
     while size < 2 * count + 2:
@@ -26,8 +26,8 @@ def _table(count):
 
 
 @helper
-def _slot(table, code):
-    """The slot of ``code`` (>= 0) in ``table``: where it is, or the empty slot where it goes (linear
+def slot(table, code):
+    """The slot of ``code`` (>= 0) in ``table`` (a ``code_table``): where it is, or the empty slot where it goes (linear
     probing from a multiplicative hash; the table is never full)."""
     mask = table.shape[0] - 1
     at = ((code ^ (code >> 29)) * 0x9E3779B1) & mask
@@ -37,76 +37,104 @@ def _slot(table, code):
 
 
 @helper
-def _pair(a, b):
+def pair(a, b):
     """``patch.pair_codes`` of one pair of ids."""
     return (min(a, b) << 32) | max(a, b)
 
 
-@kernel((F2, I2), cost=0.2)
-def longest_edges(points, face_points):
-    """(F,) the corner k whose edge k -> k+1 is longest in each face (F, 3) of ``points`` (P, 3) (the
-    first on a tie), (F,) its squared length."""
-    n = face_points.shape[0]
-    longest, squared = np.zeros(n, np.int64), np.full(n, -1.0)
-    for f in range(n):
-        for k in range(3):
-            d = squared_distance(points, face_points[f, k], face_points[f, (k + 1) % 3])
-            if d > squared[f]:
-                longest[f], squared[f] = k, d
-    return longest, squared
+@helper
+def has(table, code):
+    """Whether ``code`` is in ``table`` (a ``code_table``)."""
+    return table[slot(table, code)] == code
 
 
-@kernel((I2, I1, I1), cost=0.3)
-def closure(codes, longest, chosen):
-    """The edge codes ``chosen`` (k,) and the longest edge ``longest[f]`` (F,) of every face f with a
-    marked edge among ``codes[f]`` (F, 3), until none is added: the marked codes (m,), in no order."""
-    table = _table(codes.shape[0] + chosen.shape[0])
-    marked = np.empty(codes.shape[0] + chosen.shape[0], np.int64)
-    count = 0
-    for code in chosen:
-        at = _slot(table, code)
+@inlined
+def longest_edge(points, p, q, r):
+    """(the corner k whose edge k -> k+1 of triangle p, q, r (rows of ``points``) is longest, the first on
+    a tie; its squared length)."""
+    k, longest = 0, squared_distance(points, p, q)
+    d = squared_distance(points, q, r)
+    if d > longest:
+        k, longest = 1, d
+    d = squared_distance(points, r, p)
+    if d > longest:
+        k, longest = 2, d
+    return k, longest
+
+
+@helper
+def midpoints(points, pairs):
+    """(k, 3) the midpoint of each pair (k, 2) of rows of ``points``."""
+    out = np.empty((pairs.shape[0], 3))
+    for i in range(pairs.shape[0]):
+        for c in range(3):
+            out[i, c] = 0.5 * (points[pairs[i, 0], c] + points[pairs[i, 1], c])
+    return out
+
+
+@helper
+def edge_map(codes, n_faces, capacity):
+    """Which faces have each edge, for the faces ``codes[:n_faces]`` (edge codes (F, 3)) with room for
+    ``capacity`` faces (``add_face_edges`` adds more): (table (S,) and slot_edge (S,): the code_table of
+    the edges and each one's id, edge_code (E,), head (E,) the last incidence on each edge (-1: none),
+    next (3 capacity,) the incidence before each (incidence 3 f + k: corner edge k of face f),
+    face_edge (capacity, 3) each corner edge's id, count (1,): the edges so far). Edge ids follow the
+    order the faces come in, so a map rebuilt with more room gives the edges the same ids."""
+    table = code_table(3 * capacity)
+    emap = (table, np.empty(table.shape[0], np.int64), np.empty(3 * capacity, np.int64),
+            np.full(3 * capacity, -1, np.int64), np.empty(3 * capacity, np.int64), np.empty((capacity, 3), np.int64),
+            np.zeros(1, np.int64))
+    for f in range(n_faces):
+        add_face_edges(emap, codes, f)
+    return emap
+
+
+@helper
+def add_face_edges(emap, codes, f):
+    """Add face f (its edge codes ``codes[f]``) to an ``edge_map``."""
+    table, slot_edge, edge_code, head, incidence_next, face_edge, count = emap
+    for k in range(3):
+        at = slot(table, codes[f, k])
         if table[at] == EMPTY:
-            table[at] = marked[count] = code
-            count += 1
-    added = True
-    while added:
-        added = False
-        for f in range(codes.shape[0]):
-            at = _slot(table, longest[f])
-            if table[at] != EMPTY:
-                continue
-            for k in range(3):
-                if table[_slot(table, codes[f, k])] == codes[f, k]:
-                    table[at] = marked[count] = longest[f]
-                    count += 1
-                    added = True
-                    break
-    return marked[:count].copy()
+            table[at], slot_edge[at], edge_code[count[0]] = codes[f, k], count[0], codes[f, k]
+            count[0] += 1
+        e = slot_edge[at]
+        face_edge[f, k] = e
+        incidence_next[3 * f + k] = head[e]
+        head[e] = 3 * f + k
 
 
 @kernel((I2, I1, F2, I1, i8, i8), cost=0.5)
 def split_marked(rows, row_point, points, marked, first_row, first_point):
-    """Split every face of ``rows`` (F, 3) with a marked edge (its points' code among ``marked`` (k,)):
+    """``split`` on the edge codes ``marked`` (k,)."""
+    marks = code_table(marked.shape[0])
+    for code in marked:
+        marks[slot(marks, code)] = code
+    faces, made_from, _, row_parents, row_points, point_parents = split(rows, row_point, points, marks, first_row,
+                                                                          first_point)
+    return faces, made_from, row_parents, row_points, point_parents
+
+
+@helper
+def split(rows, row_point, points, marks, first_row, first_point):
+    """Split every face of ``rows`` (F, 3) with a marked edge (its points' code in the table ``marks``):
     on its longest edge if that is marked (else the first marked), then each half on the other edge it
     keeps, if that is marked: 2 to 4 faces, wound as the face. Each marked vertex edge gets one new row
     (ids from ``first_row``) at its welded edge's one new point (ids from ``first_point``).
 
     Returns faces (G, 3): the faces not split, in order, then the halves; the face (G,) each is or
-    comes from; the new rows' parents (r, 2) (lower row first) and points (r,); the new points'
+    comes from; how many are not split; the new rows' parents (r, 2) (lower row first) and points (r,); the new points'
     parents (p, 2) (the welded edge's points, lower first)."""
     n = rows.shape[0]
-    marks = _table(marked.shape[0])
-    for code in marked:
-        marks[_slot(marks, code)] = code
     split = np.zeros((n, 3), np.bool_)
     count = 0
     for f in range(n):
         for k in range(3):
-            code = _pair(row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]])
-            if marks[_slot(marks, code)] == code:
+            code = pair(row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]])
+            if has(marks, code):
                 split[f, k] = True
                 count += 1
-    row_table, point_table = _table(count), _table(count)
+    row_table, point_table = code_table(count), code_table(count)
     row_id, point_id = np.empty(row_table.shape[0], np.int64), np.empty(point_table.shape[0], np.int64)
     row_parents, row_points, point_parents = np.empty((count, 2), np.int64), np.empty(count, np.int64), \
         np.empty((count, 2), np.int64)
@@ -117,15 +145,15 @@ def split_marked(rows, row_point, points, marked, first_row, first_point):
             if not split[f, k]:
                 continue
             a, b = rows[f, k], rows[f, (k + 1) % 3]
-            at = _slot(row_table, _pair(a, b))
+            at = slot(row_table, pair(a, b))
             if row_table[at] == EMPTY:
                 pa, pb = row_point[a], row_point[b]
-                point_at = _slot(point_table, _pair(pa, pb))
+                point_at = slot(point_table, pair(pa, pb))
                 if point_table[point_at] == EMPTY:
-                    point_table[point_at], point_id[point_at] = _pair(pa, pb), first_point + points_made
+                    point_table[point_at], point_id[point_at] = pair(pa, pb), first_point + points_made
                     point_parents[points_made, 0], point_parents[points_made, 1] = min(pa, pb), max(pa, pb)
                     points_made += 1
-                row_table[at], row_id[at] = _pair(a, b), first_row + rows_made
+                row_table[at], row_id[at] = pair(a, b), first_row + rows_made
                 row_parents[rows_made, 0], row_parents[rows_made, 1] = min(a, b), max(a, b)
                 row_points[rows_made] = point_id[point_at]
                 rows_made += 1
@@ -135,11 +163,12 @@ def split_marked(rows, row_point, points, marked, first_row, first_point):
     for f in range(n):
         if not (split[f, 0] or split[f, 1] or split[f, 2]):
             made = put_face(out, made_from, made, f, rows[f, 0], rows[f, 1], rows[f, 2])
+    kept = made
     for f in range(n):
         if split[f, 0] or split[f, 1] or split[f, 2]:
             made = _halves(out, made_from, made, f, rows, row_point, points, midpoint)
-    return (out[:made].copy(), made_from[:made].copy(), row_parents[:rows_made].copy(), row_points[:rows_made].copy(),
-            point_parents[:points_made].copy())
+    return (out[:made].copy(), made_from[:made].copy(), kept, row_parents[:rows_made].copy(),
+            row_points[:rows_made].copy(), point_parents[:points_made].copy())
 
 
 @helper

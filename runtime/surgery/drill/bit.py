@@ -6,7 +6,7 @@ The distance of a point from the segment is the distance from its axis line (gen
 ``point_line_distance``: the outer product (x - a) ^ u, relative to a point of the axis) where the point
 projects inside the travel, else from the nearer end. ``f(x) = distance - radius`` is negative inside
 the bit and convex, so along a mesh edge whose ends lie on either side it has exactly one root, found
-to the last bit of the edge parameter (``crossings``): a rim vertex lies on the bit's surface to rounding.
+to the last bit of the edge parameter (``crossing``): a rim vertex lies on the bit's surface to rounding.
 """
 from __future__ import annotations
 
@@ -16,10 +16,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ..._shared.checks import float_array, real_number
-from ..._shared.jit import F1, F2, I2, f8, helper, kernel
+from ..._shared.jit import helper
 from ...errors import InvalidInputError
 from ...generated.kernels import barycentric, point_line_distance
-from .patch import squared_distance
 
 __all__ = ["Bit", "bit"]
 
@@ -129,80 +128,70 @@ def _closest_on_face(start, end, a, b, c, x):
     return best
 
 
-@kernel((F2, I2, F1, F1, f8))
-def crossed_faces(positions, faces, start, end, radius):
-    """(m,) bool: whether the bit's surface passes through each face, f = distance - radius being below 0
-    somewhere on it (the least over the face, ``_closest_on_face``) and above 0 at a corner (the largest
-    over the face, f being convex). The least is computed only where a bound leaves it open: f is
-    1-Lipschitz and every point of a face lies within its longest edge of a corner.
+#: every point of a triangle lies within its longest edge / sqrt(3) of a corner (its circumradius when
+#: acute, whose largest angle is at least 60 degrees; half the longest edge when not)
+NEAREST_CORNER = 1.0 / math.sqrt(3.0)
 
-    positions (w, 3) ; faces (m, 3) over them"""
-    m = faces.shape[0]
-    out, axis, x = np.zeros(m, np.bool_), end - start, np.empty(3)
-    for i in range(m):
-        a, b, c = positions[faces[i, 0]], positions[faces[i, 1]], positions[faces[i, 2]]
-        fa, fb, fc = (_segment_distance(start, end, axis, a) - radius, _segment_distance(start, end, axis, b) - radius,
-                      _segment_distance(start, end, axis, c) - radius)
-        if max(fa, max(fb, fc)) <= 0.0:
-            continue
-        p, q, r = faces[i, 0], faces[i, 1], faces[i, 2]
-        longest = math.sqrt(max(squared_distance(positions, p, q), max(squared_distance(positions, q, r),
-                                                                        squared_distance(positions, r, p))))
-        if min(fa, min(fb, fc)) - longest > 0.0:
-            continue
-        out[i] = _closest_on_face(start, end, a, b, c, x) - radius < 0.0
+
+@helper
+def surface_crosses(positions, p, q, r, signed, longest, start, end, radius, x):
+    """Whether the bit's surface passes through triangle p, q, r (rows of ``positions`` (P, 3), ``signed``
+    (P,) their ``_signed_distances``, ``longest`` its longest edge's length): f above 0 at a corner and
+    below 0 somewhere on it (at a corner, or the least over the face, ``_closest_on_face``), f being
+    convex. The least is computed only where a bound leaves it open: f is 1-Lipschitz and every point of
+    the face lies within ``NEAREST_CORNER`` times its longest edge of a corner. ``x`` (3,): scratch."""
+    fp, fq, fr = signed[p], signed[q], signed[r]
+    if max(fp, max(fq, fr)) <= 0.0 or min(fp, min(fq, fr)) - NEAREST_CORNER * longest > 0.0:
+        return False
+    if min(fp, min(fq, fr)) < 0.0:
+        return True
+    return _closest_on_face(start, end, positions[p], positions[q], positions[r], x) - radius < 0.0
+
+
+@helper
+def _signed_distances(positions, first, start, end, radius):
+    """f = distance - radius of each row of ``positions`` (P, 3) from ``first`` on (P - first,): negative
+    inside the bit."""
+    out, axis = np.empty(positions.shape[0] - first), end - start
+    for i in range(first, positions.shape[0]):
+        out[i - first] = _segment_distance(start, end, axis, positions[i]) - radius
     return out
 
 
-@kernel((F2, F1, F1, f8))
-def signed_distances(positions, start, end, radius):
-    """f = distance - radius (w,) of each point (w, 3): negative inside the bit."""
-    out, axis = np.empty(positions.shape[0]), end - start
-    for i in range(positions.shape[0]):
-        out[i] = _segment_distance(start, end, axis, positions[i]) - radius
-    return out
-
-
-#: every how many steps of ``crossings``' root search one is a bisection (so that the bracket at least
+#: every how many steps of ``crossing``'s root search one is a bisection (so that the bracket at least
 #: halves that often whatever the secant steps do)
 BISECT_EVERY = 4
 
 
-@kernel((F2, I2, F1, F1, f8))
-def crossings(positions, edges, start, end, radius):
-    """The parameter t (k,) where each edge p -> q (rows of ``edges`` (k, 2) into ``positions``), one
-    end inside the bit and the other outside, meets the bit's surface; the bracket [0, 1] narrowed by
+@helper
+def crossing(p, q, start, end, axis, radius, x):
+    """The parameter t where the edge p -> q (3,), one end inside the bit and the other outside, meets
+    the bit's surface (``axis`` = end - start; ``x`` (3,) scratch): the bracket [0, 1] narrowed by
     regula falsi steps (Illinois: an end kept twice has its value halved, so both ends close in) and a
-    bisection every ``BISECT_EVERY`` steps, until it cannot shrink. Returns t (k,), points (k, 3)."""
-    k = edges.shape[0]
-    ts, points = np.empty(k), np.empty((k, 3))
-    axis, x = end - start, np.empty(3)
-    for i in range(k):
-        p, q = positions[edges[i, 0]], positions[edges[i, 1]]
-        lo, hi = 0.0, 1.0
-        f_lo, f_hi = _segment_distance(start, end, axis, p) - radius, _segment_distance(start, end, axis, q) - radius
-        g_lo, g_hi = f_lo, f_hi                 # (the values the secant uses: Illinois halves them)
-        kept, step = 0, 0
-        while True:
-            step += 1
-            t = 0.5 * (lo + hi)
-            if step % BISECT_EVERY != 0 and g_hi != g_lo:
-                secant = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
-                if lo < secant < hi:
-                    t = secant
-            if t <= lo or t >= hi:
-                break
-            f = _segment_distance(start, end, axis, _put_on_edge(p, q, t, x)) - radius
-            if (f < 0.0) == (f_lo < 0.0):
-                lo, f_lo, g_lo = t, f, f
-                if kept == -1:
-                    g_hi *= 0.5
-                kept = -1
-            else:
-                hi, f_hi, g_hi = t, f, f
-                if kept == 1:
-                    g_lo *= 0.5
-                kept = 1
-        ts[i] = lo if abs(f_lo) <= abs(f_hi) else hi        # the end of the bracket nearer the surface
-        _put_on_edge(p, q, ts[i], points[i])
-    return ts, points
+    bisection every ``BISECT_EVERY`` steps, until it cannot shrink; the end of the bracket nearer the
+    surface."""
+    lo, hi = 0.0, 1.0
+    f_lo, f_hi = _segment_distance(start, end, axis, p) - radius, _segment_distance(start, end, axis, q) - radius
+    g_lo, g_hi = f_lo, f_hi                 # (the values the secant uses: Illinois halves them)
+    kept, step = 0, 0
+    while True:
+        step += 1
+        t = 0.5 * (lo + hi)
+        if step % BISECT_EVERY != 0 and g_hi != g_lo:
+            secant = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+            if lo < secant < hi:
+                t = secant
+        if t <= lo or t >= hi:
+            break
+        f = _segment_distance(start, end, axis, _put_on_edge(p, q, t, x)) - radius
+        if (f < 0.0) == (f_lo < 0.0):
+            lo, f_lo, g_lo = t, f, f
+            if kept == -1:
+                g_hi *= 0.5
+            kept = -1
+        else:
+            hi, f_hi, g_hi = t, f, f
+            if kept == 1:
+                g_lo *= 0.5
+            kept = 1
+    return lo if abs(f_lo) <= abs(f_hi) else hi

@@ -73,7 +73,7 @@ class Patch:
         as (1 - t) row_parents[:, 0] + t row_parents[:, 1] (``descriptions`` resolves them)
     faces : (F, 3) int64 rows, wound as the input's ; face_source : (F,) int64, the input face each
         descends from (a wall's: negative, ``wall.WALL``)
-    taken : (T,) int64, the input faces taken, in the order taken
+    taken : (T,) int64, the input faces taken, in the order taken ; is_taken : (m,) bool, per input face
     row_of : (n,) int64, the row of each input vertex (-1: none) ; point_of : (w,) int64, the point of
         each of the input's welded vertices (-1: none)
     fill_params : dict point id -> (θ, σ) on the bit's surface, for the points of a wall's fill
@@ -86,7 +86,7 @@ class Patch:
         self._row_parents, self._row_t = _Growing(np.int64, (2,)), _Growing(np.float64)
         self._faces, self._face_source, self._taken = _Growing(np.int64, (3,)), _Growing(np.int64), _Growing(np.int64)
         self.row_of, self.point_of = np.full(len(positions), -1, np.int64), np.full(topology.n_welded, -1, np.int64)
-        self._is_taken = np.zeros(len(faces), bool)
+        self.is_taken = np.zeros(len(faces), bool)
         self.fill_params = {}
 
     point_welded = property(lambda self: self._point_welded.view())
@@ -105,7 +105,7 @@ class Patch:
         """Add the input faces ``faces`` (k,) (distinct) not taken yet: rows for their vertices that have
         none and points for their welded vertices that have none, in the order their corners come.
         Returns how many faces were added."""
-        faces = faces[~self._is_taken[faces]]
+        faces = faces[~self.is_taken[faces]]
         if not len(faces):
             return 0
         corners = self.mesh_faces[faces]
@@ -116,8 +116,15 @@ class Patch:
         self._row_parents.view()[rows] = rows[:, None]          # (an input row is itself)
         self.add_faces(self.row_of[corners], faces)
         self._taken.extend(faces)
-        self._is_taken[faces] = True
+        self.is_taken[faces] = True
         return len(faces)
+
+    def grow(self, made) -> None:
+        """Take in what ``rounds.refine_rounds`` made (a ``Refined``; it updated the maps in place)."""
+        self._add_points(made.points, made.point_welded)
+        self.new_rows(made.row_points, made.row_parents[:, 0], made.row_parents[:, 1], made.row_t, made.row_vertex)
+        self.replace_faces(made.rows, made.sources)
+        self._taken.extend(made.taken)
 
     def new_rows(self, points, a, b, t, vertices=-1) -> int:
         """New rows at ``points`` (k,) whose weights and attributes blend rows a and b (k,) (or scalars)

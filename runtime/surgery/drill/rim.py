@@ -11,83 +11,146 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F2, I1, I2, kernel
-from .bit import crossings, signed_distances
-from .patch import LOW_BITS, Patch, edge_codes, pair_codes, put_face, squared_distance
+from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, kernel
+from .bisection import EMPTY, code_table, pair, slot
+from .bit import _put_on_edge, _segment_distance, _signed_distances, crossing
+from .patch import Patch, put_face, squared_distance
 
 OUTSIDE, ON, INSIDE = 1, 0, -1
 
 
 def open_hole(patch: Patch, bit, tolerance: float) -> tuple:
-    """Replace the patch's faces by their parts outside the bit.
+    """Replace the patch's faces by their parts outside the bit (``_open``).
 
     returns (rim rows (sorted (r,) row ids on the bit's surface that a face uses), the number of faces
     taken away or cut)
     """
-    start, end, radius = bit
-    points = patch.point_array()
-    f = signed_distances(points, start, end, radius)
-    side = np.where(f > tolerance, OUTSIDE, np.where(f < -tolerance, INSIDE, ON))
-    rows, sources = patch.faces, patch.face_source
-    sides = side[patch.row_point[rows]]
-    has_inside, has_outside = (sides == INSIDE).any(axis=1), (sides == OUTSIDE).any(axis=1)
-    kept = ~has_inside & has_outside
-    on_surface = np.flatnonzero(~has_inside & ~has_outside)     # every corner on the surface: kept if outside
-    kept[on_surface] = _centres_outside(points, patch, rows[on_surface], bit)
-    crossing = has_inside & has_outside
-    opened = len(rows) - int(kept.sum())
-    crossing_rows = _crossing_rows(patch, rows[crossing], sides[crossing], bit)
-    parts, part_of = _outside_parts(rows[crossing], sides[crossing], crossing_rows, patch.point_array(),
-                                    patch.row_point)
-    faces = np.concatenate([rows[kept], parts])
-    patch.replace_faces(faces, np.concatenate([sources[kept], sources[crossing][part_of]]))
-    on_bit = np.ones(patch.n_points, bool)         # (the points after the classified ones: crossings)
-    on_bit[:len(side)] = side == ON
-    used = np.zeros(patch.n_rows, bool)
-    used[faces] = True
-    return np.flatnonzero(used & on_bit[patch.row_point]), opened
+    faces, sources, points, row_points, row_parents, row_t, rim, opened = _open(
+        patch.point_array(), patch.faces, patch.face_source, patch.row_point, bit.start, bit.end, bit.radius,
+        tolerance)
+    patch.add_points(points)
+    patch.new_rows(row_points, row_parents[:, 0], row_parents[:, 1], row_t)
+    patch.replace_faces(faces, sources)
+    return rim, opened
 
 
-def _centres_outside(points, patch: Patch, rows, bit) -> np.ndarray:
-    """(F,) whether each face's centre is outside the bit."""
-    centres = points[patch.row_point[rows]].mean(axis=1)
-    return signed_distances(np.ascontiguousarray(centres), bit.start, bit.end, bit.radius) > 0.0
+@kernel((F2, I2, I1, I1, F1, F1, f8, f8), cost=1.0)
+def _open(points, rows, sources, row_point, start, end, radius, tolerance):
+    """The patch's faces ``rows`` (F, 3) (from input faces ``sources`` (F,); ``row_point`` (R,) the point
+    of each row, ``points`` (P, 3)) replaced by their parts outside the bit: each point is outside (f >
+    ``tolerance``), inside (f < -``tolerance``) or on the surface; the faces kept, in order, then the
+    parts (``_outside_parts``).
+
+    Returns (faces (G, 3), their sources (G,), the new points (p, 3), the new rows' points (r,), parents
+    (r, 2) and t (r,) (``Patch.new_rows``; ids after the patch's), the rim rows (ascending: rows on the
+    surface that a face uses), the number of faces taken away or cut)."""
+    n, n_points = rows.shape[0], points.shape[0]
+    signed = _signed_distances(points, 0, start, end, radius)
+    side = np.empty(n_points, np.int64)
+    for p in range(n_points):
+        side[p] = OUTSIDE if signed[p] > tolerance else (INSIDE if signed[p] < -tolerance else ON)
+    kept, crossed = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+    for f in range(n):
+        inside = outside = False
+        for k in range(3):
+            inside |= side[row_point[rows[f, k]]] == INSIDE
+            outside |= side[row_point[rows[f, k]]] == OUTSIDE
+        kept[f], crossed[f] = outside and not inside, outside and inside
+        if not (inside or outside):                 # every corner on the surface: kept if its centre is outside
+            kept[f] = _centre_outside(points, row_point, rows, f, start, end, radius)
+    crossing_rows, new_points, row_points, row_parents, row_t = _crossing_rows(
+        points, rows, crossed, row_point, side, start, end, radius)
+    all_points = np.concatenate((points, new_points))
+    all_row_point = np.concatenate((row_point, row_points))
+    parts, part_of = _outside_parts(rows, crossed, side, crossing_rows, all_points, all_row_point)
+    n_kept = 0
+    for f in range(n):
+        n_kept += kept[f]
+    out, out_sources = np.empty((n_kept + parts.shape[0], 3), np.int64), np.empty(n_kept + parts.shape[0], np.int64)
+    at = 0
+    for f in range(n):
+        if kept[f]:
+            out[at], out_sources[at] = rows[f], sources[f]
+            at += 1
+    for i in range(parts.shape[0]):
+        out[at + i], out_sources[at + i] = parts[i], sources[part_of[i]]
+    on_rim = np.zeros(all_row_point.shape[0], np.bool_)     # (the new points are on the surface)
+    for r in out.ravel():
+        p = all_row_point[r]
+        on_rim[r] = p >= n_points or side[p] == ON
+    return out, out_sources, new_points, row_points, row_parents, row_t, np.flatnonzero(on_rim), n - n_kept
 
 
-def _crossing_rows(patch: Patch, rows, sides, bit) -> np.ndarray:
-    """(C, 3) the row where each corner edge k -> k+1 of faces ``rows`` (C, 3) crosses the bit's surface
-    (``sides`` (C, 3) of its ends -1 and 1), -1 where it does not: one point per welded edge, placed from
-    its lower point id (``bit.crossings``), and one row per vertex edge."""
-    crossed = sides * np.roll(sides, -1, axis=1) == -1
-    row_edges, row_edge_of = np.unique(edge_codes(rows)[crossed], return_inverse=True)
-    row_a, row_b = row_edges >> 32, row_edges & LOW_BITS
-    point_a, point_b = patch.row_point[row_a], patch.row_point[row_b]
-    point_edges, point_edge_of = np.unique(pair_codes(point_a, point_b), return_inverse=True)
-    edges = np.column_stack([point_edges >> 32, point_edges & LOW_BITS])
-    ts, xs = crossings(patch.point_array(), edges, bit.start, bit.end, bit.radius)
-    first_point = patch.add_points(xs)
-    t = ts[point_edge_of]
-    t = np.where(point_a < point_b, t, 1.0 - t)          # (t runs from the lower point id)
-    first_row = patch.new_rows(first_point + point_edge_of, row_a, row_b, t)
-    out = np.full(rows.shape, -1, np.int64)
-    out[crossed] = first_row + row_edge_of
-    return out
+@helper
+def _centre_outside(points, row_point, rows, f, start, end, radius):
+    """Whether the centre of face f of ``rows`` is outside the bit."""
+    centre = np.zeros(3)
+    for k in range(3):
+        for c in range(3):
+            centre[c] += points[row_point[rows[f, k]], c] / 3.0
+    return _segment_distance(start, end, end - start, centre) - radius > 0.0
 
 
-@kernel((I2, I2, I2, F2, I1), cost=0.3)
-def _outside_parts(rows, sides, crossing_rows, points, row_point):
-    """The part outside the bit of each face ``rows`` (C, 3) with corners on both sides (``sides`` (C, 3)),
-    its corner edges crossing the surface at ``crossing_rows`` (C, 3) (-1: no crossing): a triangle, or
-    a convex quad split on its shorter diagonal (both wound as the face). Returns faces (T, 3) and the
-    face (T,) each is part of."""
+@helper
+def _crossing_rows(points, rows, crossed, row_point, side, start, end, radius):
+    """Where the corner edges of the ``crossed`` (F,) faces of ``rows`` that join a point inside the bit to
+    one outside cross its surface: one new point per welded edge, placed from its lower point id
+    (``bit.crossing``), and one new row per vertex edge (ids after ``points`` (P, 3) and ``row_point``
+    (R,)). Returns (the row (F, 3) on each corner edge k -> k+1, -1 where none; the new points (p, 3);
+    the new rows' points (r,), parents (r, 2) (lower row first) and t (r,) from the first parent)."""
+    n, n_points, n_rows = rows.shape[0], points.shape[0], row_point.shape[0]
+    out = np.full((n, 3), -1, np.int64)
+    row_table, point_table = code_table(3 * n), code_table(3 * n)
+    row_id, point_id = np.empty(row_table.shape[0], np.int64), np.empty(point_table.shape[0], np.int64)
+    new_points, point_t = np.empty((3 * n, 3)), np.empty(3 * n)
+    row_points, row_parents, row_t = np.empty(3 * n, np.int64), np.empty((3 * n, 2), np.int64), np.empty(3 * n)
+    axis, x = end - start, np.empty(3)
+    made_points = made_rows = 0
+    for f in range(n):
+        if not crossed[f]:
+            continue
+        for k in range(3):
+            a, b = rows[f, k], rows[f, (k + 1) % 3]
+            pa, pb = row_point[a], row_point[b]
+            if side[pa] * side[pb] != -1:
+                continue
+            at = slot(row_table, pair(a, b))
+            if row_table[at] == EMPTY:
+                point_at = slot(point_table, pair(pa, pb))
+                if point_table[point_at] == EMPTY:
+                    lo, hi = min(pa, pb), max(pa, pb)
+                    point_t[made_points] = crossing(points[lo], points[hi], start, end, axis, radius, x)
+                    _put_on_edge(points[lo], points[hi], point_t[made_points], new_points[made_points])
+                    point_table[point_at], point_id[point_at] = pair(pa, pb), made_points
+                    made_points += 1
+                lower, upper = min(a, b), max(a, b)
+                t = point_t[point_id[point_at]]
+                row_table[at], row_id[at] = pair(a, b), n_rows + made_rows
+                row_points[made_rows] = n_points + point_id[point_at]
+                row_parents[made_rows, 0], row_parents[made_rows, 1] = lower, upper
+                row_t[made_rows] = t if row_point[lower] < row_point[upper] else 1.0 - t   # (t from the lower point)
+                made_rows += 1
+            out[f, k] = row_id[at]
+    return (out, new_points[:made_points].copy(), row_points[:made_rows].copy(), row_parents[:made_rows].copy(),
+            row_t[:made_rows].copy())
+
+
+@helper
+def _outside_parts(rows, crossed, side, crossing_rows, points, row_point):
+    """The part outside the bit of each ``crossed`` (F,) face of ``rows`` (F, 3) (corners on both sides of
+    its surface: ``side`` per point), its corner edges crossing the surface at ``crossing_rows`` (F, 3)
+    (-1: no crossing): a triangle, or a convex quad split on its shorter diagonal (both wound as the
+    face). Returns faces (T, 3) and the face (T,) each is part of."""
     n = rows.shape[0]
     out, part_of = np.empty((2 * n, 3), np.int64), np.empty(2 * n, np.int64)
     polygon = np.empty(4, np.int64)
     count = 0
     for f in range(n):
+        if not crossed[f]:
+            continue
         corners = 0
         for k in range(3):
-            if sides[f, k] != INSIDE:
+            if side[row_point[rows[f, k]]] != INSIDE:
                 polygon[corners] = rows[f, k]
                 corners += 1
             if crossing_rows[f, k] >= 0:
@@ -104,3 +167,78 @@ def _outside_parts(rows, sides, crossing_rows, points, row_point):
             count = put_face(out, part_of, count, f, polygon[0], polygon[1], polygon[3])
             count = put_face(out, part_of, count, f, polygon[1], polygon[2], polygon[3])
     return out[:count].copy(), part_of[:count].copy()
+
+
+@kernel((I2, I1, B1), cost=0.5)
+def rim_loops(rows, row_point, on_rim):
+    """The loops of the boundary edges between rim points (``on_rim`` (P,) per point) of the faces ``rows``
+    (F, 3) (``row_point`` (R,) the point of each row; an edge is a boundary if one corner edge of one
+    face has its two points): chained as ``topology.directed_loops`` chains them (in the faces' order;
+    where several edges leave a point, the loop's first if it is one, else the first; open chains
+    dropped). Returns the loops' corners, each the tail of an edge: rows (L,) and points (L,), and
+    offsets (k + 1,) (loop i is [offsets[i], offsets[i + 1]))."""
+    n = rows.shape[0]
+    tails, heads, codes = np.empty(3 * n, np.int64), np.empty(3 * n, np.int64), np.empty(3 * n, np.int64)
+    count = 0
+    for f in range(n):
+        for k in range(3):
+            a, b = row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]]
+            if on_rim[a] and on_rim[b]:
+                tails[count], heads[count], codes[count] = rows[f, k], b, pair(a, b)
+                count += 1
+    table = code_table(count)
+    sides = np.zeros(table.shape[0], np.int64)          # (how many corner edges each code has)
+    for i in range(count):
+        at = slot(table, codes[i])
+        table[at] = codes[i]
+        sides[at] += 1
+    # the boundary edges, in order, and the ones leaving each point (CSR by tail point)
+    edges = np.empty(count, np.int64)
+    n_edges, n_points = 0, on_rim.shape[0]
+    leaving = np.zeros(n_points + 1, np.int64)
+    for i in range(count):
+        if sides[slot(table, codes[i])] == 1:
+            edges[n_edges] = i
+            n_edges += 1
+            leaving[row_point[tails[i]] + 1] += 1
+    for p in range(n_points):
+        leaving[p + 1] += leaving[p]
+    fill, by_tail = leaving[:-1].copy(), np.empty(n_edges, np.int64)
+    for e in range(n_edges):
+        p = row_point[tails[edges[e]]]
+        by_tail[fill[p]] = e
+        fill[p] += 1
+    used = np.zeros(n_edges, np.bool_)
+    corners, loop, offsets = np.empty(n_edges, np.int64), np.empty(n_edges, np.int64), np.zeros(n_edges + 1, np.int64)
+    n_corners = n_loops = 0
+    for first in range(n_edges):
+        if used[first]:
+            continue
+        length, e = 0, first
+        while True:
+            used[e] = True
+            loop[length] = e
+            length += 1
+            head = heads[edges[e]]
+            pick = -1
+            for j in range(leaving[head], leaving[head + 1]):
+                candidate = by_tail[j]
+                if candidate == first:
+                    pick = first
+                    break
+                if pick < 0 and not used[candidate]:
+                    pick = candidate
+            if pick < 0:
+                break                               # an open chain: dropped
+            if pick == first:
+                corners[n_corners:n_corners + length] = loop[:length]
+                n_corners += length
+                n_loops += 1
+                offsets[n_loops] = n_corners
+                break
+            e = pick
+    out_rows, out_points = np.empty(n_corners, np.int64), np.empty(n_corners, np.int64)
+    for c in range(n_corners):
+        out_rows[c] = tails[edges[corners[c]]]
+        out_points[c] = row_point[out_rows[c]]
+    return out_rows, out_points, offsets[:n_loops + 1].copy()

@@ -1,9 +1,8 @@
 """The walls of a hole: the part of the bit's surface inside the model, joined to the rims.
 
-The bit's surface is a surface of revolution: a point of it is (θ, σ), its angle around the axis and
-its height along the profile (the back hemisphere for σ < 0, the cylinder for 0 <= σ <= L, the tip
-hemisphere for σ > L, σ measured as arc length; ``Frame.point``). The rims (``rim.py``) are closed
-loops of the mesh's new boundary on that surface:
+A point of the bit's surface is (θ, σ), its angle around the axis and its height along the profile
+(``bit_surface.Frame``). The rims (``rim.py``) are closed loops of the mesh's new boundary on that
+surface (``bit_surface.Loop``):
 
 * a loop that winds once around the axis is an entry or an exit: the boundary of a surface around a
   hole runs clockwise seen from the side the surface faces, so on an outward-facing surface an entry
@@ -31,9 +30,10 @@ import numpy as np
 from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
-from ..topology import directed_loops
-from .patch import LOW_BITS, Patch, edge_codes, pair_codes
+from .bit_surface import Frame, Loop
+from .patch import LOW_BITS, Patch, edge_codes
 from .refine import MAX_ROUNDS, bisect_marked
+from .rim import rim_loops
 from .strips import grid, zip_chains, zip_rings
 
 #: the winding about the bit's travel of a rim where it enters an outward-facing surface
@@ -41,106 +41,6 @@ ENTRY = 1
 #: a wall face's input face (``Patch.face_source``): a tunnel's, or a fill's (the inside of a loop that
 #: does not wind around the axis)
 WALL, WALL_FILL = -1, -2
-
-
-def _cross(a, b) -> np.ndarray:
-    """a x b of two (3,) vectors (``np.cross`` costs ~16 us a call here, for its generality; this ~1)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
-class Frame:
-    """The bit's axis frame: unit axis u, e1, e2 across it, travel length L, radius r."""
-
-    def __init__(self, bit):
-        self.start, self.end, self.r = bit.start, bit.end, bit.radius
-        d = bit.end - bit.start
-        self.length = float(np.linalg.norm(d))
-        self.u = d / self.length
-        helper = np.eye(3)[int(np.argmin(np.abs(self.u)))]
-        self.e1 = _cross(self.u, helper)
-        self.e1 /= np.linalg.norm(self.e1)
-        self.e2 = _cross(self.u, self.e1)
-        self.top = self.length + 0.5 * math.pi * self.r          # σ of the tip's pole
-
-    def coordinates(self, x) -> tuple:
-        """(θ, σ) of points x (k, 3) on the bit's surface."""
-        w = x - self.start
-        s, a, b = w @ self.u, w @ self.e1, w @ self.e2
-        theta = np.arctan2(b, a)
-        radial = np.hypot(a, b)
-        sigma = np.where(s > self.length, self.length + self.r * np.arctan2(s - self.length, radial),
-                         np.where(s < 0.0, -self.r * np.arctan2(-s, radial), s))
-        return theta, sigma
-
-    def point(self, theta: float, sigma: float) -> np.ndarray:
-        """The surface point (3,) at (θ, σ)."""
-        return self.points(np.array([theta]), np.array([sigma]))[0]
-
-    def points(self, theta, sigma) -> np.ndarray:
-        """The surface points (k, 3) at angles θ (k,) and heights σ (k,): on the cylinder, or on a round
-        end beyond it (the angle φ up the end's quarter circle from the rim)."""
-        around = np.cos(theta)[:, None] * self.e1 + np.sin(theta)[:, None] * self.e2
-        phi = np.where(sigma > self.length, np.minimum((sigma - self.length) / self.r, 0.5 * math.pi),
-                       np.where(sigma < 0.0, -np.minimum(-sigma / self.r, 0.5 * math.pi), 0.0))
-        along = self.start + np.clip(sigma, 0.0, None)[:, None] * self.u
-        base = np.where((sigma > self.length)[:, None], self.end, np.where((sigma < 0.0)[:, None], self.start, along))
-        return base + self.r * (np.sin(phi)[:, None] * self.u + np.cos(phi)[:, None] * around)
-
-    def axis_point(self, sigma: float) -> np.ndarray:
-        """The point of the axis at the height of σ (inside the bit)."""
-        if sigma > self.length:
-            return self.end + self.r * math.sin(min((sigma - self.length) / self.r, 0.5 * math.pi)) * self.u
-        if sigma < 0.0:
-            return self.start - self.r * math.sin(min(-sigma / self.r, 0.5 * math.pi)) * self.u
-        return self.start + sigma * self.u
-
-    def inward(self, x) -> np.ndarray:
-        """Unit normals (k, 3) at surface points x pointing into the bit (to the axis, or a pole's centre)."""
-        s = np.clip((x - self.start) @ self.u, 0.0, self.length)
-        d = self.start + s[:, None] * self.u - x
-        return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
-class Loop:
-    """A rim loop: its rows (one per corner, in the boundary's direction), points, (θ, σ), winding."""
-
-    def __init__(self, rows, points, theta, sigma):
-        self.rows, self.points, self.sigma = rows, points, sigma
-        turns = np.diff(np.concatenate([theta, theta[:1]]))
-        turns = (turns + math.pi) % (2 * math.pi) - math.pi
-        self.unwrapped = theta[0] + np.concatenate([[0.0], np.cumsum(turns[:-1])])
-        self.winding = int(round(turns.sum() / (2 * math.pi)))
-        self.theta = theta
-        self._by_angle = None           # (order, angles, rows): the angles sorted, made at the first search
-
-    def height_at(self, theta: np.ndarray) -> np.ndarray:
-        """σ of the loop at angles θ (linear between its corners, periodic)."""
-        order = np.argsort(self.theta)
-        t, s = self.theta[order], self.sigma[order]
-        return np.interp(theta, np.concatenate([t - 2 * math.pi, t, t + 2 * math.pi]), np.tile(s, 3))
-
-    def nearest_rows(self, theta) -> np.ndarray:
-        """The loop's rows (k,) nearest in angle to each of θ (k,): of the rows at the nearest angle, the
-        first in the loop's order. Searched among the loop's angles in increasing order, not in a
-        (k, loop) table of gaps (a tunnel asks once per ring): the nearest is the first of the angles
-        equal to the one at or after θ, or to the one before it, or -- the ends meet around the circle --
-        to the smallest or the largest."""
-        if self._by_angle is None:
-            order = np.argsort(self.theta, kind="stable")
-            self._by_angle = order, self.theta[order], np.asarray(self.rows)
-        order, angles, rows = self._by_angle
-        n = len(order)
-        at = np.searchsorted(angles, theta)
-        candidates = np.stack([at % n, np.searchsorted(angles, angles[(at - 1) % n]), np.zeros_like(at),
-                               np.full_like(at, np.searchsorted(angles, angles[-1]))])
-        gaps = _gap(angles[candidates], theta)
-        nearest = np.where(gaps == gaps.min(axis=0), order[candidates], n).min(axis=0)
-        return rows[nearest]
-
-
-def _gap(a, b):
-    """|a - b| around the circle."""
-    return np.abs((a - b + math.pi) % (2 * math.pi) - math.pi)
 
 
 def build_walls(patch: Patch, rim, bit, step: float, inside) -> int:
@@ -169,25 +69,12 @@ def build_walls(patch: Patch, rim, bit, step: float, inside) -> int:
 
 def _rim_loops(patch: Patch, rim, frame: Frame) -> list:
     """The loops of boundary edges between rim points (rows ``rim``), as ``Loop``s (point ids welded:
-    seams are one)."""
-    rows, row_point = patch.faces, patch.row_point
+    seams are one; ``rim.rim_loops``)."""
     on_rim = np.zeros(patch.n_points, bool)
-    on_rim[row_point[rim]] = True
-    tails, heads = rows.ravel(), np.roll(rows, -1, axis=1).ravel()          # each face's corner edges
-    a, b = row_point[tails], row_point[heads]
-    between = np.flatnonzero(on_rim[a] & on_rim[b])          # (all of an edge's sides are among these)
-    tails, a, b = tails[between], a[between], b[between]
-    codes = pair_codes(a, b)
-    unique, counts = np.unique(codes, return_counts=True)
-    boundary = counts[np.searchsorted(unique, codes)] == 1
-    row_of_edge = {(int(p), int(q)): int(r) for p, q, r in zip(a[boundary], b[boundary], tails[boundary])}
-    points = patch.point_array()
-    out = []
-    for cycle in directed_loops(a[boundary], b[boundary]):
-        ring = [row_of_edge[(p, q)] for p, q in zip(cycle, cycle[1:] + cycle[:1])]
-        theta, sigma = frame.coordinates(points[cycle])
-        out.append(Loop(ring, np.array(cycle), theta, sigma))
-    return out
+    on_rim[patch.row_point[rim]] = True
+    rows, points, offsets = rim_loops(patch.faces, patch.row_point, on_rim)
+    theta, sigma = frame.coordinates(patch.point_array()[points])
+    return [Loop(rows[i:j], points[i:j], theta[i:j], sigma[i:j]) for i, j in zip(offsets[:-1], offsets[1:])]
 
 
 def _wall_rings(patch: Patch, frame: Frame, columns, sigma, a: Loop, b: Loop | None, weights) -> np.ndarray:
@@ -218,10 +105,10 @@ def _surface_row(patch: Patch, position, a: int, b: int, t: float) -> int:
     return patch.new_row(patch.add_point(position), a, b, t)
 
 
-def _loop_rows(patch: Patch, loop: Loop) -> list:
-    """Wall rows at the loop's own corners (the rim's points, rows of their own)."""
+def _loop_rows(patch: Patch, loop: Loop) -> np.ndarray:
+    """Wall rows (k,) at the loop's own corners (the rim's points, rows of their own)."""
     first = patch.new_rows(loop.points, loop.rows, loop.rows, 0.0)
-    return list(range(first, first + len(loop.rows)))
+    return np.arange(first, first + len(loop.rows))
 
 
 def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) -> None:
@@ -254,7 +141,7 @@ def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) ->
 def _loop_ring(patch: Patch, loop: Loop) -> tuple:
     """(rows, unwrapped angles) of a winding loop's own wall rows, in the direction of increasing angle."""
     rows, angles = _loop_rows(patch, loop), loop.unwrapped
-    return (rows, angles) if loop.winding > 0 else (rows[::-1], angles[::-1])
+    return (rows, angles) if loop.winding > 0 else (rows[::-1].copy(), angles[::-1].copy())
 
 
 def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
@@ -267,7 +154,7 @@ def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
     ear-clipped in (r θ, σ). Edges that then span the curvature are bisected (``_refine_fills``)."""
     for point, theta, sigma in zip(loop.points, loop.unwrapped, loop.sigma):
         patch.fill_params[int(point)] = np.array([theta, sigma])     # (the fill's refinement halves them)
-    rows = _loop_rows(patch, loop)
+    rows = _loop_rows(patch, loop).tolist()
     n, triangles = len(rows), None
     theta, sigma = loop.unwrapped, loop.sigma
     keys = (loop.unwrapped, loop.sigma)          # across the axis, else along it (a bit grazing lengthwise)

@@ -1,0 +1,230 @@
+"""The drilled rig from the patch (steps 4 and 5 of ``api.py``): which input faces and vertices it keeps,
+the new vertices' weights, attributes and rest positions, the wall rows' normals.
+
+The bookkeeping over the whole mesh is one compiled pass (``_layout``), each per-vertex array one
+compiled gather (``_stacked``): the same work a cut does to assemble its halves.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..._shared.frozen import kernel_array
+from ..._shared.jit import F1, F2, I1, I2, i8, kernel
+from ..._shared.warn import warn
+from ...animation.rig import Rig
+from ...errors import PlacementWarning
+from ...tolerances import tol
+from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute, place_in_rest
+from ..surface import mesh_arrays
+from .patch import Patch
+from .wall import WALL
+
+#: ``DrillResult.sources`` of a vertex the drill made
+NEW_VERTEX = -1
+
+
+class Layout(NamedTuple):
+    """What ``_layout`` decides (it returns the fields as a plain tuple).
+
+    faces : (G, 3) int64 the result's faces: the input faces kept, in order, then the patch's faces that
+        are not an input face as it was ; made_in : (k,) int64 the input face each of those lies in (-1:
+        a wall's) ; replaced : (t,) int64 the input faces not kept (ascending)
+    kept_input : (a,) int64 the input vertices the result uses (ascending): its first vertices
+    new_rows : (b,) int64 the patch's new rows it uses (ascending): its vertices after them
+    first_copy : (b,) int64 for each of those, the first of them at the same point (itself if none)
+    on_wall : (b,) bool whether a wall face uses it ; row_out : (R,) int64 each row's output vertex (-1)
+    """
+
+    faces: np.ndarray
+    made_in: np.ndarray
+    replaced: np.ndarray
+    kept_input: np.ndarray
+    new_rows: np.ndarray
+    first_copy: np.ndarray
+    on_wall: np.ndarray
+    row_out: np.ndarray
+
+
+@kernel((I2, i8, I1, I2, I1, I1, I1, i8), cost=0.6)
+def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
+    """The result's faces and vertices (``Layout``, as a plain tuple) from the input ``faces`` (m, 3) over
+    ``n`` vertices, the
+    input faces the patch ``taken`` (T,), the patch's faces ``rows`` (F, 3) from input faces ``sources``
+    (F,), its rows' input vertices ``row_vertex`` (R,) (-1: new) and points ``row_point`` (R,) of
+    ``n_points``. A patch face that is its input face as it was (its corners, in their order) keeps
+    that face's place."""
+    m, n_rows = faces.shape[0], row_vertex.shape[0]
+    kept = np.ones(m, np.bool_)
+    kept[taken] = False
+    changed = np.ones(rows.shape[0], np.bool_)
+    for f in range(rows.shape[0]):
+        s = sources[f]
+        if s >= 0 and (row_vertex[rows[f, 0]] == faces[s, 0] and row_vertex[rows[f, 1]] == faces[s, 1]
+                       and row_vertex[rows[f, 2]] == faces[s, 2]):
+            changed[f], kept[s] = False, True
+    # output ids: input vertices first (ascending), then the new rows used (ascending)
+    uses_vertex, uses_row = np.zeros(n, np.bool_), np.zeros(n_rows, np.bool_)
+    for f in range(m):
+        if kept[f]:
+            uses_vertex[faces[f, 0]] = uses_vertex[faces[f, 1]] = uses_vertex[faces[f, 2]] = True
+    on_wall_row = np.zeros(n_rows, np.bool_)
+    for f in range(rows.shape[0]):
+        if changed[f]:
+            for k in range(3):
+                r = rows[f, k]
+                if row_vertex[r] >= 0:
+                    uses_vertex[row_vertex[r]] = True
+                else:
+                    uses_row[r] = True
+                    if sources[f] <= WALL:
+                        on_wall_row[r] = True
+    vertex_out, kept_input = np.full(n, -1, np.int64), np.flatnonzero(uses_vertex)
+    vertex_out[kept_input] = np.arange(kept_input.shape[0])
+    new_rows = np.flatnonzero(uses_row)
+    row_out = np.full(n_rows, -1, np.int64)
+    first_at_point = np.full(n_points, -1, np.int64)
+    first_copy, on_wall = np.empty(new_rows.shape[0], np.int64), np.empty(new_rows.shape[0], np.bool_)
+    for j in range(new_rows.shape[0]):
+        r = new_rows[j]
+        row_out[r] = kept_input.shape[0] + j
+        if first_at_point[row_point[r]] < 0:
+            first_at_point[row_point[r]] = j
+        first_copy[j], on_wall[j] = first_at_point[row_point[r]], on_wall_row[r]
+    for r in range(n_rows):
+        if row_vertex[r] >= 0:
+            row_out[r] = vertex_out[row_vertex[r]]
+    n_kept, n_changed = 0, 0
+    for f in range(m):
+        n_kept += kept[f]
+    for f in range(rows.shape[0]):
+        n_changed += changed[f]
+    out, made_in = np.empty((n_kept + n_changed, 3), np.int64), np.empty(n_changed, np.int64)
+    at = 0
+    for f in range(m):
+        if kept[f]:
+            for k in range(3):
+                out[at, k] = vertex_out[faces[f, k]]
+            at += 1
+    for f in range(rows.shape[0]):
+        if changed[f]:
+            for k in range(3):
+                out[at, k] = row_out[rows[f, k]]
+            made_in[at - n_kept] = max(sources[f], -1)
+            at += 1
+    return out, made_in, np.flatnonzero(~kept), kept_input, new_rows, first_copy, on_wall, row_out
+
+
+@kernel((F2, I1, F2), (I2, I1, I2), cost=0.3)
+def _stacked(values, src, extra):
+    """(a + b, c): the rows ``values[src]`` (values (n, c), src (a,)), then ``extra`` (b, c)."""
+    a, c = src.shape[0], values.shape[1]
+    out = np.empty((a + extra.shape[0], c), values.dtype)
+    for i in range(a):
+        for j in range(c):
+            out[i, j] = values[src[i], j]
+    out[a:] = extra
+    return out
+
+
+def stacked(values, src, extra) -> np.ndarray:
+    """``_stacked`` for a per-vertex array of any shape (n, ...) and dtype (float64 or int64 in compiled
+    code, other dtypes through float64)."""
+    values = kernel_array(np.asarray(values))
+    flat = np.ascontiguousarray(values.reshape(len(values), -1))
+    if flat.dtype not in (np.float64, np.int64):
+        flat = flat.astype(np.float64)
+    extra = np.ascontiguousarray(np.asarray(extra, flat.dtype).reshape(len(extra), -1))
+    out = _stacked(flat, src, extra)
+    return out.reshape((len(out),) + values.shape[1:]).astype(values.dtype, copy=False)
+
+
+class Assembled(NamedTuple):
+    """The drilled rig and what ``DrillResult`` reports of it (``api.py`` names the fields)."""
+
+    rig: Rig
+    sources: np.ndarray
+    new: NewVertices
+    first_new: int
+    rim: np.ndarray
+    new_positions: np.ndarray
+    replaced: np.ndarray
+    made_in: np.ndarray
+    residual: float
+
+
+def assemble(rig: Rig, patch: Patch, rim, bit, affines, diagonal: float) -> Assembled:
+    """The drilled rig: the input vertices it uses (bit for bit), then the new rows it uses; the input
+    faces it keeps, then the patch's faces it made. ``rim`` (r,) the patch's rim rows; ``affines`` the
+    pose's bone maps (a posed drill: the new vertices are placed in rest space) or None."""
+    vertices, faces, joints, weights = mesh_arrays(rig)
+    lay = Layout(*_layout(faces, len(vertices), patch.taken, patch.faces, patch.face_source, patch.row_vertex,
+                          patch.row_point, patch.n_points))
+    src, coef = patch.descriptions()
+    new = NewVertices(src[lay.new_rows], coef[lay.new_rows])
+    new_positions = patch.point_array()[patch.row_point[lay.new_rows]]
+    # the copies of a new vertex at one point (a seam's sides, a wall's row at its rim) skin alike: their
+    # weights and rest position are the first copy's (blended from other input rows, ties in the blend
+    # could pick other bones), their attributes their own
+    new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
+    new_joints, new_weights = new_joints[lay.first_copy], new_weights[lay.first_copy]
+    new_rest, residual = new_positions, 0.0
+    if affines is not None and len(lay.new_rows):
+        new_rest, residual = _placed(vertices, new, new_positions, new_joints, new_weights, affines, diagonal)
+        new_rest = new_rest[lay.first_copy]
+    attributes = {}
+    for name, values in rig.attributes.items():
+        values = kernel_array(np.asarray(values))     # (read-only: its writeable buffer, one kernel type)
+        attributes[name] = stacked(values, lay.kept_input, interpolate_attribute(name, values, new))
+    if lay.on_wall.any() and "NORMAL" in attributes:
+        at = np.flatnonzero(lay.on_wall)
+        inward = _inward(new_positions[at], bit.start, bit.end)
+        if affines is not None:
+            inward = _to_rest_normals(inward, new_joints[at], new_weights[at], affines)
+        attributes["NORMAL"][len(lay.kept_input) + at] = inward.astype(attributes["NORMAL"].dtype)
+    result = Rig._of_checked(stacked(vertices, lay.kept_input, new_rest), lay.faces,
+                             stacked(joints, lay.kept_input, new_joints), stacked(weights, lay.kept_input, new_weights),
+                             rig.skeleton, rig.clips, attributes, f"{rig.name}_drilled")
+    sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
+    return Assembled(result, sources, new, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions,
+                     lay.replaced, lay.made_in, residual)
+
+
+@kernel((F2, F1, F1), cost=0.2)
+def _inward(points, start, end):
+    """Unit normals (k, 3) at points (k, 3) of the bit's surface pointing into the bit: to the nearest
+    point of its travel start -> end (the axis, or a round end's centre)."""
+    out = np.empty_like(points)
+    ux, uy, uz = end[0] - start[0], end[1] - start[1], end[2] - start[2]
+    length2 = ux * ux + uy * uy + uz * uz
+    for i in range(points.shape[0]):
+        s = ((points[i, 0] - start[0]) * ux + (points[i, 1] - start[1]) * uy + (points[i, 2] - start[2]) * uz) / length2
+        s = min(max(s, 0.0), 1.0)
+        dx, dy, dz = (start[0] + s * ux - points[i, 0], start[1] + s * uy - points[i, 1],
+                      start[2] + s * uz - points[i, 2])
+        norm = np.sqrt(dx * dx + dy * dy + dz * dz)
+        out[i, 0], out[i, 1], out[i, 2] = dx / norm, dy / norm, dz / norm
+    return out
+
+
+def _to_rest_normals(inward, joints, weights, affines) -> np.ndarray:
+    """Posed normals (k, 3) carried to rest by the transpose of each row's blended linear map (normals
+    transform by its inverse transpose), unit length."""
+    linear = np.einsum("kb,kbij->kij", weights, affines[joints].reshape(-1, 4, 3, 4)[..., :3])
+    out = np.einsum("kji,kj->ki", linear, inward)
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def _placed(vertices, new: NewVertices, targets, new_joints, new_weights, affines, diagonal: float):
+    """Rest positions of the new vertices of a posed drill (``place_in_rest``), and the largest residual
+    (a ``PlacementWarning`` when some miss where they were made)."""
+    guess = interpolate_attribute("POSITION", vertices, new)
+    rest, residuals = place_in_rest(targets, guess, new_joints, new_weights, affines)
+    residual = float(residuals.max()) if len(residuals) else 0.0
+    if residual > tol.placement * diagonal:
+        warn(f"{int(np.count_nonzero(residuals > tol.placement * diagonal))} new vertices of the drill miss "
+             f"where they were made in the pose by more than {tol.placement:g} of the diagonal (largest "
+             f"{residual:.3g}): a singular blended transform; they keep their interpolated rest positions",
+             PlacementWarning)
+    return rest, residual

@@ -1,0 +1,236 @@
+"""The refinement of a drill's patch (``refine.py`` says what it does) in one compiled call: rounds of
+marking the longest edge of every long face the bit's surface crosses, closing the marks and splitting
+the faces on them (``bisection.py``), taking in the input faces beyond the patch that share a marked
+edge as the closure reaches them.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, kernel, record
+from .bisection import add_face_edges, code_table, edge_map, longest_edge, midpoints, pair, slot, split
+from .bit import _signed_distances, surface_crosses
+from .patch import LOW_BITS, NEW_POINT, _new_rows_and_points
+
+#: how ``refine_rounds`` ended: no face the surface crosses is longer than the step; the rounds ran out
+REFINED, OUT_OF_ROUNDS = 0, 1
+#: whether a face is to be split (long and crossed)
+NO, YES = 0, 1
+
+
+class InputMesh(NamedTuple):
+    """The input mesh as ``refine_rounds`` reads it (it takes ``tuple(InputMesh)``).
+
+    positions : (n, 3) float64 ; faces : (m, 3) int64 ; welded : (n,) int64 the welded vertex of each
+    vertex ; welded_faces, face_edges : (m, 3) int64 ; edge_face_offsets : (e + 1,) int64 ;
+    edge_face_faces : (3m,) int64 (the ``Topology``'s fields of those names)
+    """
+
+    positions: np.ndarray
+    faces: np.ndarray
+    welded: np.ndarray
+    welded_faces: np.ndarray
+    face_edges: np.ndarray
+    edge_face_offsets: np.ndarray
+    edge_face_faces: np.ndarray
+
+
+class Refined(NamedTuple):
+    """What ``refine_rounds`` made (it returns the fields as a plain tuple).
+
+    rows : (G, 3) int64 the patch's faces now ; sources : (G,) int64 the input face of each
+    points : (p, 3) float64 and point_welded : (p,) int64 the new points (a midpoint's: ``NEW_POINT``)
+    row_points, row_vertex : (r,) int64 the new rows' points and input vertices (a midpoint's: -1)
+    row_parents : (r, 2) int64 and row_t : (r,) float64 how each new row is made (``Patch.new_rows``)
+    taken : (k,) int64 the input faces taken in ; status : ``REFINED`` or ``OUT_OF_ROUNDS``
+    """
+
+    rows: np.ndarray
+    sources: np.ndarray
+    points: np.ndarray
+    point_welded: np.ndarray
+    row_points: np.ndarray
+    row_vertex: np.ndarray
+    row_parents: np.ndarray
+    row_t: np.ndarray
+    taken: np.ndarray
+    status: int
+
+
+#: the numba types of ``InputMesh`` and of a patch's maps (row_of (n,), point_of (w,), is_taken (m,))
+INPUT_MESH, PATCH_MAPS = record(F2, I2, I1, I2, I2, I1, I1), record(I1, I1, B1)
+
+
+@kernel((F2, I1, I2, I1, I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=2.0)
+def refine_rounds(points, point_welded, rows, sources, row_point, mesh, maps, start, end, radius, step, rounds):
+    """Refine a patch: ``points`` (P, 3) and ``point_welded`` (P,), its faces ``rows`` (F, 3) from input
+    faces ``sources`` (F,), ``row_point`` (R,) the point of each row; ``mesh`` an ``InputMesh``;
+    ``maps`` the patch's row_of, point_of and is_taken, updated in place as faces are taken in.
+
+    Each round marks the longest edge of every face longer than ``step`` that the bit's surface crosses
+    (``bit.surface_crosses``), closes the marks (a marked edge marks the longest edge of every face on
+    it, ``bisection.edge_map``), taking in the input faces beyond the patch on a marked edge as it goes,
+    and splits the faces on the marks (``bisection.split``); until no such face is left, or ``rounds``
+    ran out. Returns a ``Refined`` as a
+    plain tuple."""
+    first_point, first_row = points.shape[0], row_point.shape[0]
+    signed = _signed_distances(points, 0, start, end, radius)
+    codes, longest, wanted = _describe(rows, 0, row_point, points, signed, start, end, radius, step)
+    row_vertex, row_parents, row_t = np.empty(0, np.int64), np.empty((0, 2), np.int64), np.empty(0)
+    taken = np.empty(0, np.int64)
+    row_of, point_of, is_taken = maps
+    positions, faces, welded = mesh[0], mesh[1], mesh[2]
+    for _ in range(rounds):
+        if not (wanted == YES).any():
+            return (rows, sources, points[first_point:].copy(), point_welded[first_point:].copy(),
+                    row_point[first_row:].copy(), row_vertex, row_parents, row_t, taken, REFINED)
+        # the closure of the marks: each marked edge marks the longest edge of every face on it, and
+        # takes in the input faces beyond the patch on it first
+        capacity = 2 * rows.shape[0] + 64
+        emap = edge_map(codes, rows.shape[0], capacity)
+        marked, stack = np.zeros(3 * capacity, np.bool_), np.empty(3 * capacity, np.int64)
+        depth = 0
+        for f in range(rows.shape[0]):
+            if wanted[f] == YES:
+                depth = _mark(marked, stack, depth, emap[5][f, longest[f]])
+        while depth > 0:
+            depth -= 1
+            e = stack[depth]
+            beyond = _faces_beyond(emap, e, sources, point_welded, mesh, is_taken)
+            if beyond.shape[0]:
+                is_taken[beyond] = True
+                corners = faces[beyond]
+                vertices, vertex_points, point_vertices = _new_rows_and_points(
+                    corners, welded, row_of, point_of, row_point.shape[0], points.shape[0])
+                points = np.concatenate((points, positions[point_vertices]))
+                point_welded = np.concatenate((point_welded, welded[point_vertices]))
+                signed = np.concatenate((signed, _signed_distances(points, signed.shape[0], start, end, radius)))
+                row_parents = np.concatenate((row_parents, _itself(row_point.shape[0], vertices.shape[0])))
+                row_point = np.concatenate((row_point, vertex_points))
+                row_vertex = np.concatenate((row_vertex, vertices))
+                row_t = np.concatenate((row_t, np.zeros(vertices.shape[0])))
+                first = rows.shape[0]
+                rows = np.concatenate((rows, _rows_of(corners, row_of)))
+                sources = np.concatenate((sources, beyond))
+                taken = np.concatenate((taken, beyond))
+                more_codes, more_longest, more_wanted = _describe(rows, first, row_point, points, signed, start, end,
+                                                                  radius, step)
+                codes = np.concatenate((codes, more_codes))
+                longest = np.concatenate((longest, more_longest))
+                wanted = np.concatenate((wanted, more_wanted))
+                if rows.shape[0] > capacity:            # (the same edge ids, more room)
+                    capacity = 2 * rows.shape[0]
+                    emap = edge_map(codes, rows.shape[0], capacity)
+                    marked = np.concatenate((marked, np.zeros(3 * capacity - marked.shape[0], np.bool_)))
+                    stack = np.concatenate((stack, np.empty(3 * capacity - stack.shape[0], np.int64)))
+                else:
+                    for g in range(first, rows.shape[0]):
+                        add_face_edges(emap, codes, g)
+                for g in range(first, rows.shape[0]):   # (a face taken in may have other marked edges)
+                    face_edge = emap[5][g]
+                    if wanted[g] == YES or marked[face_edge[0]] or marked[face_edge[1]] or marked[face_edge[2]]:
+                        depth = _mark(marked, stack, depth, face_edge[longest[g]])
+            incidence = emap[3][e]
+            while incidence >= 0:
+                g = incidence // 3
+                depth = _mark(marked, stack, depth, emap[5][g, longest[g]])
+                incidence = emap[4][incidence]
+        n_edges, edge_code = emap[6][0], emap[2]
+        marks = code_table(n_edges)
+        for e in range(n_edges):
+            if marked[e]:
+                marks[slot(marks, edge_code[e])] = edge_code[e]
+        rows, made_from, kept, parents, points_of_rows, point_parents = split(
+            rows, row_point, points, marks, row_point.shape[0], points.shape[0])
+        sources = sources[made_from]
+        points = np.concatenate((points, midpoints(points, point_parents)))
+        point_welded = np.concatenate((point_welded, np.full(point_parents.shape[0], NEW_POINT, np.int64)))
+        signed = np.concatenate((signed, _signed_distances(points, signed.shape[0], start, end, radius)))
+        row_point = np.concatenate((row_point, points_of_rows))
+        row_vertex = np.concatenate((row_vertex, np.full(parents.shape[0], -1, np.int64)))
+        row_parents = np.concatenate((row_parents, parents))
+        row_t = np.concatenate((row_t, np.full(parents.shape[0], 0.5)))
+        # the faces not split keep what was found about them; the halves are asked
+        half_codes, half_longest, half_wanted = _describe(rows, kept, row_point, points, signed, start, end, radius,
+                                                          step)
+        codes = np.concatenate((codes[made_from[:kept]], half_codes))
+        longest = np.concatenate((longest[made_from[:kept]], half_longest))
+        wanted = np.concatenate((wanted[made_from[:kept]], half_wanted))
+    return (rows, sources, points[first_point:].copy(), point_welded[first_point:].copy(),
+            row_point[first_row:].copy(), row_vertex, row_parents, row_t, taken, OUT_OF_ROUNDS)
+
+
+@helper
+def _mark(marked, stack, depth, e):
+    """Mark edge e (once: pushed on ``stack`` to be followed); the stack's new depth."""
+    if not marked[e]:
+        marked[e] = True
+        stack[depth] = e
+        depth += 1
+    return depth
+
+
+@helper
+def _describe(rows, first, row_point, points, signed, start, end, radius, step):
+    """For the faces of ``rows`` from ``first`` on: their edges' codes (k, 3), the corner (k,) whose edge
+    is longest, and whether each is to be split (k,) int8: longer than ``step`` and crossed by the bit's
+    surface (``bit.surface_crosses``; ``signed`` (P,) the points' signed distances)."""
+    k = rows.shape[0] - first
+    codes, longest, wanted, x = np.empty((k, 3), np.int64), np.empty(k, np.int64), np.empty(k, np.int8), np.empty(3)
+    for i in range(k):
+        f = first + i
+        p, q, r = row_point[rows[f, 0]], row_point[rows[f, 1]], row_point[rows[f, 2]]
+        codes[i, 0], codes[i, 1], codes[i, 2] = pair(p, q), pair(q, r), pair(r, p)
+        longest[i], squared = longest_edge(points, p, q, r)
+        wanted[i] = YES if squared > step * step and surface_crosses(points, p, q, r, signed, math.sqrt(squared),
+                                                                     start, end, radius, x) else NO
+    return codes, longest, wanted
+
+
+@helper
+def _faces_beyond(emap, e, sources, point_welded, mesh, is_taken):
+    """The input faces (k,) not taken yet on edge e of an ``edge_map`` of the patch's faces (from input
+    faces ``sources``), where it is an input edge: between two input points (bisection joins a new
+    point to a corner, so such an edge is an edge of the input face it lies in)."""
+    code = emap[2][e]
+    wa, wb = point_welded[code >> 32], point_welded[code & LOW_BITS]
+    welded_faces, face_edges, offsets, edge_faces = mesh[3], mesh[4], mesh[5], mesh[6]
+    incidence = emap[3][e]
+    while wa != NEW_POINT and wb != NEW_POINT and incidence >= 0:
+        s = sources[incidence // 3]
+        incidence = emap[4][incidence]
+        if s < 0:
+            continue
+        for j in range(3):
+            u, v = welded_faces[s, j], welded_faces[s, (j + 1) % 3]
+            if (u == wa and v == wb) or (u == wb and v == wa):
+                edge = face_edges[s, j]
+                out, count = np.empty(offsets[edge + 1] - offsets[edge], np.int64), 0
+                for i in range(offsets[edge], offsets[edge + 1]):
+                    if not is_taken[edge_faces[i]]:
+                        out[count] = edge_faces[i]
+                        count += 1
+                return out[:count].copy()
+    return np.empty(0, np.int64)
+
+
+@helper
+def _rows_of(corners, row_of):
+    """(k, 3) the rows of the input vertices ``corners`` (k, 3)."""
+    out = np.empty(corners.shape, np.int64)
+    for i in range(corners.shape[0]):
+        for k in range(3):
+            out[i, k] = row_of[corners[i, k]]
+    return out
+
+
+@helper
+def _itself(first, count):
+    """(count, 2): rows first, first + 1, ... each as its own parents (an input row)."""
+    out = np.empty((count, 2), np.int64)
+    for i in range(count):
+        out[i, 0] = out[i, 1] = first + i
+    return out
