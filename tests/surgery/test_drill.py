@@ -582,17 +582,16 @@ def test_random_bits_through_random_meshes(shape, seed, split, posed, data):
 @settings(max_examples=300, deadline=None)
 @given(st.data())
 def test_a_wall_row_takes_the_loop_row_nearest_in_angle(data):
-    """``Loop.nearest_rows`` (a search among the sorted angles) gives a row as near in angle as the
-    whole table of angular gaps finds (exactly: the same float gap), the first in the loop's order of
-    the rows at that angle: angles drawn from a few values (ties, and both -π and π) or anywhere,
-    asked at the loop's own angles and elsewhere."""
-    from cgaskin.surgery.drill.bit_surface import Loop
+    """``bit_surface.nearest_rows`` gives a row as near in angle as the whole table of angular gaps finds
+    (exactly: the same float gap), the first in the loop's order of the rows at that angle: angles drawn
+    from a few values (ties, and both -π and π) or anywhere, asked at the loop's own angles and
+    elsewhere."""
+    from cgaskin.surgery.drill.bit_surface import nearest_rows
     grid = st.sampled_from(np.linspace(-math.pi, math.pi, data.draw(st.integers(2, 13))).tolist())
     angle = grid | st.floats(-math.pi, math.pi)
     theta = np.array(data.draw(st.lists(angle, min_size=1, max_size=24)))
     asked = np.concatenate([theta, np.array(data.draw(st.lists(angle, max_size=24)), float)])
-    loop = Loop(list(range(100, 100 + len(theta))), np.arange(len(theta)), theta, np.zeros(len(theta)))
     gaps = np.abs((theta[None, :] - asked[:, None] + math.pi) % (2 * math.pi) - math.pi)
-    chosen = loop.nearest_rows(asked) - 100
+    chosen = nearest_rows(theta, np.arange(100, 100 + len(theta)), asked) - 100
     np.testing.assert_array_equal(gaps[np.arange(len(asked)), chosen], gaps.min(axis=1))
     np.testing.assert_array_equal(chosen, [np.flatnonzero(theta == theta[j])[0] for j in chosen])

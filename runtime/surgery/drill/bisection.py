@@ -80,7 +80,7 @@ def edge_map(codes, n_faces, capacity):
     next (3 capacity,) the incidence before each (incidence 3 f + k: corner edge k of face f),
     face_edge (capacity, 3) each corner edge's id, count (1,): the edges so far). Edge ids follow the
     order the faces come in, so a map rebuilt with more room gives the edges the same ids."""
-    table = code_table(3 * capacity)
+    table = code_table(2 * capacity)           # (>= 4 capacity slots: never full, <= 3 capacity edges)
     emap = (table, np.empty(table.shape[0], np.int64), np.empty(3 * capacity, np.int64),
             np.full(3 * capacity, -1, np.int64), np.empty(3 * capacity, np.int64), np.empty((capacity, 3), np.int64),
             np.zeros(1, np.int64))
@@ -106,34 +106,35 @@ def add_face_edges(emap, codes, f):
 
 @kernel((I2, I1, F2, I1, i8, i8), cost=0.5)
 def split_marked(rows, row_point, points, marked, first_row, first_point):
-    """``split`` on the edge codes ``marked`` (k,)."""
+    """``split`` on the edges whose points' codes are among ``marked`` (k,)."""
     marks = code_table(marked.shape[0])
     for code in marked:
         marks[slot(marks, code)] = code
-    faces, made_from, _, row_parents, row_points, point_parents = split(rows, row_point, points, marks, first_row,
-                                                                          first_point)
+    on_marked = np.empty(rows.shape, np.bool_)
+    for f in range(rows.shape[0]):
+        for k in range(3):
+            on_marked[f, k] = has(marks, pair(row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]]))
+    faces, made_from, _, row_parents, row_points, point_parents = split(rows, row_point, points, on_marked,
+                                                                          first_row, first_point)
     return faces, made_from, row_parents, row_points, point_parents
 
 
 @helper
-def split(rows, row_point, points, marks, first_row, first_point):
-    """Split every face of ``rows`` (F, 3) with a marked edge (its points' code in the table ``marks``):
-    on its longest edge if that is marked (else the first marked), then each half on the other edge it
-    keeps, if that is marked: 2 to 4 faces, wound as the face. Each marked vertex edge gets one new row
-    (ids from ``first_row``) at its welded edge's one new point (ids from ``first_point``).
+def split(rows, row_point, points, split, first_row, first_point):
+    """Split every face of ``rows`` (F, 3) with a marked edge (``split`` (F, 3): whether each corner edge
+    k -> k+1 is, alike on every face that has it): on its longest edge if that is marked (else the
+    first marked), then each half on the other edge it keeps, if that is marked: 2 to 4 faces, wound as
+    the face. Each marked vertex edge gets one new row (ids from ``first_row``) at its welded edge's one
+    new point (ids from ``first_point``).
 
     Returns faces (G, 3): the faces not split, in order, then the halves; the face (G,) each is or
-    comes from; how many are not split; the new rows' parents (r, 2) (lower row first) and points (r,); the new points'
-    parents (p, 2) (the welded edge's points, lower first)."""
+    comes from; how many are not split; the new rows' parents (r, 2) (lower row first) and points (r,);
+    the new points' parents (p, 2) (the welded edge's points, lower first)."""
     n = rows.shape[0]
-    split = np.zeros((n, 3), np.bool_)
     count = 0
     for f in range(n):
         for k in range(3):
-            code = pair(row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]])
-            if has(marks, code):
-                split[f, k] = True
-                count += 1
+            count += split[f, k]
     row_table, point_table = code_table(count), code_table(count)
     row_id, point_id = np.empty(row_table.shape[0], np.int64), np.empty(point_table.shape[0], np.int64)
     row_parents, row_points, point_parents = np.empty((count, 2), np.int64), np.empty(count, np.int64), \
@@ -158,7 +159,8 @@ def split(rows, row_point, points, marks, first_row, first_point):
                 row_points[rows_made] = point_id[point_at]
                 rows_made += 1
             midpoint[f, k] = row_id[at]
-    out, made_from = np.empty((n + 3 * n, 3), np.int64), np.empty(n + 3 * n, np.int64)
+    # (a face with j marked edges becomes j + 1 faces)
+    out, made_from = np.empty((n + count, 3), np.int64), np.empty(n + count, np.int64)
     made = 0
     for f in range(n):
         if not (split[f, 0] or split[f, 1] or split[f, 2]):
@@ -167,7 +169,7 @@ def split(rows, row_point, points, marks, first_row, first_point):
     for f in range(n):
         if split[f, 0] or split[f, 1] or split[f, 2]:
             made = _halves(out, made_from, made, f, rows, row_point, points, midpoint)
-    return (out[:made].copy(), made_from[:made].copy(), kept, row_parents[:rows_made].copy(),
+    return (out, made_from, kept, row_parents[:rows_made].copy(),
             row_points[:rows_made].copy(), point_parents[:points_made].copy())
 
 

@@ -24,14 +24,15 @@ class Frame:
     def __init__(self, bit):
         self.start, self.end, self.r = bit.start, bit.end, bit.radius
         d = bit.end - bit.start
-        self.length = float(np.linalg.norm(d))
+        self.length = math.sqrt(float(d @ d))
         self.u = d / self.length
-        helper = np.eye(3)[int(np.argmin(np.abs(self.u)))]
-        self.e1 = _cross(self.u, helper)
-        self.e1 /= np.linalg.norm(self.e1)
+        helper = np.zeros(3)
+        helper[int(np.argmin(np.abs(self.u)))] = 1.0
+        e1 = _cross(self.u, helper)
+        self.e1 = e1 / math.sqrt(float(e1 @ e1))
         self.e2 = _cross(self.u, self.e1)
         self.top = self.length + 0.5 * math.pi * self.r          # σ of the tip's pole
-        self._axes = np.stack([self.u, self.e1, self.e2])
+        self.axes = np.array([self.u, self.e1, self.e2])        # (3, 3): u, e1, e2 as rows
 
     def coordinates(self, x) -> tuple:
         """(θ, σ) of points x (k, 3) on the bit's surface."""
@@ -50,7 +51,7 @@ class Frame:
     def points(self, theta, sigma) -> np.ndarray:
         """The surface points (k, 3) at angles θ (k,) and heights σ (k,) (``_surface_points``)."""
         return _surface_points(np.ascontiguousarray(theta, np.float64), np.ascontiguousarray(sigma, np.float64),
-                               self.start, self._axes, self.length, self.r)
+                               self.start, self.axes, self.length, self.r)
 
     def axis_point(self, sigma: float) -> np.ndarray:
         """The point of the axis at the height of σ (inside the bit)."""
@@ -81,30 +82,59 @@ def _surface_points(theta, sigma, start, axes, length, r):
 
 
 class Loop:
-    """A rim loop: its rows (one per corner, in the boundary's direction), points, (θ, σ), winding."""
+    """A rim loop: its rows (one per corner, in the boundary's direction), points, (θ, σ) and θ unwrapped
+    along it, its winding about the axis (``loops`` makes them)."""
 
-    def __init__(self, rows, points, theta, sigma):
-        self.rows, self.points, self.sigma = np.asarray(rows, np.int64), points, sigma
-        turns = np.diff(np.concatenate([theta, theta[:1]]))
-        turns = (turns + math.pi) % (2 * math.pi) - math.pi
-        self.unwrapped = theta[0] + np.concatenate([[0.0], np.cumsum(turns[:-1])])
-        self.winding = int(round(turns.sum() / (2 * math.pi)))
-        self.theta = np.ascontiguousarray(theta, np.float64)
+    def __init__(self, rows, points, theta, sigma, unwrapped, winding: int):
+        self.rows, self.points = np.asarray(rows, np.int64), points
+        self.theta, self.sigma, self.unwrapped, self.winding = theta, sigma, unwrapped, int(winding)
 
-    def height_at(self, theta: np.ndarray) -> np.ndarray:
-        """σ of the loop at angles θ (linear between its corners, periodic)."""
-        order = np.argsort(self.theta)
-        t, s = self.theta[order], self.sigma[order]
-        return np.interp(theta, np.concatenate([t - 2 * math.pi, t, t + 2 * math.pi]), np.tile(s, 3))
 
-    def nearest_rows(self, theta) -> np.ndarray:
-        """The loop's rows (k,) nearest in angle to each of θ (k,): of the rows at the nearest angle, the
-        first in the loop's order (``_nearest``)."""
-        return _nearest(self.theta, self.rows, np.ascontiguousarray(theta, np.float64))
+def loops(frame: Frame, rows, points, positions, offsets) -> list:
+    """The ``Loop``s of corners ``rows`` (L,) at ``points`` (L,) with ``positions`` (L, 3) on the bit's
+    surface, loop i being [offsets[i], offsets[i + 1]) (``_loop_coordinates``)."""
+    theta, sigma, unwrapped, winding = _loop_coordinates(positions, offsets, frame.start, frame.axes, frame.length,
+                                                         frame.r)
+    return [Loop(rows[i:j], points[i:j], theta[i:j], sigma[i:j], unwrapped[i:j], w)
+            for i, j, w in zip(offsets[:-1].tolist(), offsets[1:].tolist(), winding.tolist())]
+
+
+@kernel((F2, I1, F1, F2, f8, f8), cost=0.2)
+def _loop_coordinates(x, offsets, start, axes, length, r):
+    """(θ, σ) (L,) of points x (L, 3) on the bit's surface (``Frame``: start, axes, length, r); θ unwrapped
+    (L,) along each loop [offsets[i], offsets[i + 1]) (each turn to the next corner taken in [-π, π)),
+    and each loop's winding (k,): its turns' sum in whole turns."""
+    n = x.shape[0]
+    theta, sigma, unwrapped = np.empty(n), np.empty(n), np.empty(n)
+    for i in range(n):
+        s, a, b = 0.0, 0.0, 0.0
+        for k in range(3):
+            w = x[i, k] - start[k]
+            s, a, b = s + w * axes[0, k], a + w * axes[1, k], b + w * axes[2, k]
+        theta[i], radial = math.atan2(b, a), math.hypot(a, b)
+        if s > length:
+            sigma[i] = length + r * math.atan2(s - length, radial)
+        elif s < 0.0:
+            sigma[i] = -r * math.atan2(-s, radial)
+        else:
+            sigma[i] = s
+    winding = np.empty(offsets.shape[0] - 1, np.int64)
+    for loop in range(offsets.shape[0] - 1):
+        first, last = offsets[loop], offsets[loop + 1]
+        total = 0.0
+        unwrapped[first] = theta[first]
+        for j in range(first, last):
+            following = j + 1 if j + 1 < last else first
+            turn = (theta[following] - theta[j] + math.pi) % (2.0 * math.pi) - math.pi
+            total += turn
+            if j + 1 < last:
+                unwrapped[j + 1] = unwrapped[j] + turn
+        winding[loop] = round(total / (2.0 * math.pi))
+    return theta, sigma, unwrapped, winding
 
 
 @kernel((F1, I1, F1), cost=0.1)
-def _nearest(angles, rows, theta):
+def nearest_rows(angles, rows, theta):
     """For each of θ (k,), the row (of ``rows`` (n,), at ``angles`` (n,)) whose angle is nearest around the
     circle, the first on a tie (a loop has tens of corners and a tunnel asks once per column)."""
     out = np.empty(theta.shape[0], np.int64)

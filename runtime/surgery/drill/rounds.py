@@ -11,7 +11,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, kernel, record
-from .bisection import add_face_edges, code_table, edge_map, longest_edge, midpoints, pair, slot, split
+from .bisection import add_face_edges, edge_map, longest_edge, midpoints, pair, split
 from .bit import _signed_distances, surface_crosses
 from .patch import LOW_BITS, NEW_POINT, _new_rows_and_points
 
@@ -89,18 +89,18 @@ def refine_rounds(points, point_welded, rows, sources, row_point, mesh, maps, st
                     row_point[first_row:].copy(), row_vertex, row_parents, row_t, taken, REFINED)
         # the closure of the marks: each marked edge marks the longest edge of every face on it, and
         # takes in the input faces beyond the patch on it first
-        capacity = 2 * rows.shape[0] + 64
+        capacity = rows.shape[0] + 64                 # (room for faces taken in)
         emap = edge_map(codes, rows.shape[0], capacity)
         marked, stack = np.zeros(3 * capacity, np.bool_), np.empty(3 * capacity, np.int64)
         depth = 0
         for f in range(rows.shape[0]):
             if wanted[f] == YES:
                 depth = _mark(marked, stack, depth, emap[5][f, longest[f]])
-        while depth > 0:
-            depth -= 1
-            e = stack[depth]
-            beyond = _faces_beyond(emap, e, sources, point_welded, mesh, is_taken)
-            if beyond.shape[0]:
+        pending, n_pending = np.empty(16, np.int64), 0     # input edges with faces beyond the patch
+        while depth > 0 or n_pending > 0:
+            if depth == 0:              # the faces beyond join the patch, all at once, and the closure
+                beyond = _faces_on(pending[:n_pending], mesh, is_taken)
+                n_pending = 0
                 is_taken[beyond] = True
                 corners = faces[beyond]
                 vertices, vertex_points, point_vertices = _new_rows_and_points(
@@ -129,22 +129,28 @@ def refine_rounds(points, point_welded, rows, sources, row_point, mesh, maps, st
                 else:
                     for g in range(first, rows.shape[0]):
                         add_face_edges(emap, codes, g)
-                for g in range(first, rows.shape[0]):   # (a face taken in may have other marked edges)
-                    face_edge = emap[5][g]
-                    if wanted[g] == YES or marked[face_edge[0]] or marked[face_edge[1]] or marked[face_edge[2]]:
-                        depth = _mark(marked, stack, depth, face_edge[longest[g]])
+                for g in range(first, rows.shape[0]):   # (each is on a marked edge: it marks its longest)
+                    depth = _mark(marked, stack, depth, emap[5][g, longest[g]])
+                continue
+            depth -= 1
+            e = stack[depth]
+            edge = _open_input_edge(emap, e, sources, point_welded, mesh, is_taken)
+            if edge >= 0:
+                if n_pending == pending.shape[0]:
+                    pending = np.concatenate((pending, np.empty(n_pending, np.int64)))
+                pending[n_pending] = edge
+                n_pending += 1
             incidence = emap[3][e]
             while incidence >= 0:
                 g = incidence // 3
                 depth = _mark(marked, stack, depth, emap[5][g, longest[g]])
                 incidence = emap[4][incidence]
-        n_edges, edge_code = emap[6][0], emap[2]
-        marks = code_table(n_edges)
-        for e in range(n_edges):
-            if marked[e]:
-                marks[slot(marks, edge_code[e])] = edge_code[e]
+        on_marked = np.empty(rows.shape, np.bool_)
+        for f in range(rows.shape[0]):
+            for k in range(3):
+                on_marked[f, k] = marked[emap[5][f, k]]
         rows, made_from, kept, parents, points_of_rows, point_parents = split(
-            rows, row_point, points, marks, row_point.shape[0], points.shape[0])
+            rows, row_point, points, on_marked, row_point.shape[0], points.shape[0])
         sources = sources[made_from]
         points = np.concatenate((points, midpoints(points, point_parents)))
         point_welded = np.concatenate((point_welded, np.full(point_parents.shape[0], NEW_POINT, np.int64)))
@@ -191,10 +197,10 @@ def _describe(rows, first, row_point, points, signed, start, end, radius, step):
 
 
 @helper
-def _faces_beyond(emap, e, sources, point_welded, mesh, is_taken):
-    """The input faces (k,) not taken yet on edge e of an ``edge_map`` of the patch's faces (from input
-    faces ``sources``), where it is an input edge: between two input points (bisection joins a new
-    point to a corner, so such an edge is an edge of the input face it lies in)."""
+def _open_input_edge(emap, e, sources, point_welded, mesh, is_taken):
+    """The input edge (its id in ``mesh``) that edge e of an ``edge_map`` of the patch's faces (from input
+    faces ``sources``) is, if input faces not ``taken`` have it too; else -1. (An edge between two
+    input points is an edge of the input face it lies in: bisection joins a new point to a corner.)"""
     code = emap[2][e]
     wa, wb = point_welded[code >> 32], point_welded[code & LOW_BITS]
     welded_faces, face_edges, offsets, edge_faces = mesh[3], mesh[4], mesh[5], mesh[6]
@@ -208,13 +214,33 @@ def _faces_beyond(emap, e, sources, point_welded, mesh, is_taken):
             u, v = welded_faces[s, j], welded_faces[s, (j + 1) % 3]
             if (u == wa and v == wb) or (u == wb and v == wa):
                 edge = face_edges[s, j]
-                out, count = np.empty(offsets[edge + 1] - offsets[edge], np.int64), 0
                 for i in range(offsets[edge], offsets[edge + 1]):
                     if not is_taken[edge_faces[i]]:
-                        out[count] = edge_faces[i]
-                        count += 1
-                return out[:count].copy()
-    return np.empty(0, np.int64)
+                        return edge
+                return -1
+    return -1
+
+
+@helper
+def _faces_on(edges, mesh, is_taken):
+    """The distinct input faces (k,) not ``taken`` on the input ``edges`` (e,) (ids in ``mesh``)."""
+    offsets, edge_faces = mesh[5], mesh[6]
+    total = 0
+    for edge in edges:
+        total += offsets[edge + 1] - offsets[edge]
+    out, count = np.empty(total, np.int64), 0
+    for edge in edges:
+        for i in range(offsets[edge], offsets[edge + 1]):
+            g = edge_faces[i]
+            if is_taken[g]:
+                continue
+            seen = False
+            for j in range(count):
+                seen |= out[j] == g
+            if not seen:
+                out[count] = g
+                count += 1
+    return out[:count].copy()
 
 
 @helper

@@ -12,7 +12,7 @@ surface (``bit_surface.Loop``):
   wall and round bottom) or to that loop only where the axis beyond it is inside the input model (its
   winding number, a solid-angle sum over all its faces: the one global step, taken only then);
 * a tunnel is made of rings at heights between the two loops' (columns and rings about ``step``
-  apart), zipped together by angle; its vertices lie on the bit's surface;
+  apart), zipped together by angle (``tunnel.py``); its vertices lie on the bit's surface;
 * a loop that does not wind around the axis (a bit grazing the model's side) is filled with the part of
   the surface it encloses: its two chains zipped by angle (or ear-clipped in the unrolled (r θ, σ)
   plane and refined, ``_refine_fills``).
@@ -30,11 +30,12 @@ import numpy as np
 from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
-from .bit_surface import Frame, Loop
+from .bit_surface import Frame, Loop, loops
 from .patch import LOW_BITS, Patch, edge_codes
 from .refine import MAX_ROUNDS, bisect_marked
 from .rim import rim_loops
-from .strips import grid, zip_chains, zip_rings
+from .strips import zip_chains
+from .tunnel import tunnel
 
 #: the winding about the bit's travel of a rim where it enters an outward-facing surface
 ENTRY = 1
@@ -54,11 +55,11 @@ def build_walls(patch: Patch, rim, bit, step: float, inside) -> int:
         if a.winding != ENTRY:
             continue
         if b is not None and b.winding != ENTRY:
-            _tunnel(patch, frame, a, b, step)           # an entry, then an exit
+            tunnel(patch, frame, a, b, step, WALL)      # an entry, then an exit
             continue
         beyond = frame.top if b is None else float(b.sigma.min())
         if inside(frame.axis_point(0.5 * (float(a.sigma.max()) + beyond))):
-            _tunnel(patch, frame, a, b, step)           # a blind hole (or a surface facing the wrong way)
+            tunnel(patch, frame, a, b, step, WALL)      # a blind hole (or a surface facing the wrong way)
     fills = [loop for loop in loops if loop.winding == 0]
     for loop in fills:
         _fill(patch, frame, loop, step)
@@ -73,75 +74,13 @@ def _rim_loops(patch: Patch, rim, frame: Frame) -> list:
     on_rim = np.zeros(patch.n_points, bool)
     on_rim[patch.row_point[rim]] = True
     rows, points, offsets = rim_loops(patch.faces, patch.row_point, on_rim)
-    theta, sigma = frame.coordinates(patch.point_array()[points])
-    return [Loop(rows[i:j], points[i:j], theta[i:j], sigma[i:j]) for i, j in zip(offsets[:-1], offsets[1:])]
-
-
-def _wall_rings(patch: Patch, frame: Frame, columns, sigma, a: Loop, b: Loop | None, weights) -> np.ndarray:
-    """New wall rows (k, c) in rings at angles ``columns`` (c,) and heights ``sigma`` (k, c) between loop
-    a and loop b (or the tip: None), their weights and attributes blended from the rim rows nearest in
-    angle on the two loops (``weights`` (k,): b's share in each ring)."""
-    ra = a.nearest_rows(columns)
-    rb = ra if b is None else b.nearest_rows(columns)
-    shape = sigma.shape
-    first = patch.add_points(frame.points(np.tile(columns, shape[0]), sigma.ravel()))
-    t = 0.0 if b is None else np.repeat(weights, shape[1])
-    first_row = patch.new_rows(first + np.arange(sigma.size), np.tile(ra, shape[0]), np.tile(rb, shape[0]), t)
-    return (first_row + np.arange(sigma.size)).reshape(shape)
-
-
-def _pole_row(patch: Patch, frame: Frame, sigma: float, loop: Loop) -> int:
-    """The row at the bit's tip, blended evenly from six rows spread around the loop it closes (a chain
-    of blends: the rows between are used by no face, and dropped)."""
-    picks = [loop.rows[i] for i in np.linspace(0, len(loop.rows) - 1, 6).astype(int)]
-    position = frame.point(0.0, sigma)
-    row = picks[0]
-    for i, r in enumerate(picks[1:], start=2):
-        row = _surface_row(patch, position, row, r, 1.0 / i)
-    return row
-
-
-def _surface_row(patch: Patch, position, a: int, b: int, t: float) -> int:
-    return patch.new_row(patch.add_point(position), a, b, t)
+    return loops(frame, rows, points, patch.point_array()[points], offsets)
 
 
 def _loop_rows(patch: Patch, loop: Loop) -> np.ndarray:
     """Wall rows (k,) at the loop's own corners (the rim's points, rows of their own)."""
     first = patch.new_rows(loop.points, loop.rows, loop.rows, 0.0)
     return np.arange(first, first + len(loop.rows))
-
-
-def _tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float) -> None:
-    """The wall from loop a up to loop b (or to the tip's pole): rings between them, each zipped to the
-    next in the direction of increasing angle; faces wound to face the axis (in (θ, σ), counter-clockwise
-    faces away from it: ∂θ × ∂σ is the outward radial)."""
-    count = max(8, int(math.ceil(2.0 * math.pi * frame.r / step)))
-    columns = np.linspace(-math.pi, math.pi, count, endpoint=False)     # the rings' angles, step apart
-    low = a.height_at(columns)
-    high = b.height_at(columns) if b is not None else np.full(len(columns), frame.top)
-    rings_between = max(1, int(math.ceil(float(np.max(np.abs(high - low))) / step)))
-    weights = np.arange(1, rings_between) / rings_between
-    bottom = _loop_ring(patch, a)
-    inner = _wall_rings(patch, frame, columns, (1 - weights)[:, None] * low + weights[:, None] * high, a, b, weights)
-    top = _loop_ring(patch, b) if b is not None else None
-    if len(inner):          # the loops zipped to the first and last ring, the rings between as a grid
-        strips = [zip_rings(*bottom, inner[0], columns), grid(inner)]
-        last = (inner[-1], columns)
-    else:
-        strips, last = [], bottom
-    if top is not None:
-        strips.append(zip_rings(*last, *top))
-    if b is None:
-        pole = _pole_row(patch, frame, frame.top, a)
-        rows = np.asarray(last[0], np.int64)
-        strips.append(np.column_stack([np.roll(rows, -1), np.full(len(rows), pole), rows]))
-    patch.add_faces(np.concatenate(strips)[:, [0, 2, 1]], WALL)
-
-
-def _loop_ring(patch: Patch, loop: Loop) -> tuple:
-    """(rows, unwrapped angles) of a winding loop's own wall rows, in the direction of increasing angle."""
-    rows, angles = _loop_rows(patch, loop), loop.unwrapped
-    return (rows, angles) if loop.winding > 0 else (rows[::-1].copy(), angles[::-1].copy())
 
 
 def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
