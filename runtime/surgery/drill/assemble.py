@@ -161,14 +161,13 @@ def assemble(rig: Rig, patch: Patch, rim, bit, affines, diagonal: float) -> Asse
     vertices, faces, joints, weights = mesh_arrays(rig)
     lay = Layout(*_layout(faces, len(vertices), patch.taken, patch.faces, patch.face_source, patch.row_vertex,
                           patch.row_point, patch.n_points))
-    src, coef = patch.descriptions()
-    new = NewVertices(src[lay.new_rows], coef[lay.new_rows])
-    new_positions = patch.point_array()[patch.row_point[lay.new_rows]]
+    src, coef, new_positions = _new_rows(*patch.descriptions(), patch.row_point, patch.point_array(), lay.new_rows)
+    new = NewVertices(src, coef)
     # the copies of a new vertex at one point (a seam's sides, a wall's row at its rim) skin alike: their
     # weights and rest position are the first copy's (blended from other input rows, ties in the blend
     # could pick other bones), their attributes their own
     new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
-    new_joints, new_weights = new_joints[lay.first_copy], new_weights[lay.first_copy]
+    _as_first_copies(new_joints, new_weights, lay.first_copy)
     new_rest, residual = new_positions, 0.0
     if affines is not None and len(lay.new_rows):
         new_rest, residual = _placed(vertices, new, new_positions, new_joints, new_weights, affines, diagonal)
@@ -189,6 +188,30 @@ def assemble(rig: Rig, patch: Patch, rim, bit, affines, diagonal: float) -> Asse
     sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
     return Assembled(result, sources, new, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions,
                      lay.replaced, lay.made_in, residual)
+
+
+@kernel((I2, F2, I1, F2, I1), cost=0.2)
+def _new_rows(src, coef, row_point, points, new_rows):
+    """The descriptions (``Patch.descriptions``: ``src``, ``coef`` (R, s)) and positions (k, 3) of the
+    rows ``new_rows`` (k,) (``row_point`` (R,) their points, ``points`` (P, 3))."""
+    k, s = new_rows.shape[0], src.shape[1]
+    out_src, out_coef, positions = np.empty((k, s), np.int64), np.empty((k, s)), np.empty((k, 3))
+    for i in range(k):
+        r = new_rows[i]
+        for j in range(s):
+            out_src[i, j], out_coef[i, j] = src[r, j], coef[r, j]
+        for c in range(3):
+            positions[i, c] = points[row_point[r], c]
+    return out_src, out_coef, positions
+
+
+@kernel((I2, F2, I1), cost=0.1)
+def _as_first_copies(joints, weights, first_copy):
+    """Give each row of ``joints``, ``weights`` (k, 4) the values of row ``first_copy[i]`` (<= i), in place."""
+    for i in range(first_copy.shape[0]):
+        j = first_copy[i]
+        if j != i:
+            joints[i], weights[i] = joints[j], weights[j]
 
 
 @kernel((F2, F1, F1), cost=0.2)

@@ -163,15 +163,32 @@ def _signed_distances(positions, first, start, end, radius):
 BISECT_EVERY = 4
 
 
+#: the half-widths, in the edge parameter, of the brackets ``crossing`` tries about its closed-form guess
+#: (off by rounding only: the first brackets the crossing where the edge is not nearly tangent), smallest
+#: first
+GUESS_BRACKETS = (3e-14, 1e-11, 1e-8)
+
+
 @helper
 def crossing(p, q, start, end, axis, radius, x):
     """The parameter t where the edge p -> q (3,), one end inside the bit and the other outside, meets
-    the bit's surface (``axis`` = end - start; ``x`` (3,) scratch): the bracket [0, 1] narrowed by
-    regula falsi steps (Illinois: an end kept twice has its value halved, so both ends close in) and a
-    bisection every ``BISECT_EVERY`` steps, until it cannot shrink; the end of the bracket nearer the
-    surface."""
+    the bit's surface (``axis`` = end - start; ``x`` (3,) scratch): a bracket narrowed by regula falsi
+    steps (Illinois: an end kept twice has its value halved, so both ends close in) and a bisection
+    every ``BISECT_EVERY`` steps, until it cannot shrink; the end of the bracket nearer the surface.
+    The bracket is the first of ``GUESS_BRACKETS`` about the closed-form crossing (``_guess``) across
+    which f changes sign as across the edge, else [0, 1]."""
     lo, hi = 0.0, 1.0
     f_lo, f_hi = _segment_distance(start, end, axis, p) - radius, _segment_distance(start, end, axis, q) - radius
+    guess = _guess(p, q, start, end, axis, radius)
+    for half in GUESS_BRACKETS:
+        a, b = guess - half, guess + half
+        if not 0.0 < a < b < 1.0:
+            break
+        f_a = _segment_distance(start, end, axis, _put_on_edge(p, q, a, x)) - radius
+        f_b = _segment_distance(start, end, axis, _put_on_edge(p, q, b, x)) - radius
+        if (f_a < 0.0) == (f_lo < 0.0) and (f_b < 0.0) == (f_hi < 0.0):
+            lo, hi, f_lo, f_hi = a, b, f_a, f_b
+            break
     g_lo, g_hi = f_lo, f_hi                 # (the values the secant uses: Illinois halves them)
     kept, step = 0, 0
     while True:
@@ -195,3 +212,43 @@ def crossing(p, q, start, end, axis, radius, x):
                 g_lo *= 0.5
             kept = 1
     return lo if abs(f_lo) <= abs(f_hi) else hi
+
+
+@helper
+def _guess(p, q, start, end, axis, radius):
+    """Where p -> q (3,) meets the bit's surface, in closed form: a root in [0, 1] of |p + t (q - p) -
+    axis line|^2 = r^2 whose point projects inside the travel, else of |p + t (q - p) - c|^2 = r^2 with
+    c the end of the travel it lies beyond; -1 where none is found."""
+    dx, dy, dz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+    wx, wy, wz = p[0] - start[0], p[1] - start[1], p[2] - start[2]
+    length2 = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]
+    d_along, w_along = (dx * axis[0] + dy * axis[1] + dz * axis[2]), (wx * axis[0] + wy * axis[1] + wz * axis[2])
+    a = dx * dx + dy * dy + dz * dz - d_along * d_along / length2
+    b = 2.0 * (wx * dx + wy * dy + wz * dz - w_along * d_along / length2)
+    c = wx * wx + wy * wy + wz * wz - w_along * w_along / length2 - radius * radius
+    for t in _quadratic_roots(a, b, c):
+        along = (w_along + t * d_along) / length2
+        if 0.0 <= t <= 1.0 and 0.0 <= along <= 1.0:
+            return t
+    for beyond_end in (False, True):          # (the round ends)
+        cap = end if beyond_end else start
+        ex, ey, ez = p[0] - cap[0], p[1] - cap[1], p[2] - cap[2]
+        for t in _quadratic_roots(dx * dx + dy * dy + dz * dz, 2.0 * (ex * dx + ey * dy + ez * dz),
+                                  ex * ex + ey * ey + ez * ez - radius * radius):
+            along = (w_along + t * d_along) / length2
+            if 0.0 <= t <= 1.0 and (along > 1.0 if beyond_end else along < 0.0):
+                return t
+    return -1.0
+
+
+@helper
+def _quadratic_roots(a, b, c):
+    """The real roots (two, equal where one; -1, -1 where none) of a t^2 + b t + c (a > 0), each computed
+    without cancellation."""
+    disc = b * b - 4.0 * a * c
+    if a <= 0.0 or disc < 0.0:
+        return -1.0, -1.0
+    u = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    if u == 0.0:
+        return 0.0, 0.0
+    return u / a, c / u
