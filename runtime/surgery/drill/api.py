@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._shared.cache import rig_cached
 from ..._shared.jit import F1, F2, I2, kernel
 from ..._shared.memory import collection_paused
 from ...animation.rig import Rig
@@ -93,7 +94,8 @@ def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) ->
     the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
     affines = None if pose is None else check_pose(rig, pose).bone_affines()
     positions = vertices if affines is None else skin_affine(vertices, joints, weights, affines)
-    diagonal = box_diagonal(positions)
+    diagonal = rig_cached(rig, "drill.diagonal", lambda _: box_diagonal(vertices)) if affines is None else \
+        box_diagonal(positions)
     return drill_region(rig, the_bit, wall, affines, positions, diagonal,
                         lambda p: winding_number(positions, faces, p) > 0.5)
 
@@ -120,11 +122,11 @@ def _drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagon
     faces = mesh_arrays(rig).faces
     step = RIM_STEP * the_bit.radius
     patch = Patch(positions, faces, rig_topology(rig))
-    patch.take(faces_near_bit(positions, faces, the_bit))
+    first = faces_near_bit(positions, faces, the_bit)
     tolerance = tol.on_plane * max(diagonal, the_bit.radius)
     rim, opened = np.empty(0, np.int64), 0
-    if len(patch.faces):
-        refine(patch, the_bit, step)
+    if len(first):
+        refine(patch, first, the_bit, step)
         rim, opened = open_hole(patch, the_bit, tolerance)
     if opened == 0:
         raise missed(the_bit, rig.name)

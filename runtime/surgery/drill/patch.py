@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import F1, I1, I2, helper, i8, kernel
+from ..._shared.jit import F1, I1, I2, helper, kernel
 from ..new_vertices import accumulate, largest_first
 
 #: input vertices a new vertex is described by at most: 3 in a face, 6 on a wall (between two rims)
@@ -77,6 +77,9 @@ class Patch:
     row_of : (n,) int64, the row of each input vertex (-1: none) ; point_of : (w,) int64, the point of
         each of the input's welded vertices (-1: none)
     fill_params : dict point id -> (θ, σ) on the bit's surface, for the points of a wall's fill
+
+    Input faces join it through ``rounds.refine_rounds`` (``grow``), new rows and faces through the
+    other steps.
     """
 
     def __init__(self, positions, faces, topology):
@@ -101,24 +104,6 @@ class Patch:
     n_rows = property(lambda self: self._row_point.n)
 
     # -- building ------------------------------------------------------------------------------------
-    def take(self, faces) -> int:
-        """Add the input faces ``faces`` (k,) (distinct) not taken yet: rows for their vertices that have
-        none and points for their welded vertices that have none, in the order their corners come.
-        Returns how many faces were added."""
-        faces = faces[~self.is_taken[faces]]
-        if not len(faces):
-            return 0
-        corners = self.mesh_faces[faces]
-        vertices, vertex_points, point_vertices = _new_rows_and_points(
-            corners, self.topology.welded, self.row_of, self.point_of, self.n_rows, self.n_points)
-        self._add_points(self.positions[point_vertices], self.topology.welded[point_vertices])
-        rows = self.new_rows(vertex_points, 0, 0, 0.0, vertices) + np.arange(len(vertices))
-        self._row_parents.view()[rows] = rows[:, None]          # (an input row is itself)
-        self.add_faces(self.row_of[corners], faces)
-        self._taken.extend(faces)
-        self.is_taken[faces] = True
-        return len(faces)
-
     def grow(self, made) -> None:
         """Take in what ``rounds.refine_rounds`` made (a ``Refined``; it updated the maps in place)."""
         self._add_points(made.points, made.point_welded)
@@ -214,8 +199,8 @@ def _descriptions(vertex, parents, t):
     return src, coef
 
 
-@kernel((I2, I1, I1, I1, i8, i8), cost=0.3)
-def _new_rows_and_points(corners, welded, row_of, point_of, first_row, first_point):
+@helper
+def new_rows_and_points(corners, welded, row_of, point_of, first_row, first_point):
     """The rows and points that faces with ``corners`` (k, 3) (input vertices) add to a patch, in the
     order the corners come: ``row_of`` (n,) and ``point_of`` (w,) (-1: none yet) get the new ids (rows
     from ``first_row``, points from ``first_point``) in place. Returns the new rows' vertices (v,), their

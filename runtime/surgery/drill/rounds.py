@@ -14,7 +14,7 @@ from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, inlined, kernel, 
 from .bisection import EMPTY, add_face_edges, code_table, edge_map, grown, halves, longest_edge, pair, \
     remove_face_edges, slot, with_room
 from .bit import _signed_distances, surface_crosses
-from .patch import LOW_BITS, NEW_POINT, _new_rows_and_points
+from .patch import LOW_BITS, NEW_POINT, new_rows_and_points
 
 #: how ``refine_rounds`` ended: no face the surface crosses is longer than the step; the rounds ran out
 REFINED, OUT_OF_ROUNDS = 0, 1
@@ -75,11 +75,13 @@ FACES, POINTS, ROWS, TAKEN = 0, 1, 2, 3
 #   marks: (marked (E,) per edge of the ``edge_map``, stack (E,) the marked edges still to follow)
 
 
-@kernel((F2, I1, I2, I1, I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=2.0)
-def refine_rounds(points, point_welded, rows, sources, row_point, mesh, maps, start, end, radius, step, rounds):
-    """Refine a patch: ``points`` (P, 3) and ``point_welded`` (P,), its faces ``rows`` (F, 3) from input
-    faces ``sources`` (F,), ``row_point`` (R,) the point of each row; ``mesh`` an ``InputMesh``;
-    ``maps`` the patch's row_of, point_of and is_taken, updated in place as faces are taken in.
+@kernel((F2, I1, I2, I1, I1, I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=2.0)
+def refine_rounds(points, point_welded, rows, sources, row_point, first, mesh, maps, start, end, radius, step,
+                  rounds):
+    """Take the input faces ``first`` (k,) (not taken yet) into a patch and refine it: ``points`` (P, 3)
+    and ``point_welded`` (P,), its faces ``rows`` (F, 3) from input faces ``sources`` (F,), ``row_point``
+    (R,) the point of each row; ``mesh`` an ``InputMesh``; ``maps`` the patch's row_of, point_of and
+    is_taken, updated in place as faces are taken in.
 
     Each round marks the longest edge of every face longer than ``step`` that the bit's surface crosses
     (``bit.surface_crosses``), closes the marks (a marked edge marks the longest edge of every face on
@@ -100,6 +102,8 @@ def refine_rounds(points, point_welded, rows, sources, row_point, mesh, maps, st
     emap = edge_map(faces[2], n, capacity)
     marks = (np.zeros(emap[2].shape[0], np.bool_), np.empty(emap[2].shape[0], np.int64))
     taken = np.empty(16, np.int64)
+    faces, points, made, taken, emap, marks = _take_in(first, faces, points, made, taken, sizes, emap, marks, mesh,
+                                                       maps, start, end, radius, step)
     for _ in range(rounds):
         marked, stack = marks
         depth = 0
@@ -164,7 +168,7 @@ def _take_in(beyond, faces, points, made, taken, sizes, emap, marks, mesh, maps,
     taken[sizes[TAKEN]:sizes[TAKEN] + k] = beyond
     sizes[TAKEN] += k
     corners = mesh_faces[beyond]
-    vertices, vertex_points, point_vertices = _new_rows_and_points(corners, welded, row_of, point_of, n_rows,
+    vertices, vertex_points, point_vertices = new_rows_and_points(corners, welded, row_of, point_of, n_rows,
                                                                    n_points)
     p, r = point_vertices.shape[0], vertices.shape[0]
     faces, points, made = _with_room(faces, n + k, points, n_points + p, made, n_rows + r)
