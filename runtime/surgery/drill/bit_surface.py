@@ -13,26 +13,15 @@ import numpy as np
 from ..._shared.jit import F1, F2, I1, f8, kernel
 
 
-def _cross(a, b) -> np.ndarray:
-    """a x b of two (3,) vectors (``np.cross`` costs ~16 us a call here, for its generality; this ~1)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 class Frame:
-    """The bit's axis frame: unit axis u, e1, e2 across it, travel length L, radius r."""
+    """The bit's axis frame: unit axis u, e1, e2 across it (``axes`` (3, 3): the three as rows), travel
+    length L, radius r."""
 
     def __init__(self, bit):
         self.start, self.end, self.r = bit.start, bit.end, bit.radius
-        d = bit.end - bit.start
-        self.length = math.sqrt(float(d @ d))
-        self.u = d / self.length
-        helper = np.zeros(3)
-        helper[int(np.argmin(np.abs(self.u)))] = 1.0
-        e1 = _cross(self.u, helper)
-        self.e1 = e1 / math.sqrt(float(e1 @ e1))
-        self.e2 = _cross(self.u, self.e1)
+        self.axes, self.length = _axes(bit.start, bit.end)
+        self.u, self.e1, self.e2 = self.axes
         self.top = self.length + 0.5 * math.pi * self.r          # σ of the tip's pole
-        self.axes = np.array([self.u, self.e1, self.e2])        # (3, 3): u, e1, e2 as rows
 
     def coordinates(self, x) -> tuple:
         """(θ, σ) of points x (k, 3) on the bit's surface."""
@@ -88,6 +77,27 @@ class Loop:
     def __init__(self, rows, points, theta, sigma, unwrapped, winding: int):
         self.rows, self.points = np.asarray(rows, np.int64), points
         self.theta, self.sigma, self.unwrapped, self.winding = theta, sigma, unwrapped, int(winding)
+
+
+@kernel((F1, F1), cost=0.1)
+def _axes(start, end):
+    """(the unit axis u of start -> end, e1 = u x (the coordinate axis least along u), normalised, and
+    e2 = u x e1, as rows (3, 3); the length of start -> end)."""
+    axes = np.zeros((3, 3))
+    length = math.sqrt((end[0] - start[0]) ** 2 + (end[1] - start[1]) ** 2 + (end[2] - start[2]) ** 2)
+    for k in range(3):
+        axes[0, k] = (end[k] - start[k]) / length
+    least = 0
+    for k in range(1, 3):
+        if abs(axes[0, k]) < abs(axes[0, least]):
+            least = k
+    axes[1, (least + 1) % 3], axes[1, (least + 2) % 3] = axes[0, (least + 2) % 3], -axes[0, (least + 1) % 3]
+    norm = math.sqrt(axes[1, 0] ** 2 + axes[1, 1] ** 2 + axes[1, 2] ** 2)
+    for k in range(3):
+        axes[1, k] /= norm
+    for k in range(3):
+        axes[2, k] = axes[0, (k + 1) % 3] * axes[1, (k + 2) % 3] - axes[0, (k + 2) % 3] * axes[1, (k + 1) % 3]
+    return axes, length
 
 
 def loops(frame: Frame, rows, points, positions, offsets) -> list:

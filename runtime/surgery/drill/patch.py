@@ -38,7 +38,7 @@ class _Growing:
     """An array that rows are appended to, its capacity doubled when full; ``view()`` the rows so far."""
 
     def __init__(self, dtype, tail: tuple = ()):
-        self._data, self.n = np.empty((1024,) + tail, dtype), 0      # (a hole makes a few thousand)
+        self._data, self.n = np.empty((4096,) + tail, dtype), 0      # (a hole makes a few thousand)
 
     def extend(self, rows) -> int:
         """Append ``rows`` (k, *tail); the index of the first."""
