@@ -63,16 +63,6 @@ def longest_edge(points, p, q, r):
 
 
 @helper
-def midpoints(points, pairs):
-    """(k, 3) the midpoint of each pair (k, 2) of rows of ``points``."""
-    out = np.empty((pairs.shape[0], 3))
-    for i in range(pairs.shape[0]):
-        for c in range(3):
-            out[i, c] = 0.5 * (points[pairs[i, 0], c] + points[pairs[i, 1], c])
-    return out
-
-
-@helper
 def edge_map(codes, n_faces, capacity):
     """Which faces have each edge, for the faces ``codes[:n_faces]`` (edge codes (F, 3)) with room for
     ``capacity`` faces (``add_face_edges`` adds more, ``remove_face_edges`` takes one's corners away,

@@ -45,12 +45,6 @@ def bit(start, end, radius) -> Bit:
 
 
 @helper
-def _distance(start, end, x):
-    """Distance of x (3,) from the segment start -> end."""
-    return _segment_distance(start, end, end - start, x)
-
-
-@helper
 def _segment_distance(start, end, axis, x):
     """Distance of x (3,) from the segment start -> end, ``axis`` = end - start (3,) (made once by a
     caller that measures many points)."""

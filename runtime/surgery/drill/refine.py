@@ -26,17 +26,15 @@ MAX_ROUNDS = 60
 
 
 def refine(patch: Patch, first, bit, step: float) -> None:
-    """Take the input faces ``first`` (k,) (distinct, not in the patch) into it and bisect its faces that
-    the bit's surface passes through until none is longer than ``step`` (module docstring), taking in
-    the input faces beyond the patch that share a bisected edge."""
+    """Fill a new (empty) patch with the input faces ``first`` (k,) and bisect its faces that the bit's
+    surface passes through until none is longer than ``step`` (module docstring), taking in the input
+    faces beyond the patch that share a bisected edge."""
     start, end, radius = bit
     topology = patch.topology
     mesh = InputMesh(patch.positions, patch.mesh_faces, topology.welded, topology.faces, topology.face_edges,
                      topology.edge_face_offsets, topology.edge_face_faces)
-    made = Refined(*refine_rounds(patch.point_array(), patch.point_welded, patch.faces, patch.face_source,
-                                  patch.row_point, first, tuple(mesh),
-                                  (patch.row_of, patch.point_of, patch.is_taken), start, end, radius, step,
-                                  MAX_ROUNDS))
+    made = Refined(*refine_rounds(first, tuple(mesh), (patch.row_of, patch.point_of, patch.is_taken), start, end,
+                                  radius, step, MAX_ROUNDS))
     patch.grow(made)
     if made.status != REFINED:
         raise InternalError(f"the faces near the bit did not become shorter than {step:g} in {MAX_ROUNDS} rounds")

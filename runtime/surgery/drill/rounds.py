@@ -40,12 +40,12 @@ class InputMesh(NamedTuple):
 
 
 class Refined(NamedTuple):
-    """What ``refine_rounds`` made (it returns the fields as a plain tuple).
+    """The patch ``refine_rounds`` made (it returns the fields as a plain tuple).
 
-    rows : (G, 3) int64 the patch's faces now ; sources : (G,) int64 the input face of each
-    points : (p, 3) float64 and point_welded : (p,) int64 the new points (a midpoint's: ``NEW_POINT``)
-    row_points, row_vertex : (r,) int64 the new rows' points and input vertices (a midpoint's: -1)
-    row_parents : (r, 2) int64 and row_t : (r,) float64 how each new row is made (``Patch.new_rows``)
+    rows : (G, 3) int64 its faces ; sources : (G,) int64 the input face of each
+    points : (p, 3) float64 and point_welded : (p,) int64 its points (a midpoint's: ``NEW_POINT``)
+    row_points, row_vertex : (r,) int64 its rows' points and input vertices (a midpoint's: -1)
+    row_parents : (r, 2) int64 and row_t : (r,) float64 how each row is made (``Patch.new_rows``)
     taken : (k,) int64 the input faces taken in ; status : ``REFINED`` or ``OUT_OF_ROUNDS``
     """
 
@@ -75,13 +75,10 @@ FACES, POINTS, ROWS, TAKEN = 0, 1, 2, 3
 #   marks: (marked (E,) per edge of the ``edge_map``, stack (E,) the marked edges still to follow)
 
 
-@kernel((F2, I1, I2, I1, I1, I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=2.0)
-def refine_rounds(points, point_welded, rows, sources, row_point, first, mesh, maps, start, end, radius, step,
-                  rounds):
-    """Take the input faces ``first`` (k,) (not taken yet) into a patch and refine it: ``points`` (P, 3)
-    and ``point_welded`` (P,), its faces ``rows`` (F, 3) from input faces ``sources`` (F,), ``row_point``
-    (R,) the point of each row; ``mesh`` an ``InputMesh``; ``maps`` the patch's row_of, point_of and
-    is_taken, updated in place as faces are taken in.
+@kernel((I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=2.0)
+def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
+    """A patch of the input faces ``first`` (k,), refined: ``mesh`` an ``InputMesh``; ``maps`` a new
+    patch's row_of, point_of and is_taken, updated in place as faces are taken in.
 
     Each round marks the longest edge of every face longer than ``step`` that the bit's surface crosses
     (``bit.surface_crosses``), closes the marks (a marked edge marks the longest edge of every face on
@@ -89,21 +86,17 @@ def refine_rounds(points, point_welded, rows, sources, row_point, first, mesh, m
     on a marked edge as it goes (``_take_in``), and splits the faces on the marks where they are
     (``_split``); until no such face is left, or ``rounds`` ran out. Returns a ``Refined`` as a plain
     tuple."""
-    n, first_point, first_row = rows.shape[0], points.shape[0], row_point.shape[0]
-    sizes = np.array([n, first_point, first_row, 0])
-    capacity = 2 * n + 64
-    faces = (grown(rows.copy(), capacity), grown(sources.copy(), capacity), np.empty((capacity, 3), np.int64),
-             np.empty(capacity, np.int64), np.full(capacity, YES, np.int8))
-    points = (grown(points.copy(), 2 * first_point + 64), grown(point_welded.copy(), 2 * first_point + 64),
-              grown(_signed_distances(points, 0, start, end, radius), 2 * first_point + 64))
-    made = (grown(row_point.copy(), 2 * first_row + 64), np.empty(2 * first_row + 64, np.int64),
-            np.empty((2 * first_row + 64, 2), np.int64), np.empty(2 * first_row + 64))
-    _describe(faces, np.arange(n), points, made[0], start, end, radius, step)
-    emap = edge_map(faces[2], n, capacity)
+    capacity = 4 * first.shape[0] + 64
+    sizes = np.zeros(4, np.int64)
+    faces = (np.empty((capacity, 3), np.int64), np.empty(capacity, np.int64), np.empty((capacity, 3), np.int64),
+             np.empty(capacity, np.int64), np.empty(capacity, np.int8))
+    points = (np.empty((capacity, 3)), np.empty(capacity, np.int64), np.empty(capacity))
+    made = (np.empty(capacity, np.int64), np.empty(capacity, np.int64), np.empty((capacity, 2), np.int64),
+            np.empty(capacity))
+    emap = edge_map(faces[2], 0, capacity)
     marks = (np.zeros(emap[2].shape[0], np.bool_), np.empty(emap[2].shape[0], np.int64))
-    taken = np.empty(16, np.int64)
-    faces, points, made, taken, emap, marks = _take_in(first, faces, points, made, taken, sizes, emap, marks, mesh,
-                                                       maps, start, end, radius, step)
+    faces, points, made, taken, emap, marks = _take_in(first, faces, points, made, np.empty(16, np.int64), sizes,
+                                                       emap, marks, mesh, maps, start, end, radius, step)
     for _ in range(rounds):
         marked, stack = marks
         depth = 0
@@ -111,7 +104,7 @@ def refine_rounds(points, point_welded, rows, sources, row_point, first, mesh, m
             if faces[4][f] == YES:
                 depth = _mark(marked, stack, depth, emap[5][f, faces[3][f]])
         if depth == 0:
-            return _refined(faces, points, made, taken, sizes, first_point, first_row, REFINED)
+            return _refined(faces, points, made, taken, sizes, REFINED)
         # the closure: each marked edge marks the longest edge of every face on it; the input faces
         # beyond the patch on a marked edge join it (a batch at a time), and the closure
         pending, n_pending = np.empty(16, np.int64), 0
@@ -143,16 +136,15 @@ def refine_rounds(points, point_welded, rows, sources, row_point, first, mesh, m
                 incidence = emap[4][incidence]
         faces, points, made, emap, marks = _split(followed[:n_followed], faces, points, made, sizes, emap, marks,
                                                   start, end, radius, step)
-    return _refined(faces, points, made, taken, sizes, first_point, first_row, OUT_OF_ROUNDS)
+    return _refined(faces, points, made, taken, sizes, OUT_OF_ROUNDS)
 
 
 @helper
-def _refined(faces, points, made, taken, sizes, first_point, first_row, status):
-    """``refine_rounds``' result: the faces, and what was added to the points and rows."""
+def _refined(faces, points, made, taken, sizes, status):
+    """``refine_rounds``' result: the records' rows in use."""
     n, n_points, n_rows = sizes[FACES], sizes[POINTS], sizes[ROWS]
-    return (faces[0][:n].copy(), faces[1][:n].copy(), points[0][first_point:n_points].copy(),
-            points[1][first_point:n_points].copy(), made[0][first_row:n_rows].copy(),
-            made[1][first_row:n_rows].copy(), made[2][first_row:n_rows].copy(), made[3][first_row:n_rows].copy(),
+    return (faces[0][:n].copy(), faces[1][:n].copy(), points[0][:n_points].copy(), points[1][:n_points].copy(),
+            made[0][:n_rows].copy(), made[1][:n_rows].copy(), made[2][:n_rows].copy(), made[3][:n_rows].copy(),
             taken[:sizes[TAKEN]].copy(), status)
 
 
