@@ -4,8 +4,9 @@ Every point of the patch is outside the bit (f > tolerance), inside (f < -tolera
 A face with no corner inside stays (one with every corner on the surface stays when its centre is
 outside); a face with no corner outside goes; a face with corners on both sides keeps its outside part,
 a triangle or a convex quad (two triangles over the shorter diagonal), whose new corners lie where its
-edges cross the bit's surface (``bit.crossings``: one point per welded edge, so a seam's copies meet;
-one row per vertex edge, so that each copy keeps its attributes).
+edges cross the bit's surface (``bit.crossing``: one point per welded edge, so a seam's copies meet;
+one row per vertex edge, so that each copy keeps its attributes). All of it is one compiled pass
+(``_open``). Then ``rim_loops`` traces the rims: the loops of the new boundary on the surface.
 """
 from __future__ import annotations
 
