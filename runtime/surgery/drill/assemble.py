@@ -81,7 +81,8 @@ def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
                     if sources[f] <= WALL:
                         on_wall_row[r] = True
     vertex_out, kept_input = np.full(n, -1, np.int64), np.flatnonzero(uses_vertex)
-    vertex_out[kept_input] = np.arange(kept_input.shape[0])
+    for i in range(kept_input.shape[0]):
+        vertex_out[kept_input[i]] = i
     new_rows = np.flatnonzero(uses_row)
     row_out = np.full(n_rows, -1, np.int64)
     first_at_point = np.full(n_points, -1, np.int64)
@@ -124,7 +125,9 @@ def _stacked(values, src, extra):
     for i in range(a):
         for j in range(c):
             out[i, j] = values[src[i], j]
-    out[a:] = extra
+    for i in range(extra.shape[0]):
+        for j in range(c):
+            out[a + i, j] = extra[i, j]
     return out
 
 
@@ -210,8 +213,8 @@ def _as_first_copies(joints, weights, first_copy):
     """Give each row of ``joints``, ``weights`` (k, 4) the values of row ``first_copy[i]`` (<= i), in place."""
     for i in range(first_copy.shape[0]):
         j = first_copy[i]
-        if j != i:
-            joints[i], weights[i] = joints[j], weights[j]
+        for k in range(joints.shape[1]):
+            joints[i, k], weights[i, k] = joints[j, k], weights[j, k]
 
 
 @kernel((F2, F1, F1), cost=0.2)

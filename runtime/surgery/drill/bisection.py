@@ -63,58 +63,35 @@ def longest_edge(points, p, q, r):
 
 
 @helper
+def midpoints(points, pairs):
+    """(k, 3) the midpoint of each pair (k, 2) of rows of ``points``."""
+    out = np.empty((pairs.shape[0], 3))
+    for i in range(pairs.shape[0]):
+        for c in range(3):
+            out[i, c] = 0.5 * (points[pairs[i, 0], c] + points[pairs[i, 1], c])
+    return out
+
+
+@helper
 def edge_map(codes, n_faces, capacity):
     """Which faces have each edge, for the faces ``codes[:n_faces]`` (edge codes (F, 3)) with room for
-    ``capacity`` faces (``add_face_edges`` adds more, ``remove_face_edges`` takes one's corners away,
-    ``with_room`` makes more room): (table (S,) and slot_edge (S,): the code_table of the edges and each
-    one's id; edge_code (E,); head (E,) the last incidence on each edge (-1: none); next (3 capacity,)
-    the incidence before each (incidence 3 f + k: corner edge k of face f); face_edge (capacity, 3)
-    each corner edge's id; count (1,): the edges so far). An edge keeps its id while the map lives."""
-    table = code_table(2 * capacity)          # (>= 4 capacity slots: at most half full with 2 capacity edges)
-    emap = (table, np.empty(table.shape[0], np.int64), np.empty(2 * capacity, np.int64),
-            np.full(2 * capacity, -1, np.int64), np.empty(3 * capacity, np.int64), np.empty((capacity, 3), np.int64),
+    ``capacity`` faces (``add_face_edges`` adds more): (table (S,) and slot_edge (S,): the code_table of
+    the edges and each one's id, edge_code (E,), head (E,) the last incidence on each edge (-1: none),
+    next (3 capacity,) the incidence before each (incidence 3 f + k: corner edge k of face f),
+    face_edge (capacity, 3) each corner edge's id, count (1,): the edges so far). Edge ids follow the
+    order the faces come in, so a map rebuilt with more room gives the edges the same ids."""
+    table = code_table(2 * capacity)           # (>= 4 capacity slots: never full, <= 3 capacity edges)
+    emap = (table, np.empty(table.shape[0], np.int64), np.empty(3 * capacity, np.int64),
+            np.full(3 * capacity, -1, np.int64), np.empty(3 * capacity, np.int64), np.empty((capacity, 3), np.int64),
             np.zeros(1, np.int64))
-    emap = with_room(emap, n_faces, 3 * n_faces)
     for f in range(n_faces):
         add_face_edges(emap, codes, f)
     return emap
 
 
 @helper
-def with_room(emap, faces, edges):
-    """An ``edge_map`` with room for ``faces`` faces and ``edges`` more edges: itself, or its arrays grown
-    (the table rebuilt larger, the edges keeping their ids)."""
-    table, slot_edge, edge_code, head, incidence_next, face_edge, count = emap
-    if faces > face_edge.shape[0]:
-        capacity = max(2 * face_edge.shape[0], faces)
-        incidence_next, face_edge = grown(incidence_next, 3 * capacity), grown(face_edge, capacity)
-    need = count[0] + edges
-    if need > edge_code.shape[0]:
-        edge_code, head = grown(edge_code, need), grown(head, need)
-        head[count[0]:] = -1
-    if 2 * need + 2 > table.shape[0]:
-        table = code_table(2 * need)
-        slot_edge = np.empty(table.shape[0], np.int64)
-        for e in range(count[0]):
-            at = slot(table, edge_code[e])
-            table[at], slot_edge[at] = edge_code[e], e
-    return table, slot_edge, edge_code, head, incidence_next, face_edge, count
-
-
-@helper
-def grown(a, n):
-    """``a`` if it has n rows, else a copy with room for max(2 len(a), n) rows (the rows after a's
-    unwritten)."""
-    if n <= a.shape[0]:
-        return a
-    out = np.empty((max(2 * a.shape[0], n),) + a.shape[1:], a.dtype)
-    out[:a.shape[0]] = a
-    return out
-
-
-@helper
 def add_face_edges(emap, codes, f):
-    """Add face f (its edge codes ``codes[f]``) to an ``edge_map`` (with room: ``with_room``)."""
+    """Add face f (its edge codes ``codes[f]``) to an ``edge_map``."""
     table, slot_edge, edge_code, head, incidence_next, face_edge, count = emap
     for k in range(3):
         at = slot(table, codes[f, k])
@@ -125,21 +102,6 @@ def add_face_edges(emap, codes, f):
         face_edge[f, k] = e
         incidence_next[3 * f + k] = head[e]
         head[e] = 3 * f + k
-
-
-@helper
-def remove_face_edges(emap, f):
-    """Take face f's corner edges out of an ``edge_map`` (before its corners change)."""
-    head, incidence_next, face_edge = emap[3], emap[4], emap[5]
-    for k in range(3):
-        e, incidence = face_edge[f, k], 3 * f + k
-        if head[e] == incidence:
-            head[e] = incidence_next[incidence]
-            continue
-        before = head[e]
-        while incidence_next[before] != incidence:
-            before = incidence_next[before]
-        incidence_next[before] = incidence_next[incidence]
 
 
 @kernel((I2, I1, F2, I1, i8, i8), cost=0.5)
@@ -206,27 +168,25 @@ def split(rows, row_point, points, split, first_row, first_point):
     kept = made
     for f in range(n):
         if split[f, 0] or split[f, 1] or split[f, 2]:
-            made = halves(out, made_from, made, f, rows[f], midpoint[f], row_point, points)
+            made = _halves(out, made_from, made, f, rows, row_point, points, midpoint)
     return (out, made_from, kept, row_parents[:rows_made].copy(),
             row_points[:rows_made].copy(), point_parents[:points_made].copy())
 
 
 @helper
-def halves(out, made_from, made, f, corners, mids, row_point, points):
-    """Write the 2 to 4 faces that replace face f, corners ``corners`` (3,) (rows) and ``mids`` (3,) the
-    new row on each marked corner edge k -> k+1 (-1: not marked), at row ``made`` of ``out``
-    (``split``); the next row."""
+def _halves(out, made_from, made, f, rows, row_point, points, midpoint):
+    """Write the faces that replace face f (``split_marked``) at row ``made`` of ``out``; the next row."""
     k, longest = -1, -1.0
     for j in range(3):
-        d = squared_distance(points, row_point[corners[j]], row_point[corners[(j + 1) % 3]])
+        d = squared_distance(points, row_point[rows[f, j]], row_point[rows[f, (j + 1) % 3]])
         if d > longest:
             k, longest = j, d
-    if mids[k] < 0:
+    if midpoint[f, k] < 0:
         k = 0
-        while mids[k] < 0:
+        while midpoint[f, k] < 0:
             k += 1
-    a, b, c = corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]
-    m, on_ca, on_bc = mids[k], mids[(k + 2) % 3], mids[(k + 1) % 3]
+    a, b, c = rows[f, k], rows[f, (k + 1) % 3], rows[f, (k + 2) % 3]
+    m, on_ca, on_bc = midpoint[f, k], midpoint[f, (k + 2) % 3], midpoint[f, (k + 1) % 3]
     # each half keeps one of the face's other two edges (c-a, b-c): bisected too where it is marked
     if on_ca >= 0:
         made = put_face(out, made_from, made, f, a, m, on_ca)

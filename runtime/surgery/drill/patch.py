@@ -177,12 +177,14 @@ def _descriptions(vertex, parents, t):
     keys, values = np.empty(2 * SOURCES, np.int64), np.empty(2 * SOURCES)
     for r in range(rows):
         if vertex[r] >= 0:
-            src[r, :] = vertex[r]
+            for s in range(SOURCES):
+                src[r, s] = vertex[r]
             coef[r, 0] = 1.0
             continue
         if t[r] == 0.0 or t[r] == 1.0:        # a copy (a wall's row at a rim's point): bit for bit, so that
             p = parents[r, 0] if t[r] == 0.0 else parents[r, 1]     # a posed drill places both alike
-            src[r, :], coef[r, :] = src[p, :], coef[p, :]
+            for s in range(SOURCES):
+                src[r, s], coef[r, s] = src[p, s], coef[p, s]
             continue
         count = 0
         for side in range(2):

@@ -71,10 +71,12 @@ def _open(points, rows, sources, row_point, start, end, radius, tolerance):
     at = 0
     for f in range(n):
         if kept[f]:
-            out[at], out_sources[at] = rows[f], sources[f]
+            out[at, 0], out[at, 1], out[at, 2], out_sources[at] = rows[f, 0], rows[f, 1], rows[f, 2], sources[f]
             at += 1
     for i in range(parts.shape[0]):
-        out[at + i], out_sources[at + i] = parts[i], sources[part_of[i]]
+        out[at, 0], out[at, 1], out[at, 2], out_sources[at] = parts[i, 0], parts[i, 1], parts[i, 2], \
+            sources[part_of[i]]
+        at += 1
     on_rim = np.zeros(all_row_point.shape[0], np.bool_)     # (the new points are on the surface)
     for r in out.ravel():
         p = all_row_point[r]
@@ -232,7 +234,8 @@ def rim_loops(rows, row_point, on_rim):
             if pick < 0:
                 break                               # an open chain: dropped
             if pick == first:
-                corners[n_corners:n_corners + length] = loop[:length]
+                for i in range(length):
+                    corners[n_corners + i] = loop[i]
                 n_corners += length
                 n_loops += 1
                 offsets[n_loops] = n_corners

@@ -10,9 +10,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, inlined, kernel, record
-from .bisection import EMPTY, add_face_edges, code_table, edge_map, grown, halves, longest_edge, pair, \
-    remove_face_edges, slot, with_room
+from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, kernel, record
+from .bisection import add_face_edges, edge_map, longest_edge, midpoints, pair, split
 from .bit import _signed_distances, surface_crosses
 from .patch import LOW_BITS, NEW_POINT, new_rows_and_points
 
@@ -63,16 +62,6 @@ class Refined(NamedTuple):
 
 #: the numba types of ``InputMesh`` and of a patch's maps (row_of (n,), point_of (w,), is_taken (m,))
 INPUT_MESH, PATCH_MAPS = record(F2, I2, I1, I2, I2, I1, I1), record(I1, I1, B1)
-#: the entries of ``refine_rounds``' ``sizes``: the faces, points, rows and input faces taken in so far
-FACES, POINTS, ROWS, TAKEN = 0, 1, 2, 3
-
-# Inside ``refine_rounds`` the patch lives in arrays with room to grow (``bisection.grown``), the first
-# ``sizes[...]`` rows of each in use, grouped as plain tuples:
-#   faces: (rows (F, 3), sources (F,), codes (F, 3) the edges' codes, longest (F,) the corner of the
-#          longest edge, wanted (F,) int8 whether the face is to be split: ``_describe``)
-#   points: (positions (P, 3), welded (P,) the input's welded vertex or NEW_POINT, signed (P,) f)
-#   made: (point (R,), vertex (R,) the input vertex or -1, parents (R, 2), t (R,)) of each row
-#   marks: (marked (E,) per edge of the ``edge_map``, stack (E,) the marked edges still to follow)
 
 
 @kernel((I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=2.0)
@@ -82,195 +71,105 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
 
     Each round marks the longest edge of every face longer than ``step`` that the bit's surface crosses
     (``bit.surface_crosses``), closes the marks (a marked edge marks the longest edge of every face on
-    it, through an ``edge_map`` kept from round to round), taking in the input faces beyond the patch
-    on a marked edge as it goes (``_take_in``), and splits the faces on the marks where they are
-    (``_split``); until no such face is left, or ``rounds`` ran out. Returns a ``Refined`` as a plain
-    tuple."""
-    capacity = 4 * first.shape[0] + 64
-    sizes = np.zeros(4, np.int64)
-    faces = (np.empty((capacity, 3), np.int64), np.empty(capacity, np.int64), np.empty((capacity, 3), np.int64),
-             np.empty(capacity, np.int64), np.empty(capacity, np.int8))
-    points = (np.empty((capacity, 3)), np.empty(capacity, np.int64), np.empty(capacity))
-    made = (np.empty(capacity, np.int64), np.empty(capacity, np.int64), np.empty((capacity, 2), np.int64),
-            np.empty(capacity))
-    emap = edge_map(faces[2], 0, capacity)
-    marks = (np.zeros(emap[2].shape[0], np.bool_), np.empty(emap[2].shape[0], np.int64))
-    faces, points, made, taken, emap, marks = _take_in(first, faces, points, made, np.empty(16, np.int64), sizes,
-                                                       emap, marks, mesh, maps, start, end, radius, step)
+    it, ``bisection.edge_map``), taking in the input faces beyond the patch on a marked edge as it goes,
+    and splits the faces on the marks (``bisection.split``); until no such face is left, or ``rounds``
+    ran out. Returns a ``Refined`` as a plain tuple."""
+    row_of, point_of, is_taken = maps
+    points, point_welded, signed = np.empty((0, 3)), np.empty(0, np.int64), np.empty(0)
+    row_point, row_vertex, row_parents, row_t = (np.empty(0, np.int64), np.empty(0, np.int64),
+                                                 np.empty((0, 2), np.int64), np.empty(0))
+    rows, sources, taken = np.empty((0, 3), np.int64), np.empty(0, np.int64), np.empty(0, np.int64)
+    codes, longest, wanted = np.empty((0, 3), np.int64), np.empty(0, np.int64), np.empty(0, np.int8)
+    beyond = first
     for _ in range(rounds):
-        marked, stack = marks
+        # the closure of the marks: each marked edge marks the longest edge of every face on it; the
+        # input faces beyond the patch on a marked edge join it (a batch at a time), and the closure
+        capacity = rows.shape[0] + beyond.shape[0] + 64                 # (room for faces taken in)
+        emap = edge_map(codes, rows.shape[0], capacity)
+        marked, stack = np.zeros(3 * capacity, np.bool_), np.empty(3 * capacity, np.int64)
         depth = 0
-        for f in range(sizes[FACES]):
-            if faces[4][f] == YES:
-                depth = _mark(marked, stack, depth, emap[5][f, faces[3][f]])
-        if depth == 0:
-            return _refined(faces, points, made, taken, sizes, REFINED)
-        # the closure: each marked edge marks the longest edge of every face on it; the input faces
-        # beyond the patch on a marked edge join it (a batch at a time), and the closure
-        pending, n_pending = np.empty(16, np.int64), 0
-        followed, n_followed = np.empty(16, np.int64), 0
-        while depth > 0 or n_pending > 0:
-            if depth == 0:
-                beyond = _faces_on(pending[:n_pending], mesh, maps[2])
-                n_pending = 0
-                faces, points, made, taken, emap, marks = _take_in(beyond, faces, points, made, taken, sizes, emap,
-                                                                   marks, mesh, maps, start, end, radius, step)
-                marked, stack = marks
-                for g in range(sizes[FACES] - beyond.shape[0], sizes[FACES]):      # (each is on a marked edge)
-                    depth = _mark(marked, stack, depth, emap[5][g, faces[3][g]])
+        for f in range(rows.shape[0]):
+            if wanted[f] == YES:
+                depth = _mark(marked, stack, depth, emap[5][f, longest[f]])
+        pending, n_pending = np.empty(16, np.int64), 0     # input edges with faces beyond the patch
+        while depth > 0 or beyond.shape[0] > 0:
+            if beyond.shape[0]:
+                is_taken[beyond] = True
+                corners = mesh[1][beyond]
+                vertices, vertex_points, point_vertices = new_rows_and_points(
+                    corners, mesh[2], row_of, point_of, row_point.shape[0], points.shape[0])
+                points = np.concatenate((points, mesh[0][point_vertices]))
+                point_welded = np.concatenate((point_welded, mesh[2][point_vertices]))
+                signed = np.concatenate((signed, _signed_distances(points, signed.shape[0], start, end, radius)))
+                row_parents = np.concatenate((row_parents, _itself(row_point.shape[0], vertices.shape[0])))
+                row_point = np.concatenate((row_point, vertex_points))
+                row_vertex = np.concatenate((row_vertex, vertices))
+                row_t = np.concatenate((row_t, np.zeros(vertices.shape[0])))
+                first_new = rows.shape[0]
+                rows = np.concatenate((rows, _rows_of(corners, row_of)))
+                sources = np.concatenate((sources, beyond))
+                taken = np.concatenate((taken, beyond))
+                more_codes, more_longest, more_wanted = _describe(rows, first_new, row_point, points, signed, start,
+                                                                  end, radius, step, np.ones(beyond.shape[0], np.bool_))
+                codes = np.concatenate((codes, more_codes))
+                longest = np.concatenate((longest, more_longest))
+                wanted = np.concatenate((wanted, more_wanted))
+                if rows.shape[0] > capacity:            # (the same edge ids, more room)
+                    capacity = 2 * rows.shape[0]
+                    emap = edge_map(codes, rows.shape[0], capacity)
+                    marked = np.concatenate((marked, np.zeros(3 * capacity - marked.shape[0], np.bool_)))
+                    stack = np.concatenate((stack, np.empty(3 * capacity - stack.shape[0], np.int64)))
+                else:
+                    for g in range(first_new, rows.shape[0]):
+                        add_face_edges(emap, codes, g)
+                # each is on a marked edge (it marks its longest), or one of the first (then if wanted)
+                for g in range(first_new, rows.shape[0]):
+                    if first_new > 0 or wanted[g] == YES:
+                        depth = _mark(marked, stack, depth, emap[5][g, longest[g]])
+                beyond = np.empty(0, np.int64)
                 continue
             depth -= 1
             e = stack[depth]
-            followed = grown(followed, n_followed + 1)
-            followed[n_followed] = e
-            n_followed += 1
-            edge = _open_input_edge(emap, e, faces[1], points[1], mesh, maps[2])
+            edge = _open_input_edge(emap, e, sources, point_welded, mesh, is_taken)
             if edge >= 0:
-                pending = grown(pending, n_pending + 1)
+                if n_pending == pending.shape[0]:
+                    pending = np.concatenate((pending, np.empty(n_pending, np.int64)))
                 pending[n_pending] = edge
                 n_pending += 1
             incidence = emap[3][e]
             while incidence >= 0:
                 g = incidence // 3
-                depth = _mark(marked, stack, depth, emap[5][g, faces[3][g]])
+                depth = _mark(marked, stack, depth, emap[5][g, longest[g]])
                 incidence = emap[4][incidence]
-        faces, points, made, emap, marks = _split(followed[:n_followed], faces, points, made, sizes, emap, marks,
-                                                  start, end, radius, step)
-    return _refined(faces, points, made, taken, sizes, OUT_OF_ROUNDS)
+            if depth == 0 and n_pending:
+                beyond, n_pending = _faces_on(pending[:n_pending], mesh, is_taken), 0
+        if not marked.any():
+            return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken, REFINED)
+        on_marked = np.empty(rows.shape, np.bool_)
+        for f in range(rows.shape[0]):
+            for k in range(3):
+                on_marked[f, k] = marked[emap[5][f, k]]
+        rows, made_from, kept, parents, points_of_rows, point_parents = split(
+            rows, row_point, points, on_marked, row_point.shape[0], points.shape[0])
+        sources = sources[made_from]
+        points = np.concatenate((points, midpoints(points, point_parents)))
+        point_welded = np.concatenate((point_welded, np.full(point_parents.shape[0], NEW_POINT, np.int64)))
+        signed = np.concatenate((signed, _signed_distances(points, signed.shape[0], start, end, radius)))
+        row_point = np.concatenate((row_point, points_of_rows))
+        row_vertex = np.concatenate((row_vertex, np.full(parents.shape[0], -1, np.int64)))
+        row_parents = np.concatenate((row_parents, parents))
+        row_t = np.concatenate((row_t, np.full(parents.shape[0], 0.5)))
+        # the faces not split keep what was found about them; the halves of a face to be split are
+        # asked (a part of one that was not is not either: shorter, on the same side of the surface)
+        half_codes, half_longest, half_wanted = _describe(rows, kept, row_point, points, signed, start, end, radius,
+                                                          step, wanted[made_from[kept:]] == YES)
+        codes = np.concatenate((codes[made_from[:kept]], half_codes))
+        longest = np.concatenate((longest[made_from[:kept]], half_longest))
+        wanted = np.concatenate((wanted[made_from[:kept]], half_wanted))
+    return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken, OUT_OF_ROUNDS)
 
 
 @helper
-def _refined(faces, points, made, taken, sizes, status):
-    """``refine_rounds``' result: the records' rows in use."""
-    n, n_points, n_rows = sizes[FACES], sizes[POINTS], sizes[ROWS]
-    return (faces[0][:n].copy(), faces[1][:n].copy(), points[0][:n_points].copy(), points[1][:n_points].copy(),
-            made[0][:n_rows].copy(), made[1][:n_rows].copy(), made[2][:n_rows].copy(), made[3][:n_rows].copy(),
-            taken[:sizes[TAKEN]].copy(), status)
-
-
-@helper
-def _take_in(beyond, faces, points, made, taken, sizes, emap, marks, mesh, maps, start, end, radius, step):
-    """Add the input faces ``beyond`` (k,) to the patch (``maps`` updated), with rows for their vertices
-    that have none and points for their welded vertices that have none; returns the grown records."""
-    positions, mesh_faces, welded = mesh[0], mesh[1], mesh[2]
-    row_of, point_of, is_taken = maps
-    n, n_points, n_rows, k = sizes[FACES], sizes[POINTS], sizes[ROWS], beyond.shape[0]
-    is_taken[beyond] = True
-    taken = grown(taken, sizes[TAKEN] + k)
-    taken[sizes[TAKEN]:sizes[TAKEN] + k] = beyond
-    sizes[TAKEN] += k
-    corners = mesh_faces[beyond]
-    vertices, vertex_points, point_vertices = new_rows_and_points(corners, welded, row_of, point_of, n_rows,
-                                                                   n_points)
-    p, r = point_vertices.shape[0], vertices.shape[0]
-    faces, points, made = _with_room(faces, n + k, points, n_points + p, made, n_rows + r)
-    for i in range(p):
-        points[0][n_points + i] = positions[point_vertices[i]]
-        points[1][n_points + i] = welded[point_vertices[i]]
-    points[2][n_points:n_points + p] = _signed_distances(points[0][:n_points + p], n_points, start, end, radius)
-    for i in range(r):
-        j = n_rows + i
-        made[0][j], made[1][j], made[3][j] = vertex_points[i], vertices[i], 0.0
-        made[2][j, 0] = made[2][j, 1] = j          # (an input row is itself)
-    for i in range(k):
-        for c in range(3):
-            faces[0][n + i, c] = row_of[corners[i, c]]
-        faces[1][n + i], faces[4][n + i] = beyond[i], YES
-    sizes[FACES], sizes[POINTS], sizes[ROWS] = n + k, n_points + p, n_rows + r
-    _describe(faces, np.arange(n, n + k), points, made[0], start, end, radius, step)
-    emap = with_room(emap, n + k, 3 * k)
-    marks = _room_to_mark(marks, emap)
-    for g in range(n, n + k):
-        add_face_edges(emap, faces[2], g)
-    return faces, points, made, taken, emap, marks
-
-
-@helper
-def _split(followed, faces, points, made, sizes, emap, marks, start, end, radius, step):
-    """Split the faces on the marked edges ``followed`` (k,) where they are (``bisection.halves``: the
-    first part takes the face's place, the others come last): one new point per marked edge (its
-    welded points' midpoint), one new row per marked vertex edge; the marks cleared. Returns the grown
-    records."""
-    marked = marks[0]
-    n, n_points, n_rows, k = sizes[FACES], sizes[POINTS], sizes[ROWS], followed.shape[0]
-    split_faces, n_split, listed = np.empty(2 * k, np.int64), 0, np.zeros(n, np.bool_)
-    for i in range(k):
-        incidence = emap[3][followed[i]]
-        while incidence >= 0:
-            g = incidence // 3
-            if not listed[g]:
-                listed[g] = True
-                split_faces = grown(split_faces, n_split + 1)
-                split_faces[n_split] = g
-                n_split += 1
-            incidence = emap[4][incidence]
-    room = 3 * n_split             # (at most: a face with j marked edges becomes j + 1 faces)
-    faces, points, made = _with_room(faces, n + room, points, n_points + k, made, n_rows + room)
-    point_of_edge = np.full(emap[6][0], -1, np.int64)
-    for i in range(k):
-        code = emap[2][followed[i]]
-        a, b = code >> 32, code & LOW_BITS
-        for c in range(3):
-            points[0][n_points + i, c] = 0.5 * (points[0][a, c] + points[0][b, c])
-        points[1][n_points + i] = NEW_POINT
-        point_of_edge[followed[i]] = n_points + i
-    points[2][n_points:n_points + k] = _signed_distances(points[0][:n_points + k], n_points, start, end, radius)
-    sizes[POINTS] += k
-    rows, sources, wanted = faces[0], faces[1], faces[4]
-    row_table = code_table(3 * n_split)
-    row_ids = np.empty(row_table.shape[0], np.int64)
-    parts, made_from = np.empty((4, 3), np.int64), np.empty(4, np.int64)
-    corners, mids = np.empty(3, np.int64), np.empty(3, np.int64)
-    emap = with_room(emap, n + room, 3 * (n_split + room))
-    for i in range(n_split):
-        f = split_faces[i]
-        for c in range(3):
-            corners[c], mids[c] = rows[f, c], -1
-            if marked[emap[5][f, c]]:
-                a, b = rows[f, c], rows[f, (c + 1) % 3]
-                at = slot(row_table, pair(a, b))
-                if row_table[at] == EMPTY:
-                    row_table[at], row_ids[at] = pair(a, b), n_rows
-                    made[0][n_rows], made[1][n_rows], made[3][n_rows] = point_of_edge[emap[5][f, c]], -1, 0.5
-                    made[2][n_rows, 0], made[2][n_rows, 1] = min(a, b), max(a, b)
-                    n_rows += 1
-                mids[c] = row_ids[at]
-        count = halves(parts, made_from, 0, f, corners, mids, made[0], points[0])
-        remove_face_edges(emap, f)
-        rows[f] = parts[0]
-        for j in range(1, count):
-            rows[n], sources[n], wanted[n] = parts[j], sources[f], wanted[f]
-            n += 1
-    changed = np.concatenate((split_faces[:n_split], np.arange(sizes[FACES], n)))
-    sizes[FACES], sizes[ROWS] = n, n_rows
-    _describe(faces, changed, points, made[0], start, end, radius, step)
-    for f in changed:
-        add_face_edges(emap, faces[2], f)
-    marked[followed] = False
-    return faces, points, made, emap, _room_to_mark(marks, emap)
-
-
-@helper
-def _with_room(faces, n_faces, points, n_points, made, n_rows):
-    """The records with room for ``n_faces`` faces, ``n_points`` points and ``n_rows`` rows."""
-    faces = (grown(faces[0], n_faces), grown(faces[1], n_faces), grown(faces[2], n_faces), grown(faces[3], n_faces),
-             grown(faces[4], n_faces))
-    points = (grown(points[0], n_points), grown(points[1], n_points), grown(points[2], n_points))
-    made = (grown(made[0], n_rows), grown(made[1], n_rows), grown(made[2], n_rows), grown(made[3], n_rows))
-    return faces, points, made
-
-
-@helper
-def _room_to_mark(marks, emap):
-    """``marks`` with a row for every edge an ``edge_map`` has room for (unmarked where grown)."""
-    marked, stack = marks
-    before = marked.shape[0]
-    marked, stack = grown(marked, emap[2].shape[0]), grown(stack, emap[2].shape[0])
-    marked[before:] = False
-    return marked, stack
-
-
-@inlined
 def _mark(marked, stack, depth, e):
     """Mark edge e (once: pushed on ``stack`` to be followed); the stack's new depth."""
     if not marked[e]:
@@ -281,21 +180,22 @@ def _mark(marked, stack, depth, e):
 
 
 @helper
-def _describe(faces, changed, points, row_point, start, end, radius, step):
-    """For the faces ``changed`` (k,) of the ``faces`` record, in place: their edges' codes, the corner
-    whose edge is longest, and whether each is to be split: longer than ``step`` and crossed by the
-    bit's surface (``bit.surface_crosses``). Asked only where ``wanted`` is ``YES`` (a new face, or a
-    part of one that was): a part of a face that was not is not either (it is shorter, and inside or
-    outside the bit where the face was)."""
-    rows, codes, longest, wanted = faces[0], faces[2], faces[3], faces[4]
-    positions, signed, x = points[0], points[2], np.empty(3)
-    for f in changed:
+def _describe(rows, first, row_point, points, signed, start, end, radius, step, ask):
+    """For the faces of ``rows`` from ``first`` on: their edges' codes (k, 3), the corner (k,) whose edge
+    is longest, and whether each is to be split (k,) int8: longer than ``step`` and crossed by the bit's
+    surface (``bit.surface_crosses``; ``signed`` (P,) the points' signed distances), asked where ``ask``
+    (k,) (elsewhere not)."""
+    k = rows.shape[0] - first
+    codes, longest, wanted, x = np.empty((k, 3), np.int64), np.empty(k, np.int64), np.zeros(k, np.int8), np.empty(3)
+    for i in range(k):
+        f = first + i
         p, q, r = row_point[rows[f, 0]], row_point[rows[f, 1]], row_point[rows[f, 2]]
-        codes[f, 0], codes[f, 1], codes[f, 2] = pair(p, q), pair(q, r), pair(r, p)
-        longest[f], squared = longest_edge(positions, p, q, r)
-        if wanted[f] == YES:
-            wanted[f] = YES if squared > step * step and surface_crosses(
-                positions, p, q, r, signed, math.sqrt(squared), start, end, radius, x) else NO
+        codes[i, 0], codes[i, 1], codes[i, 2] = pair(p, q), pair(q, r), pair(r, p)
+        longest[i], squared = longest_edge(points, p, q, r)
+        if ask[i] and squared > step * step and surface_crosses(points, p, q, r, signed, math.sqrt(squared), start,
+                                                                end, radius, x):
+            wanted[i] = YES
+    return codes, longest, wanted
 
 
 @helper
@@ -343,3 +243,22 @@ def _faces_on(edges, mesh, is_taken):
                 out[count] = g
                 count += 1
     return out[:count].copy()
+
+
+@helper
+def _rows_of(corners, row_of):
+    """(k, 3) the rows of the input vertices ``corners`` (k, 3)."""
+    out = np.empty(corners.shape, np.int64)
+    for i in range(corners.shape[0]):
+        for k in range(3):
+            out[i, k] = row_of[corners[i, k]]
+    return out
+
+
+@helper
+def _itself(first, count):
+    """(count, 2): rows first, first + 1, ... each as its own parents (an input row)."""
+    out = np.empty((count, 2), np.int64)
+    for i in range(count):
+        out[i, 0] = out[i, 1] = first + i
+    return out

@@ -104,12 +104,23 @@ def _tunnel_grid(a, a_winding, b, b_winding, has_b, frame, step, first_point, fi
 
 @helper
 def _height_at(loop, theta):
-    """σ (k,) of a loop (``_loop_record``) at angles θ (k,): linear between its corners, periodic."""
+    """σ (k,) of a loop (``_loop_record``) at angles θ (k,): linear in angle between the corners nearest
+    below and above each (around the circle)."""
     angles, heights = loop[2], loop[3]
-    order = np.argsort(angles)
-    t, s = angles[order], heights[order]
-    turn = 2.0 * math.pi
-    return np.interp(theta, np.concatenate((t - turn, t, t + turn)), np.concatenate((s, s, s)))
+    turn, n = 2.0 * math.pi, angles.shape[0]
+    out = np.empty(theta.shape[0])
+    for i in range(theta.shape[0]):
+        below, above, gap_below, gap_above = 0, 0, np.inf, np.inf
+        for j in range(n):
+            ahead = (angles[j] - theta[i]) % turn           # (in [0, 2π): how far on the corner is)
+            if ahead <= gap_above:
+                above, gap_above = j, ahead
+            if turn - ahead < gap_below or (ahead == 0.0 and gap_below > 0.0):
+                below, gap_below = j, (0.0 if ahead == 0.0 else turn - ahead)
+        span = gap_below + gap_above
+        w = gap_below / span if span > 0.0 else 0.0
+        out[i] = (1.0 - w) * heights[below] + w * heights[above]
+    return out
 
 
 @helper
