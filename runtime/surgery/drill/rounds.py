@@ -84,7 +84,7 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
     for _ in range(rounds):
         # the closure of the marks: each marked edge marks the longest edge of every face on it; the
         # input faces beyond the patch on a marked edge join it (a batch at a time), and the closure
-        capacity = rows.shape[0] + beyond.shape[0] + 64                 # (room for faces taken in)
+        capacity = rows.shape[0] + 64                 # (room for faces taken in)
         emap = edge_map(codes, rows.shape[0], capacity)
         marked, stack = np.zeros(3 * capacity, np.bool_), np.empty(3 * capacity, np.int64)
         depth = 0
@@ -114,6 +114,9 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
                 codes = np.concatenate((codes, more_codes))
                 longest = np.concatenate((longest, more_longest))
                 wanted = np.concatenate((wanted, more_wanted))
+                if first_new == 0 and not (wanted == YES).any():        # (nothing to refine: no map)
+                    return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken,
+                            REFINED)
                 if rows.shape[0] > capacity:            # (the same edge ids, more room)
                     capacity = 2 * rows.shape[0]
                     emap = edge_map(codes, rows.shape[0], capacity)
