@@ -47,7 +47,7 @@ class Layout(NamedTuple):
     row_out: np.ndarray
 
 
-@kernel((I2, i8, I1, I2, I1, I1, I1, i8), cost=0.6)
+@kernel((I2, i8, I1, I2, I1, I1, I1, i8), cost=0.9)
 def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
     """The result's faces and vertices (``Layout``, as a plain tuple) from the input ``faces`` (m, 3) over
     ``n`` vertices, the

@@ -35,7 +35,7 @@ def open_hole(patch: Patch, bit, tolerance: float) -> tuple:
     return rim, opened
 
 
-@kernel((F2, I2, I1, I1, F1, F1, f8, f8), cost=1.0)
+@kernel((F2, I2, I1, I1, F1, F1, f8, f8), cost=3.0)
 def _open(points, rows, sources, row_point, start, end, radius, tolerance):
     """The patch's faces ``rows`` (F, 3) (from input faces ``sources`` (F,); ``row_point`` (R,) the point
     of each row, ``points`` (P, 3)) replaced by their parts outside the bit: each point is outside (f >
@@ -172,7 +172,7 @@ def _outside_parts(rows, crossed, side, crossing_rows, points, row_point):
     return out[:count].copy(), part_of[:count].copy()
 
 
-@kernel((I2, I1, B1), cost=0.5)
+@kernel((I2, I1, B1), cost=0.9)
 def rim_loops(rows, row_point, on_rim):
     """The loops of the boundary edges between rim points (``on_rim`` (P,) per point) of the faces ``rows``
     (F, 3) (``row_point`` (R,) the point of each row; an edge is a boundary if one corner edge of one

@@ -64,7 +64,7 @@ class Refined(NamedTuple):
 INPUT_MESH, PATCH_MAPS = record(F2, I2, I1, I2, I2, I1, I1), record(I1, I1, B1)
 
 
-@kernel((I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=2.0)
+@kernel((I1, INPUT_MESH, PATCH_MAPS, F1, F1, f8, f8, i8), cost=5.0)
 def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
     """A patch of the input faces ``first`` (k,), refined: ``mesh`` an ``InputMesh``; ``maps`` a new
     patch's row_of, point_of and is_taken, updated in place as faces are taken in.

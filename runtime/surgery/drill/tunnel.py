@@ -42,7 +42,7 @@ def _loop_record(loop: Loop) -> tuple:
     return loop.rows, loop.points, loop.theta, loop.sigma, loop.unwrapped
 
 
-@kernel((LOOP, i8, LOOP, i8, b1, FRAME, f8, i8, i8), cost=1.0)
+@kernel((LOOP, i8, LOOP, i8, b1, FRAME, f8, i8, i8), cost=2.0, fused=True)
 def _tunnel_grid(a, a_winding, b, b_winding, has_b, frame, step, first_point, first_row):
     """The tunnel's points, rows and faces from loop a up to loop b (``has_b``; else to the tip's height
     ``top``), loops as ``_loop_record`` gives them (with their windings), ``frame`` (start, axes, length,
