@@ -6,12 +6,13 @@ compiled gather (``_stacked``): the same work a cut does to assemble its halves.
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 
 from ..._shared.frozen import kernel_array
-from ..._shared.jit import F1, F2, I1, I2, i8, kernel
+from ..._shared.jit import B1, F1, F2, I1, I2, helper, i8, kernel
 from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...errors import PlacementWarning
@@ -179,15 +180,19 @@ def assemble(rig: Rig, patch: Patch, rim, bit, affines, diagonal: float) -> Asse
     for name, values in rig.attributes.items():
         values = kernel_array(np.asarray(values))     # (read-only: its writeable buffer, one kernel type)
         attributes[name] = stacked(values, lay.kept_input, interpolate_attribute(name, values, new))
-    if lay.on_wall.any() and "NORMAL" in attributes:
+    normals = attributes.get("NORMAL")
+    if normals is not None and affines is None and normals.dtype == np.float64 and normals.shape[1:] == (3,):
+        _inward_into(normals, len(lay.kept_input), lay.on_wall, new_positions, bit.start, bit.end)
+    elif normals is not None and lay.on_wall.any():
         at = np.flatnonzero(lay.on_wall)
         inward = _inward(new_positions[at], bit.start, bit.end)
         if affines is not None:
             inward = _to_rest_normals(inward, new_joints[at], new_weights[at], affines)
-        attributes["NORMAL"][len(lay.kept_input) + at] = inward.astype(attributes["NORMAL"].dtype)
-    result = Rig._of_checked(stacked(vertices, lay.kept_input, new_rest), lay.faces,
-                             stacked(joints, lay.kept_input, new_joints), stacked(weights, lay.kept_input, new_weights),
-                             rig.skeleton, rig.clips, attributes, f"{rig.name}_drilled")
+        normals[len(lay.kept_input) + at] = inward.astype(normals.dtype)
+    out_vertices, out_joints, out_weights = _stacked_skin(vertices, joints, weights, lay.kept_input, new_rest,
+                                                          new_joints, new_weights)
+    result = Rig._of_checked(out_vertices, lay.faces, out_joints, out_weights, rig.skeleton, rig.clips, attributes,
+                             f"{rig.name}_drilled")
     sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
     return Assembled(result, sources, new, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions,
                      lay.replaced, lay.made_in, residual)
@@ -222,16 +227,36 @@ def _inward(points, start, end):
     """Unit normals (k, 3) at points (k, 3) of the bit's surface pointing into the bit: to the nearest
     point of its travel start -> end (the axis, or a round end's centre)."""
     out = np.empty_like(points)
-    ux, uy, uz = end[0] - start[0], end[1] - start[1], end[2] - start[2]
-    length2 = ux * ux + uy * uy + uz * uz
     for i in range(points.shape[0]):
-        s = ((points[i, 0] - start[0]) * ux + (points[i, 1] - start[1]) * uy + (points[i, 2] - start[2]) * uz) / length2
-        s = min(max(s, 0.0), 1.0)
-        dx, dy, dz = (start[0] + s * ux - points[i, 0], start[1] + s * uy - points[i, 1],
-                      start[2] + s * uz - points[i, 2])
-        norm = np.sqrt(dx * dx + dy * dy + dz * dz)
-        out[i, 0], out[i, 1], out[i, 2] = dx / norm, dy / norm, dz / norm
+        _put_inward(points, i, start, end, out, i)
     return out
+
+
+@kernel((F2, i8, B1, F2, F1, F1), cost=0.2)
+def _inward_into(normals, first, on_wall, points, start, end):
+    """``_inward`` at the rows i of ``points`` (k, 3) that are ``on_wall`` (k,), written to row first + i
+    of ``normals`` (n, 3)."""
+    for i in range(points.shape[0]):
+        if on_wall[i]:
+            _put_inward(points, i, start, end, normals, first + i)
+
+
+@helper
+def _put_inward(points, i, start, end, out, row):
+    """Write the unit vector from row i of ``points`` to the nearest point of start -> end to ``out[row]``."""
+    ux, uy, uz = end[0] - start[0], end[1] - start[1], end[2] - start[2]
+    s = ((points[i, 0] - start[0]) * ux + (points[i, 1] - start[1]) * uy + (points[i, 2] - start[2]) * uz) / \
+        (ux * ux + uy * uy + uz * uz)
+    s = min(max(s, 0.0), 1.0)
+    dx, dy, dz = start[0] + s * ux - points[i, 0], start[1] + s * uy - points[i, 1], start[2] + s * uz - points[i, 2]
+    norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+    out[row, 0], out[row, 1], out[row, 2] = dx / norm, dy / norm, dz / norm
+
+
+@kernel((F2, I2, F2, I1, F2, I2, F2), cost=0.4)
+def _stacked_skin(vertices, joints, weights, src, new_vertices, new_joints, new_weights):
+    """``_stacked`` of the vertices (n, 3), joints and weights (n, 4) at once."""
+    return _stacked(vertices, src, new_vertices), _stacked(joints, src, new_joints), _stacked(weights, src, new_weights)
 
 
 def _to_rest_normals(inward, joints, weights, affines) -> np.ndarray:
