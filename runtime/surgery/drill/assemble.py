@@ -51,11 +51,10 @@ class Layout(NamedTuple):
 @kernel((I2, i8, I1, I2, I1, I1, I1, i8), cost=0.9)
 def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
     """The result's faces and vertices (``Layout``, as a plain tuple) from the input ``faces`` (m, 3) over
-    ``n`` vertices, the
-    input faces the patch ``taken`` (T,), the patch's faces ``rows`` (F, 3) from input faces ``sources``
-    (F,), its rows' input vertices ``row_vertex`` (R,) (-1: new) and points ``row_point`` (R,) of
-    ``n_points``. A patch face that is its input face as it was (its corners, in their order) keeps
-    that face's place."""
+    ``n`` vertices, the input faces the patch ``taken`` (T,), the patch's faces ``rows`` (F, 3) from
+    input faces ``sources`` (F,), its rows' input vertices ``row_vertex`` (R,) (-1: new) and points
+    ``row_point`` (R,) of ``n_points``. A patch face that is its input face as it was (its corners, in
+    their order) keeps that face's place."""
     m, n_rows = faces.shape[0], row_vertex.shape[0]
     kept = np.ones(m, np.bool_)
     kept[taken] = False
@@ -67,9 +66,11 @@ def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
             changed[f], kept[s] = False, True
     # output ids: input vertices first (ascending), then the new rows used (ascending)
     uses_vertex, uses_row = np.zeros(n, np.bool_), np.zeros(n_rows, np.bool_)
+    n_kept = 0
     for f in range(m):
         if kept[f]:
             uses_vertex[faces[f, 0]] = uses_vertex[faces[f, 1]] = uses_vertex[faces[f, 2]] = True
+            n_kept += 1
     on_wall_row = np.zeros(n_rows, np.bool_)
     for f in range(rows.shape[0]):
         if changed[f]:
@@ -97,9 +98,7 @@ def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
     for r in range(n_rows):
         if row_vertex[r] >= 0:
             row_out[r] = vertex_out[row_vertex[r]]
-    n_kept, n_changed = 0, 0
-    for f in range(m):
-        n_kept += kept[f]
+    n_changed = 0
     for f in range(rows.shape[0]):
         n_changed += changed[f]
     out, made_in = np.empty((n_kept + n_changed, 3), np.int64), np.empty(n_changed, np.int64)
