@@ -72,6 +72,10 @@ def midpoints(points, pairs):
     return out
 
 
+#: the fields of an ``edge_map`` (a plain tuple)
+TABLE, SLOT_EDGE, EDGE_CODE, HEAD, NEXT, FACE_EDGE, COUNT = range(7)
+
+
 @helper
 def edge_map(codes, n_faces, capacity):
     """Which faces have each edge, for the faces ``codes[:n_faces]`` (edge codes (F, 3)) with room for

@@ -11,7 +11,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, kernel, record
-from .bisection import add_face_edges, edge_map, longest_edge, midpoints, pair, split
+from .bisection import FACE_EDGE, EDGE_CODE, HEAD, NEXT, add_face_edges, edge_map, longest_edge, midpoints, pair, \
+    split
 from .bit import _signed_distances, surface_crosses
 from .patch import LOW_BITS, NEW_POINT, new_rows_and_points
 
@@ -75,6 +76,7 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
     and splits the faces on the marks (``bisection.split``); until no such face is left, or ``rounds``
     ran out. Returns a ``Refined`` as a plain tuple."""
     row_of, point_of, is_taken = maps
+    positions, mesh_faces, welded = mesh[0], mesh[1], mesh[2]
     points, point_welded, signed = np.empty((0, 3)), np.empty(0, np.int64), np.empty(0)
     row_point, row_vertex, row_parents, row_t = (np.empty(0, np.int64), np.empty(0, np.int64),
                                                  np.empty((0, 2), np.int64), np.empty(0))
@@ -90,16 +92,16 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
         depth = 0
         for f in range(rows.shape[0]):
             if wanted[f] == YES:
-                depth = _mark(marked, stack, depth, emap[5][f, longest[f]])
+                depth = _mark(marked, stack, depth, emap[FACE_EDGE][f, longest[f]])
         pending, n_pending = np.empty(16, np.int64), 0     # input edges with faces beyond the patch
         while depth > 0 or beyond.shape[0] > 0:
             if beyond.shape[0]:
                 is_taken[beyond] = True
-                corners = mesh[1][beyond]
+                corners = mesh_faces[beyond]
                 vertices, vertex_points, point_vertices = new_rows_and_points(
-                    corners, mesh[2], row_of, point_of, row_point.shape[0], points.shape[0])
-                points = np.concatenate((points, mesh[0][point_vertices]))
-                point_welded = np.concatenate((point_welded, mesh[2][point_vertices]))
+                    corners, welded, row_of, point_of, row_point.shape[0], points.shape[0])
+                points = np.concatenate((points, positions[point_vertices]))
+                point_welded = np.concatenate((point_welded, welded[point_vertices]))
                 signed = np.concatenate((signed, _signed_distances(points, signed.shape[0], start, end, radius)))
                 row_parents = np.concatenate((row_parents, _itself(row_point.shape[0], vertices.shape[0])))
                 row_point = np.concatenate((row_point, vertex_points))
@@ -128,7 +130,7 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
                 # each is on a marked edge (it marks its longest), or one of the first (then if wanted)
                 for g in range(first_new, rows.shape[0]):
                     if first_new > 0 or wanted[g] == YES:
-                        depth = _mark(marked, stack, depth, emap[5][g, longest[g]])
+                        depth = _mark(marked, stack, depth, emap[FACE_EDGE][g, longest[g]])
                 beyond = np.empty(0, np.int64)
                 continue
             depth -= 1
@@ -139,11 +141,11 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
                     pending = np.concatenate((pending, np.empty(n_pending, np.int64)))
                 pending[n_pending] = edge
                 n_pending += 1
-            incidence = emap[3][e]
+            incidence = emap[HEAD][e]
             while incidence >= 0:
                 g = incidence // 3
-                depth = _mark(marked, stack, depth, emap[5][g, longest[g]])
-                incidence = emap[4][incidence]
+                depth = _mark(marked, stack, depth, emap[FACE_EDGE][g, longest[g]])
+                incidence = emap[NEXT][incidence]
             if depth == 0 and n_pending:
                 beyond, n_pending = _faces_on(pending[:n_pending], mesh, is_taken), 0
         if not marked.any():
@@ -151,7 +153,7 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
         on_marked = np.empty(rows.shape, np.bool_)
         for f in range(rows.shape[0]):
             for k in range(3):
-                on_marked[f, k] = marked[emap[5][f, k]]
+                on_marked[f, k] = marked[emap[FACE_EDGE][f, k]]
         rows, made_from, kept, parents, points_of_rows, point_parents = split(
             rows, row_point, points, on_marked, row_point.shape[0], points.shape[0])
         sources = sources[made_from]
@@ -206,13 +208,13 @@ def _open_input_edge(emap, e, sources, point_welded, mesh, is_taken):
     """The input edge (its id in ``mesh``) that edge e of an ``edge_map`` of the patch's faces (from input
     faces ``sources``) is, if input faces not ``taken`` have it too; else -1. (An edge between two
     input points is an edge of the input face it lies in: bisection joins a new point to a corner.)"""
-    code = emap[2][e]
+    code = emap[EDGE_CODE][e]
     wa, wb = point_welded[code >> 32], point_welded[code & LOW_BITS]
     welded_faces, face_edges, offsets, edge_faces = mesh[3], mesh[4], mesh[5], mesh[6]
-    incidence = emap[3][e]
+    incidence = emap[HEAD][e]
     while wa != NEW_POINT and wb != NEW_POINT and incidence >= 0:
         s = sources[incidence // 3]
-        incidence = emap[4][incidence]
+        incidence = emap[NEXT][incidence]
         if s < 0:
             continue
         for j in range(3):
