@@ -24,8 +24,6 @@ A bit that touches no face raises ``MissesMeshError``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..._shared.cache import rig_cached
@@ -35,14 +33,14 @@ from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
 from ...errors import InvalidInputError, MissesMeshError
 from ...tolerances import tol
-from ..new_vertices import NewVertices
 from ..surface import box_diagonal, mesh_arrays
 from ..topology import rig_topology
-from .assemble import NEW_VERTEX, assemble
+from .assemble import assemble
 from .bit import Bit, bit as checked_bit
 from .inside import winding_number
 from .patch import Patch
 from .refine import refine
+from .result import NEW_VERTEX, DrillResult
 from .rim import open_hole
 from .wall import build_walls
 
@@ -50,42 +48,6 @@ __all__ = ["drill", "drill_details", "DrillResult", "RIM_STEP", "NEW_VERTEX"]
 
 #: the longest edge near a rim, as a fraction of the radius: 2 sin(pi / 25), about 25 edges around a hole
 RIM_STEP = 2.0 * np.sin(np.pi / 25)
-
-
-@dataclass(frozen=True, eq=False)
-class DrillResult:
-    """A drill with its bookkeeping.
-
-    rig : Rig, the drilled rig
-    sources : (n_out,) int64, the input vertex of each output vertex, ``NEW_VERTEX`` for a new one
-    new : NewVertices, the input vertices each new vertex lies between and its coefficients there
-        (new vertex j is output vertex ``first_new + j``)
-    first_new : int
-    rim : (r,) int64, the output vertices on the bit's surface
-    new_positions : (k, 3) float64, the new vertices in the space that was drilled (rest, or posed)
-    removed_faces : int, input faces (after refinement) taken away or cut by the bit
-    replaced : (t,) int64, the input faces the drill replaced (split, cut or taken away; ascending): the
-        result's faces are the other input faces, in their order, then the faces made in their place
-    made_in : (k,) int64, for each face made (the last k of the result's), the input face it lies in
-        (-1: a wall's)
-    wall_faces : int, the walls' faces: the last ``wall_faces`` rows of ``rig.faces``
-    bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
-        |skinned new vertex - where it was made| (0 for a drill at rest)
-    """
-
-    rig: Rig
-    sources: np.ndarray
-    new: NewVertices
-    first_new: int
-    rim: np.ndarray
-    new_positions: np.ndarray
-    removed_faces: int
-    replaced: np.ndarray
-    made_in: np.ndarray
-    wall_faces: int
-    bit: Bit
-    tolerance: float
-    residual: float
 
 
 def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> DrillResult:
@@ -131,9 +93,7 @@ def _drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagon
     if opened == 0:
         raise missed(the_bit, rig.name)
     walls = build_walls(patch, rim, the_bit, step, inside) if wall else 0
-    made = assemble(rig, patch, rim, the_bit, affines, diagonal)
-    return DrillResult(made.rig, made.sources, made.new, made.first_new, made.rim, made.new_positions, opened,
-                       made.replaced, made.made_in, walls, the_bit, tolerance, made.residual)
+    return assemble(rig, patch, rim, opened, walls, the_bit, tolerance, affines, diagonal)
 
 
 def missed(the_bit: Bit, name: str) -> MissesMeshError:

@@ -20,10 +20,8 @@ from ...tolerances import tol
 from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute, place_in_rest
 from ..surface import mesh_arrays
 from .patch import Patch
+from .result import NEW_VERTEX, DrillResult
 from .wall import WALL
-
-#: ``DrillResult.sources`` of a vertex the drill made
-NEW_VERTEX = -1
 
 
 class Layout(NamedTuple):
@@ -143,23 +141,11 @@ def stacked(values, src, extra) -> np.ndarray:
     return out.reshape((len(out),) + values.shape[1:]).astype(values.dtype, copy=False)
 
 
-class Assembled(NamedTuple):
-    """The drilled rig and what ``DrillResult`` reports of it (``api.py`` names the fields)."""
-
-    rig: Rig
-    sources: np.ndarray
-    new: NewVertices
-    first_new: int
-    rim: np.ndarray
-    new_positions: np.ndarray
-    replaced: np.ndarray
-    made_in: np.ndarray
-    residual: float
-
-
-def assemble(rig: Rig, patch: Patch, rim, bit, affines, diagonal: float) -> Assembled:
+def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, bit, tolerance: float, affines,
+             diagonal: float) -> DrillResult:
     """The drilled rig: the input vertices it uses (bit for bit), then the new rows it uses; the input
-    faces it keeps, then the patch's faces it made. ``rim`` (r,) the patch's rim rows; ``affines`` the
+    faces it keeps, then the patch's faces it made; with its bookkeeping. ``rim`` (r,) the patch's rim
+    rows; ``opened``, ``walls``, ``bit``, ``tolerance`` as ``DrillResult`` names them; ``affines`` the
     pose's bone maps (a posed drill: the new vertices are placed in rest space) or None."""
     vertices, faces, joints, weights = mesh_arrays(rig)
     lay = Layout(*_layout(faces, len(vertices), patch.taken, patch.faces, patch.face_source, patch.row_vertex,
@@ -193,8 +179,8 @@ def assemble(rig: Rig, patch: Patch, rim, bit, affines, diagonal: float) -> Asse
     result = Rig._of_checked(out_vertices, lay.faces, out_joints, out_weights, rig.skeleton, rig.clips, attributes,
                              f"{rig.name}_drilled")
     sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
-    return Assembled(result, sources, new, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions,
-                     lay.replaced, lay.made_in, residual)
+    return DrillResult(result, sources, new, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions, opened,
+                       lay.replaced, lay.made_in, walls, bit, tolerance, residual)
 
 
 @kernel((I2, F2, I1, F2, I1), cost=0.2)
