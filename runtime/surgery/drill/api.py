@@ -15,7 +15,7 @@ The bit (``bit.py``) is the solid within ``radius`` of the segment start -> end,
    result in ``pose`` puts them where they were made (as a posed cut does).
 5. The result keeps the input vertices it uses in their order (attributes and weights bit for bit),
    then the new vertices; the faces it did not split, cut or take away keep their order, then come the
-   faces it made.
+   faces it made (``assemble.py``, with the ``DrillResult`` of ``result.py``).
 
 6. ``wall=True``: where the bit passes inside the model, the hole gets a wall on the bit's surface
    (``wall.py``), so that a closed model stays closed; ``wall=False`` leaves the rims as boundaries.
