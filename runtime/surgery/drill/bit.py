@@ -45,7 +45,7 @@ def bit(start, end, radius) -> Bit:
 
 
 @helper
-def _segment_distance(start, end, axis, x):
+def segment_distance(start, end, axis, x):
     """Distance of x (3,) from the segment start -> end, ``axis`` = end - start (3,) (made once by a
     caller that measures many points)."""
     dx, dy, dz = axis[0], axis[1], axis[2]
@@ -60,7 +60,7 @@ def _segment_distance(start, end, axis, x):
 
 
 @helper
-def _put_on_edge(p, q, t, out):
+def put_on_edge(p, q, t, out):
     """out (3,) := p + t (q - p); out."""
     for k in range(3):
         out[k] = p[k] + t * (q[k] - p[k])
@@ -116,7 +116,7 @@ def _closest_on_face(start, end, a, b, c, x):
     da = (start[0] - a[0]) * nx + (start[1] - a[1]) * ny + (start[2] - a[2]) * nz
     db = (end[0] - a[0]) * nx + (end[1] - a[1]) * ny + (end[2] - a[2]) * nz
     if (da < 0.0) != (db < 0.0) and da != db:
-        la, lb, lc = barycentric(a, b, c, _put_on_edge(start, end, da / (da - db), x))
+        la, lb, lc = barycentric(a, b, c, put_on_edge(start, end, da / (da - db), x))
         if la >= 0.0 and lb >= 0.0 and lc >= 0.0:
             best = 0.0
     return best
@@ -130,7 +130,7 @@ NEAREST_CORNER = 1.0 / math.sqrt(3.0)
 @helper
 def surface_crosses(positions, p, q, r, signed, longest, start, end, radius, x):
     """Whether the bit's surface passes through triangle p, q, r (rows of ``positions`` (P, 3), ``signed``
-    (P,) their ``_signed_distances``, ``longest`` its longest edge's length): f above 0 at a corner and
+    (P,) their ``signed_distances``, ``longest`` its longest edge's length): f above 0 at a corner and
     below 0 somewhere on it (at a corner, or the least over the face, ``_closest_on_face``), f being
     convex. The least is computed only where a bound leaves it open: f is 1-Lipschitz and every point of
     the face lies within ``NEAREST_CORNER`` times its longest edge of a corner. ``x`` (3,): scratch."""
@@ -143,12 +143,12 @@ def surface_crosses(positions, p, q, r, signed, longest, start, end, radius, x):
 
 
 @helper
-def _signed_distances(positions, first, start, end, radius):
+def signed_distances(positions, first, start, end, radius):
     """f = distance - radius of each row of ``positions`` (P, 3) from ``first`` on (P - first,): negative
     inside the bit."""
     out, axis = np.empty(positions.shape[0] - first), end - start
     for i in range(first, positions.shape[0]):
-        out[i - first] = _segment_distance(start, end, axis, positions[i]) - radius
+        out[i - first] = segment_distance(start, end, axis, positions[i]) - radius
     return out
 
 
@@ -172,14 +172,14 @@ def crossing(p, q, start, end, axis, radius, x):
     The bracket is the first of ``GUESS_BRACKETS`` about the closed-form crossing (``_guess``) across
     which f changes sign as across the edge, else [0, 1]."""
     lo, hi = 0.0, 1.0
-    f_lo, f_hi = _segment_distance(start, end, axis, p) - radius, _segment_distance(start, end, axis, q) - radius
+    f_lo, f_hi = segment_distance(start, end, axis, p) - radius, segment_distance(start, end, axis, q) - radius
     guess = _guess(p, q, start, end, axis, radius)
     for half in GUESS_BRACKETS:
         a, b = guess - half, guess + half
         if not 0.0 < a < b < 1.0:
             break
-        f_a = _segment_distance(start, end, axis, _put_on_edge(p, q, a, x)) - radius
-        f_b = _segment_distance(start, end, axis, _put_on_edge(p, q, b, x)) - radius
+        f_a = segment_distance(start, end, axis, put_on_edge(p, q, a, x)) - radius
+        f_b = segment_distance(start, end, axis, put_on_edge(p, q, b, x)) - radius
         if (f_a < 0.0) == (f_lo < 0.0) and (f_b < 0.0) == (f_hi < 0.0):
             lo, hi, f_lo, f_hi = a, b, f_a, f_b
             break
@@ -194,7 +194,7 @@ def crossing(p, q, start, end, axis, radius, x):
                 t = secant
         if t <= lo or t >= hi:
             break
-        f = _segment_distance(start, end, axis, _put_on_edge(p, q, t, x)) - radius
+        f = segment_distance(start, end, axis, put_on_edge(p, q, t, x)) - radius
         if (f < 0.0) == (f_lo < 0.0):
             lo, f_lo, g_lo = t, f, f
             if kept == -1:

@@ -15,7 +15,6 @@ bisection of a seam edge is seen from both sides. The rounds run in one compiled
 """
 from __future__ import annotations
 
-
 from ...errors import InternalError
 from .bisection import split_marked
 from .patch import Patch

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, kernel
 from .bisection import EMPTY, code_table, pair, slot
-from .bit import _put_on_edge, _segment_distance, _signed_distances, crossing
+from .bit import crossing, put_on_edge, segment_distance, signed_distances
 from .patch import Patch, put_face, squared_distance
 
 OUTSIDE, ON, INSIDE = 1, 0, -1
@@ -46,7 +46,7 @@ def _open(points, rows, sources, row_point, start, end, radius, tolerance):
     (r, 2) and t (r,) (``Patch.new_rows``; ids after the patch's), the rim rows (ascending: rows on the
     surface that a face uses), the number of faces taken away or cut)."""
     n, n_points = rows.shape[0], points.shape[0]
-    signed = _signed_distances(points, 0, start, end, radius)
+    signed = signed_distances(points, 0, start, end, radius)
     side = np.empty(n_points, np.int64)
     for p in range(n_points):
         side[p] = OUTSIDE if signed[p] > tolerance else (INSIDE if signed[p] < -tolerance else ON)
@@ -91,7 +91,7 @@ def _centre_outside(points, row_point, rows, f, start, end, radius):
     for k in range(3):
         for c in range(3):
             centre[c] += points[row_point[rows[f, k]], c] / 3.0
-    return _segment_distance(start, end, end - start, centre) - radius > 0.0
+    return segment_distance(start, end, end - start, centre) - radius > 0.0
 
 
 @helper
@@ -123,7 +123,7 @@ def _crossing_rows(points, rows, crossed, row_point, side, start, end, radius):
                 if point_table[point_at] == EMPTY:
                     lo, hi = min(pa, pb), max(pa, pb)
                     point_t[made_points] = crossing(points[lo], points[hi], start, end, axis, radius, x)
-                    _put_on_edge(points[lo], points[hi], point_t[made_points], new_points[made_points])
+                    put_on_edge(points[lo], points[hi], point_t[made_points], new_points[made_points])
                     point_table[point_at], point_id[point_at] = pair(pa, pb), made_points
                     made_points += 1
                 lower, upper = min(a, b), max(a, b)

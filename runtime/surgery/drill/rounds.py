@@ -13,7 +13,7 @@ import numpy as np
 from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, kernel, record
 from .bisection import FACE_EDGE, EDGE_CODE, HEAD, NEXT, add_face_edges, edge_map, longest_edge, midpoints, pair, \
     split
-from .bit import _signed_distances, surface_crosses
+from .bit import signed_distances, surface_crosses
 from .patch import LOW_BITS, NEW_POINT, new_rows_and_points
 
 #: how ``refine_rounds`` ended: no face the surface crosses is longer than the step; the rounds ran out
@@ -102,7 +102,7 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
                     corners, welded, row_of, point_of, row_point.shape[0], points.shape[0])
                 points = np.concatenate((points, positions[point_vertices]))
                 point_welded = np.concatenate((point_welded, welded[point_vertices]))
-                signed = np.concatenate((signed, _signed_distances(points, signed.shape[0], start, end, radius)))
+                signed = np.concatenate((signed, signed_distances(points, signed.shape[0], start, end, radius)))
                 row_parents = np.concatenate((row_parents, _itself(row_point.shape[0], vertices.shape[0])))
                 row_point = np.concatenate((row_point, vertex_points))
                 row_vertex = np.concatenate((row_vertex, vertices))
@@ -159,7 +159,7 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
         sources = sources[made_from]
         points = np.concatenate((points, midpoints(points, point_parents)))
         point_welded = np.concatenate((point_welded, np.full(point_parents.shape[0], NEW_POINT, np.int64)))
-        signed = np.concatenate((signed, _signed_distances(points, signed.shape[0], start, end, radius)))
+        signed = np.concatenate((signed, signed_distances(points, signed.shape[0], start, end, radius)))
         row_point = np.concatenate((row_point, points_of_rows))
         row_vertex = np.concatenate((row_vertex, np.full(parents.shape[0], -1, np.int64)))
         row_parents = np.concatenate((row_parents, parents))
