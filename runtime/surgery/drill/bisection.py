@@ -93,7 +93,7 @@ def edge_map(codes, n_faces, capacity):
     return emap
 
 
-@helper
+@inlined
 def add_face_edges(emap, codes, f):
     """Add face f (its edge codes ``codes[f]``) to an ``edge_map``."""
     table, slot_edge, edge_code, head, incidence_next, face_edge, count = emap
@@ -177,7 +177,7 @@ def split(rows, row_point, points, split, first_row, first_point):
             row_points[:rows_made].copy(), point_parents[:points_made].copy())
 
 
-@helper
+@inlined
 def _halves(out, made_from, made, f, rows, row_point, points, midpoint):
     """Write the faces that replace face f (``split_marked``) at row ``made`` of ``out``; the next row."""
     k, longest = -1, -1.0

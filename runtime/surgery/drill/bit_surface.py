@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..._shared.jit import F1, F2, I1, f8, kernel
+from ..._shared.jit import F1, F2, I1, f8, helper, kernel
 
 
 class Frame:
@@ -135,7 +135,7 @@ def _loop_coordinates(x, offsets, start, axes, length, r):
         unwrapped[first] = theta[first]
         for j in range(first, last):
             following = j + 1 if j + 1 < last else first
-            turn = (theta[following] - theta[j] + math.pi) % (2.0 * math.pi) - math.pi
+            turn = modulo_turn(theta[following] - theta[j] + math.pi) - math.pi
             total += turn
             if j + 1 < last:
                 unwrapped[j + 1] = unwrapped[j] + turn
@@ -151,8 +151,22 @@ def nearest_rows(angles, rows, theta):
     for i in range(theta.shape[0]):
         best, gap = 0, np.inf
         for j in range(angles.shape[0]):
-            g = abs((angles[j] - theta[i] + math.pi) % (2 * math.pi) - math.pi)
+            g = abs(modulo_turn(angles[j] - theta[i] + math.pi) - math.pi)
             if g < gap:
                 best, gap = j, g
         out[i] = rows[best]
     return out
+
+
+@helper
+def modulo_turn(x):
+    """x % 2π, in [0, 2π) as Python's float modulo gives it, without numba's call to fmod where x lies
+    within a turn or two of 0 (a difference of angles: the wall's inner loops ask tens of thousands)."""
+    turn = 2.0 * math.pi
+    if 0.0 <= x < turn:
+        return x
+    if -turn < x < 0.0:
+        return x + turn            # (fmod gives x itself, then the modulo adds a turn)
+    if turn <= x < 2.0 * turn:
+        return x - turn            # (exact: x and the turn are within a factor of 2)
+    return x % turn

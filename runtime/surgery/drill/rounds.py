@@ -10,7 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, kernel, record
+from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, inlined, kernel, record
 from .bisection import FACE_EDGE, EDGE_CODE, HEAD, NEXT, add_face_edges, edge_map, longest_edge, midpoints, pair, \
     split
 from .bit import signed_distances, surface_crosses
@@ -174,7 +174,7 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
     return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken, OUT_OF_ROUNDS)
 
 
-@helper
+@inlined
 def _mark(marked, stack, depth, e):
     """Mark edge e (once: pushed on ``stack`` to be followed); the stack's new depth."""
     if not marked[e]:
@@ -203,7 +203,7 @@ def _describe(rows, first, row_point, points, signed, start, end, radius, step, 
     return codes, longest, wanted
 
 
-@helper
+@inlined
 def _open_input_edge(emap, e, sources, point_welded, mesh, is_taken):
     """The input edge (its id in ``mesh``) that edge e of an ``edge_map`` of the patch's faces (from input
     faces ``sources``) is, if input faces not ``taken`` have it too; else -1. (An edge between two

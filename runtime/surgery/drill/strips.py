@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from ..._shared.jit import F1, I1, I2, kernel
+from .bit_surface import modulo_turn
 
 
 @kernel((I2,), cost=0.1)
@@ -35,7 +36,7 @@ def zip_rings(ra, ua, rb, ub):
     na, nb, turn = ra.shape[0], rb.shape[0], 2 * math.pi
     j, gap = 0, np.inf
     for i in range(nb):                                       # b starts near a
-        g = abs((ub[i] - ua[0] + math.pi) % turn - math.pi)
+        g = abs(modulo_turn(ub[i] - ua[0] + math.pi) - math.pi)
         if g < gap:
             j, gap = i, g
     # each ring's angles with its first again at the end, one turn on; b's from its corner j

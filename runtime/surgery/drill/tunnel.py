@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..._shared.jit import F1, F2, I1, b1, f8, helper, i8, kernel, record
-from .bit_surface import Frame, Loop, _surface_points, nearest_rows
+from .bit_surface import Frame, Loop, _surface_points, modulo_turn, nearest_rows
 from .patch import Patch
 from .strips import grid, zip_rings
 
@@ -112,7 +112,7 @@ def _height_at(loop, theta):
     for i in range(theta.shape[0]):
         below, above, gap_below, gap_above = 0, 0, np.inf, np.inf
         for j in range(n):
-            ahead = (angles[j] - theta[i]) % turn           # (in [0, 2π): how far on the corner is)
+            ahead = modulo_turn(angles[j] - theta[i])       # (in [0, 2π): how far on the corner is)
             if ahead <= gap_above:
                 above, gap_above = j, ahead
             if turn - ahead < gap_below or (ahead == 0.0 and gap_below > 0.0):
