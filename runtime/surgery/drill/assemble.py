@@ -2,7 +2,7 @@
 the new vertices' weights, attributes and rest positions, the wall rows' normals.
 
 The bookkeeping over the whole mesh is one compiled pass (``_layout``), each per-vertex array one
-compiled gather (``_stacked``): the same work a cut does to assemble its halves.
+compiled gather (``stacked``) into an array made here: the same work a cut does to assemble its halves.
 """
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ import numpy as np
 
 from ..._shared.frozen import kernel_array
 from ..._shared.jit import B1, F1, F2, I1, I2, helper, i8, kernel
+from ..._shared.memory import recycled_empty
 from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...errors import PlacementWarning
@@ -115,30 +116,33 @@ def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
     return out, made_in, np.flatnonzero(~kept), kept_input, new_rows, first_copy, on_wall, row_out
 
 
-@kernel((F2, I1, F2), (I2, I1, I2), cost=0.3)
-def _stacked(values, src, extra):
-    """(a + b, c): the rows ``values[src]`` (values (n, c), src (a,)), then ``extra`` (b, c)."""
+@kernel((F2, I1, F2, F2), (I2, I1, I2, I2), cost=0.3)
+def _stacked_into(values, src, extra, out):
+    """out (a + b, c) := the rows ``values[src]`` (values (n, c), src (a,)), then ``extra`` (b, c)."""
     a, c = src.shape[0], values.shape[1]
-    out = np.empty((a + extra.shape[0], c), values.dtype)
     for i in range(a):
         for j in range(c):
             out[i, j] = values[src[i], j]
     for i in range(extra.shape[0]):
         for j in range(c):
             out[a + i, j] = extra[i, j]
-    return out
 
 
 def stacked(values, src, extra) -> np.ndarray:
-    """``_stacked`` for a per-vertex array of any shape (n, ...) and dtype (float64 or int64 in compiled
-    code, other dtypes through float64)."""
+    """A new per-vertex array: the rows ``values[src]`` (values (n, ...), src (a,)), then ``extra`` (b,
+    ...), of values' dtype (float64 and int64 filled in compiled code, other dtypes through float64).
+    It is made here (``recycled_empty``), so that the rig holds it as it is (``frozen`` copies a
+    kernel's own array: it cannot tell one from a view of another's)."""
     values = kernel_array(np.asarray(values))
+    shape = (len(src) + len(extra),) + values.shape[1:]
     flat = np.ascontiguousarray(values.reshape(len(values), -1))
-    if flat.dtype not in (np.float64, np.int64):
+    direct = flat.dtype in (np.float64, np.int64)
+    if not direct:
         flat = flat.astype(np.float64)
-    extra = np.ascontiguousarray(np.asarray(extra, flat.dtype).reshape(len(extra), -1))
-    out = _stacked(flat, src, extra)
-    return out.reshape((len(out),) + values.shape[1:]).astype(values.dtype, copy=False)
+    out = recycled_empty(shape, flat.dtype)
+    _stacked_into(flat, src, np.ascontiguousarray(np.asarray(extra, flat.dtype).reshape(len(extra), -1)),
+                  out.reshape(len(out), -1))
+    return out if direct else out.astype(values.dtype)
 
 
 def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, bit, tolerance: float, affines,
@@ -174,8 +178,8 @@ def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, bit, toleranc
         if affines is not None:
             inward = _to_rest_normals(inward, new_joints[at], new_weights[at], affines)
         normals[len(lay.kept_input) + at] = inward.astype(normals.dtype)
-    out_vertices, out_joints, out_weights = _stacked_skin(vertices, joints, weights, lay.kept_input, new_rest,
-                                                          new_joints, new_weights)
+    out_vertices, out_joints, out_weights = (stacked(values, lay.kept_input, extra) for values, extra in
+                                             ((vertices, new_rest), (joints, new_joints), (weights, new_weights)))
     result = Rig._of_checked(out_vertices, lay.faces, out_joints, out_weights, rig.skeleton, rig.clips, attributes,
                              f"{rig.name}_drilled")
     sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
@@ -236,12 +240,6 @@ def _put_inward(points, i, start, end, out, row):
     dx, dy, dz = start[0] + s * ux - points[i, 0], start[1] + s * uy - points[i, 1], start[2] + s * uz - points[i, 2]
     norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     out[row, 0], out[row, 1], out[row, 2] = dx / norm, dy / norm, dz / norm
-
-
-@kernel((F2, I2, F2, I1, F2, I2, F2), cost=0.4)
-def _stacked_skin(vertices, joints, weights, src, new_vertices, new_joints, new_weights):
-    """``_stacked`` of the vertices (n, 3), joints and weights (n, 4) at once."""
-    return _stacked(vertices, src, new_vertices), _stacked(joints, src, new_joints), _stacked(weights, src, new_weights)
 
 
 def _to_rest_normals(inward, joints, weights, affines) -> np.ndarray:
