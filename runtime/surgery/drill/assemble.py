@@ -18,7 +18,7 @@ from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...errors import PlacementWarning
 from ...tolerances import tol
-from ..new_vertices import NewVertices, blend_weight_rows, interpolate_attribute, place_in_rest
+from ..new_vertices import UNIT, NewVertices, blend_weight_rows, combine, interpolate_attribute, place_in_rest
 from ..surface import mesh_arrays
 from .patch import Patch
 from .result import NEW_VERTEX, DrillResult
@@ -168,16 +168,11 @@ def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, bit, toleranc
     attributes = {}
     for name, values in rig.attributes.items():
         values = kernel_array(np.asarray(values))     # (read-only: its writeable buffer, one kernel type)
-        attributes[name] = stacked(values, lay.kept_input, interpolate_attribute(name, values, new))
-    normals = attributes.get("NORMAL")
-    if normals is not None and affines is None and normals.dtype == np.float64 and normals.shape[1:] == (3,):
-        _inward_into(normals, len(lay.kept_input), lay.on_wall, new_positions, bit.start, bit.end)
-    elif normals is not None and lay.on_wall.any():
-        at = np.flatnonzero(lay.on_wall)
-        inward = _inward(new_positions[at], bit.start, bit.end)
-        if affines is not None:
-            inward = _to_rest_normals(inward, new_joints[at], new_weights[at], affines)
-        normals[len(lay.kept_input) + at] = inward.astype(normals.dtype)
+        if name == "NORMAL" and values.shape[1:] == (3,):
+            extra = _new_normals(values, new, lay.on_wall, new_positions, bit, affines, new_joints, new_weights)
+        else:
+            extra = interpolate_attribute(name, values, new)
+        attributes[name] = stacked(values, lay.kept_input, extra)
     out_vertices, out_joints, out_weights = (stacked(values, lay.kept_input, extra) for values, extra in
                                              ((vertices, new_rest), (joints, new_joints), (weights, new_weights)))
     result = Rig._of_checked(out_vertices, lay.faces, out_joints, out_weights, rig.skeleton, rig.clips, attributes,
@@ -211,23 +206,31 @@ def _as_first_copies(joints, weights, first_copy):
             joints[i, k], weights[i, k] = joints[j, k], weights[j, k]
 
 
-@kernel((F2, F1, F1), cost=0.2)
-def _inward(points, start, end):
-    """Unit normals (k, 3) at points (k, 3) of the bit's surface pointing into the bit: to the nearest
-    point of its travel start -> end (the axis, or a round end's centre)."""
-    out = np.empty_like(points)
-    for i in range(points.shape[0]):
-        _put_inward(points, i, start, end, out, i)
+def _new_normals(normals, new: NewVertices, on_wall, points, bit, affines, joints, weights) -> np.ndarray:
+    """The new vertices' normals (k, 3) float64 from the input's ``normals`` (n, 3): interpolated (unit
+    length), and on a wall (``on_wall`` (k,)) pointing into the bit from their ``points`` (k, 3); a posed
+    drill's wall normals carried to rest by their ``joints``, ``weights`` (k, 4) in the pose's bone
+    ``affines``."""
+    out = _interpolated_or_inward(np.ascontiguousarray(normals, np.float64), new.src, new.coef, on_wall, points,
+                                  bit.start, bit.end)
+    if affines is not None and on_wall.any():
+        at = np.flatnonzero(on_wall)
+        out[at] = _to_rest_normals(out[at], joints[at], weights[at], affines)
     return out
 
 
-@kernel((F2, i8, B1, F2, F1, F1), cost=0.2)
-def _inward_into(normals, first, on_wall, points, start, end):
-    """``_inward`` at the rows i of ``points`` (k, 3) that are ``on_wall`` (k,), written to row first + i
-    of ``normals`` (n, 3)."""
-    for i in range(points.shape[0]):
+@kernel((F2, I2, F2, B1, F2, F1, F1), cost=0.3)
+def _interpolated_or_inward(normals, src, coef, on_wall, points, start, end):
+    """(k, 3): the unit normal interpolated from ``normals`` (n, 3) by ``src``, ``coef`` (k, s), or where
+    ``on_wall`` (k,) the unit vector from row i of ``points`` (k, 3) to the nearest point of the bit's
+    travel start -> end (its axis, or a round end's centre): a wall faces the hole."""
+    out = np.empty((src.shape[0], 3))
+    for i in range(src.shape[0]):
         if on_wall[i]:
-            _put_inward(points, i, start, end, normals, first + i)
+            _put_inward(points, i, start, end, out, i)
+        else:
+            combine(normals, src, coef, i, UNIT, out, i)
+    return out
 
 
 @helper
