@@ -1,6 +1,6 @@
-"""Longest-edge bisection in compiled code (``refine.py`` explains it): each face's longest edge, the
-closure of the marked edges (a face with a marked edge marks its longest), and the faces split on their
-marked edges, with one new row per vertex edge and one new point per welded edge.
+"""Longest-edge bisection in compiled code (``refine.py`` explains it; ``rounds.py`` closes the marks):
+each face's longest edge, and the faces split on their marked edges, with one new row per vertex edge
+and one new point per welded edge.
 
 Edges are ``patch.pair_codes`` of their two point ids (welded: a seam's copies are one edge) or row ids;
 the sets and maps of codes are open-addressing hash tables (``code_table``, ``slot``): no sort.
@@ -70,42 +70,6 @@ def midpoints(points, pairs):
         for c in range(3):
             out[i, c] = 0.5 * (points[pairs[i, 0], c] + points[pairs[i, 1], c])
     return out
-
-
-#: the fields of an ``edge_map`` (a plain tuple)
-TABLE, SLOT_EDGE, EDGE_CODE, HEAD, NEXT, FACE_EDGE, COUNT = range(7)
-
-
-@helper
-def edge_map(codes, n_faces, capacity):
-    """Which faces have each edge, for the faces ``codes[:n_faces]`` (edge codes (F, 3)) with room for
-    ``capacity`` faces (``add_face_edges`` adds more): (table (S,) and slot_edge (S,): the code_table of
-    the edges and each one's id, edge_code (E,), head (E,) the last incidence on each edge (-1: none),
-    next (3 capacity,) the incidence before each (incidence 3 f + k: corner edge k of face f),
-    face_edge (capacity, 3) each corner edge's id, count (1,): the edges so far). Edge ids follow the
-    order the faces come in, so a map rebuilt with more room gives the edges the same ids."""
-    table = code_table(2 * capacity)           # (>= 4 capacity slots: never full, <= 3 capacity edges)
-    emap = (table, np.empty(table.shape[0], np.int64), np.empty(3 * capacity, np.int64),
-            np.full(3 * capacity, -1, np.int64), np.empty(3 * capacity, np.int64), np.empty((capacity, 3), np.int64),
-            np.zeros(1, np.int64))
-    for f in range(n_faces):
-        add_face_edges(emap, codes, f)
-    return emap
-
-
-@inlined
-def add_face_edges(emap, codes, f):
-    """Add face f (its edge codes ``codes[f]``) to an ``edge_map``."""
-    table, slot_edge, edge_code, head, incidence_next, face_edge, count = emap
-    for k in range(3):
-        at = slot(table, codes[f, k])
-        if table[at] == EMPTY:
-            table[at], slot_edge[at], edge_code[count[0]] = codes[f, k], count[0], codes[f, k]
-            count[0] += 1
-        e = slot_edge[at]
-        face_edge[f, k] = e
-        incidence_next[3 * f + k] = head[e]
-        head[e] = 3 * f + k
 
 
 @kernel((I2, I1, F2, I1, i8, i8), cost=0.5)

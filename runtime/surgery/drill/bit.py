@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..._shared.checks import float_array, real_number
-from ..._shared.jit import helper
+from ..._shared.jit import helper, inlined
 from ...errors import InvalidInputError
 from ...generated.kernels import barycentric, point_line_distance
 
@@ -164,15 +164,15 @@ GUESS_BRACKETS = (3e-14, 1e-11, 1e-8)
 
 
 @helper
-def crossing(p, q, start, end, axis, radius, x):
-    """The parameter t where the edge p -> q (3,), one end inside the bit and the other outside, meets
-    the bit's surface (``axis`` = end - start; ``x`` (3,) scratch): a bracket narrowed by regula falsi
-    steps (Illinois: an end kept twice has its value halved, so both ends close in) and a bisection
-    every ``BISECT_EVERY`` steps, until it cannot shrink; the end of the bracket nearer the surface.
-    The bracket is the first of ``GUESS_BRACKETS`` about the closed-form crossing (``_guess``) across
-    which f changes sign as across the edge, else [0, 1]."""
+def crossing(p, q, f_p, f_q, start, end, axis, radius, x):
+    """The parameter t where the edge p -> q (3,), one end inside the bit and the other outside (f there
+    ``f_p``, ``f_q``: their ``signed_distances``), meets the bit's surface (``axis`` = end - start; ``x``
+    (3,) scratch): a bracket narrowed by regula falsi steps (Illinois: an end kept twice has its value
+    halved, so both ends close in) and a bisection every ``BISECT_EVERY`` steps, until it cannot shrink;
+    the end of the bracket nearer the surface. The bracket is the first of ``GUESS_BRACKETS`` about the
+    closed-form crossing (``_guess``) across which f changes sign as across the edge, else [0, 1]."""
     lo, hi = 0.0, 1.0
-    f_lo, f_hi = segment_distance(start, end, axis, p) - radius, segment_distance(start, end, axis, q) - radius
+    f_lo, f_hi = f_p, f_q
     guess = _guess(p, q, start, end, axis, radius)
     for half in GUESS_BRACKETS:
         a, b = guess - half, guess + half
@@ -185,7 +185,7 @@ def crossing(p, q, start, end, axis, radius, x):
             break
     g_lo, g_hi = f_lo, f_hi                 # (the values the secant uses: Illinois halves them)
     kept, step = 0, 0
-    while True:
+    while not _same_point(p, q, lo, hi):
         step += 1
         t = 0.5 * (lo + hi)
         if step % BISECT_EVERY != 0 and g_hi != g_lo:
@@ -206,6 +206,16 @@ def crossing(p, q, start, end, axis, radius, x):
                 g_lo *= 0.5
             kept = 1
     return lo if abs(f_lo) <= abs(f_hi) else hi
+
+
+@inlined
+def _same_point(p, q, a, b):
+    """Whether parameters a and b of the edge p -> q (3,) give the same point (``put_on_edge``): a bracket
+    that narrow has found the crossing as closely as a point can be placed."""
+    for k in range(3):
+        if p[k] + a * (q[k] - p[k]) != p[k] + b * (q[k] - p[k]):
+            return False
+    return True
 
 
 @helper

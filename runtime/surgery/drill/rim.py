@@ -60,7 +60,7 @@ def _open(points, rows, sources, row_point, start, end, radius, tolerance):
         if not (inside or outside):                 # every corner on the surface: kept if its centre is outside
             kept[f] = _centre_outside(points, row_point, rows, f, start, end, radius)
     crossing_rows, new_points, row_points, row_parents, row_t = _crossing_rows(
-        points, rows, crossed, row_point, side, start, end, radius)
+        points, rows, crossed, row_point, side, signed, start, end, radius)
     all_points = np.concatenate((points, new_points))
     all_row_point = np.concatenate((row_point, row_points))
     parts, part_of = _outside_parts(rows, crossed, side, crossing_rows, all_points, all_row_point)
@@ -95,7 +95,7 @@ def _centre_outside(points, row_point, rows, f, start, end, radius):
 
 
 @helper
-def _crossing_rows(points, rows, crossed, row_point, side, start, end, radius):
+def _crossing_rows(points, rows, crossed, row_point, side, signed, start, end, radius):
     """Where the corner edges of the ``crossed`` (F,) faces of ``rows`` that join a point inside the bit to
     one outside cross its surface: one new point per welded edge, placed from its lower point id
     (``bit.crossing``), and one new row per vertex edge (ids after ``points`` (P, 3) and ``row_point``
@@ -122,7 +122,8 @@ def _crossing_rows(points, rows, crossed, row_point, side, start, end, radius):
                 point_at = slot(point_table, pair(pa, pb))
                 if point_table[point_at] == EMPTY:
                     lo, hi = min(pa, pb), max(pa, pb)
-                    point_t[made_points] = crossing(points[lo], points[hi], start, end, axis, radius, x)
+                    point_t[made_points] = crossing(points[lo], points[hi], signed[lo], signed[hi], start, end, axis,
+                                                    radius, x)
                     put_on_edge(points[lo], points[hi], point_t[made_points], new_points[made_points])
                     point_table[point_at], point_id[point_at] = pair(pa, pb), made_points
                     made_points += 1

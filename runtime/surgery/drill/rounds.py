@@ -11,8 +11,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, i8, inlined, kernel, record
-from .bisection import FACE_EDGE, EDGE_CODE, HEAD, NEXT, add_face_edges, edge_map, longest_edge, midpoints, pair, \
-    split
+from .bisection import code_table, longest_edge, midpoints, pair, slot, split
 from .bit import signed_distances, surface_crosses
 from .patch import LOW_BITS, NEW_POINT, new_rows_and_points
 
@@ -72,29 +71,32 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
 
     Each round marks the longest edge of every face longer than ``step`` that the bit's surface crosses
     (``bit.surface_crosses``), closes the marks (a marked edge marks the longest edge of every face on
-    it, ``bisection.edge_map``), taking in the input faces beyond the patch on a marked edge as it goes,
-    and splits the faces on the marks (``bisection.split``); until no such face is left, or ``rounds``
-    ran out. Returns a ``Refined`` as a plain tuple."""
+    it, found through the faces at each point: ``_corner_lists``), taking in the input faces beyond the
+    patch on a marked edge as it goes, and splits the faces on the marks (``bisection.split``); until no
+    such face is left, or ``rounds`` ran out. Returns a ``Refined`` as a plain tuple."""
     row_of, point_of, is_taken = maps
     positions, mesh_faces, welded = mesh[0], mesh[1], mesh[2]
     points, point_welded, signed = np.empty((0, 3)), np.empty(0, np.int64), np.empty(0)
     row_point, row_vertex, row_parents, row_t = (np.empty(0, np.int64), np.empty(0, np.int64),
                                                  np.empty((0, 2), np.int64), np.empty(0))
     rows, sources, taken = np.empty((0, 3), np.int64), np.empty(0, np.int64), np.empty(0, np.int64)
-    codes, longest, wanted = np.empty((0, 3), np.int64), np.empty(0, np.int64), np.empty(0, np.int8)
+    longest, wanted = np.empty(0, np.int64), np.empty(0, np.int8)
     beyond = first
     for _ in range(rounds):
+        if beyond.shape[0] == 0 and not (wanted == YES).any():     # (no round left to run)
+            return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken, REFINED)
         # the closure of the marks: each marked edge marks the longest edge of every face on it; the
         # input faces beyond the patch on a marked edge join it (a batch at a time), and the closure
-        capacity = rows.shape[0] + 64                 # (room for faces taken in)
-        emap = edge_map(codes, rows.shape[0], capacity)
-        marked, stack = np.zeros(3 * capacity, np.bool_), np.empty(3 * capacity, np.int64)
-        depth = 0
+        # goes on from them. Marked edges are codes of their points (``pair``), followed in the order marked.
+        heads, following = _corner_lists(rows, row_point, points.shape[0], rows.shape[0] + 64)
+        marks = code_table(3 * (rows.shape[0] + 64))
+        marked = np.empty(3 * (rows.shape[0] + 64), np.int64)
+        n_marked = followed = 0
         for f in range(rows.shape[0]):
             if wanted[f] == YES:
-                depth = _mark(marked, stack, depth, emap[FACE_EDGE][f, longest[f]])
+                n_marked = _mark(marks, marked, n_marked, _corner_edge(rows, row_point, f, longest[f]))
         pending, n_pending = np.empty(16, np.int64), 0     # input edges with faces beyond the patch
-        while depth > 0 or beyond.shape[0] > 0:
+        while followed < n_marked or beyond.shape[0] > 0:
             if beyond.shape[0]:
                 is_taken[beyond] = True
                 corners = mesh_faces[beyond]
@@ -111,49 +113,53 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
                 rows = np.concatenate((rows, _rows_of(corners, row_of)))
                 sources = np.concatenate((sources, beyond))
                 taken = np.concatenate((taken, beyond))
-                more_codes, more_longest, more_wanted = _describe(rows, first_new, row_point, points, signed, start,
-                                                                  end, radius, step, np.ones(beyond.shape[0], np.bool_))
-                codes = np.concatenate((codes, more_codes))
+                more_longest, more_wanted = _describe(rows, first_new, row_point, points, signed, start, end, radius,
+                                                      step, np.ones(beyond.shape[0], np.bool_))
                 longest = np.concatenate((longest, more_longest))
                 wanted = np.concatenate((wanted, more_wanted))
-                if first_new == 0 and not (wanted == YES).any():        # (nothing to refine: no map)
+                if first_new == 0 and not (wanted == YES).any():        # (nothing to refine)
                     return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken,
                             REFINED)
-                if rows.shape[0] > capacity:            # (the same edge ids, more room)
-                    capacity = 2 * rows.shape[0]
-                    emap = edge_map(codes, rows.shape[0], capacity)
-                    marked = np.concatenate((marked, np.zeros(3 * capacity - marked.shape[0], np.bool_)))
-                    stack = np.concatenate((stack, np.empty(3 * capacity - stack.shape[0], np.int64)))
-                else:
-                    for g in range(first_new, rows.shape[0]):
-                        add_face_edges(emap, codes, g)
+                heads, following = _grown(heads, following, points.shape[0], rows.shape[0])
+                if 3 * rows.shape[0] > marked.shape[0]:
+                    marked = np.concatenate((marked, np.empty(3 * rows.shape[0], np.int64)))
+                    marks = _rehashed(marks, marked, n_marked, 3 * rows.shape[0])
+                for g in range(first_new, rows.shape[0]):
+                    _add_corners(heads, following, rows, row_point, g)
                 # each is on a marked edge (it marks its longest), or one of the first (then if wanted)
                 for g in range(first_new, rows.shape[0]):
                     if first_new > 0 or wanted[g] == YES:
-                        depth = _mark(marked, stack, depth, emap[FACE_EDGE][g, longest[g]])
+                        n_marked = _mark(marks, marked, n_marked, _corner_edge(rows, row_point, g, longest[g]))
                 beyond = np.empty(0, np.int64)
                 continue
-            depth -= 1
-            e = stack[depth]
-            edge = _open_input_edge(emap, e, sources, point_welded, mesh, is_taken)
+            code = marked[followed]
+            followed += 1
+            a, b = code >> 32, code & LOW_BITS
+            edge = _open_input_edge(heads, following, rows, row_point, a, b, sources, point_welded, mesh, is_taken)
             if edge >= 0:
                 if n_pending == pending.shape[0]:
                     pending = np.concatenate((pending, np.empty(n_pending, np.int64)))
                 pending[n_pending] = edge
                 n_pending += 1
-            incidence = emap[HEAD][e]
-            while incidence >= 0:
-                g = incidence // 3
-                depth = _mark(marked, stack, depth, emap[FACE_EDGE][g, longest[g]])
-                incidence = emap[NEXT][incidence]
-            if depth == 0 and n_pending:
+            corner = heads[a]
+            while corner >= 0:
+                g, k = corner // 3, _edge_at(rows, row_point, corner, b)
+                if k >= 0:
+                    n_marked = _mark(marks, marked, n_marked, _corner_edge(rows, row_point, g, longest[g]))
+                corner = following[corner]
+            if followed == n_marked and n_pending:
                 beyond, n_pending = _faces_on(pending[:n_pending], mesh, is_taken), 0
-        if not marked.any():
+        if n_marked == 0:
             return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken, REFINED)
-        on_marked = np.empty(rows.shape, np.bool_)
-        for f in range(rows.shape[0]):
-            for k in range(3):
-                on_marked[f, k] = marked[emap[FACE_EDGE][f, k]]
+        on_marked = np.zeros(rows.shape, np.bool_)
+        for i in range(n_marked):
+            a, b = marked[i] >> 32, marked[i] & LOW_BITS
+            corner = heads[a]
+            while corner >= 0:
+                k = _edge_at(rows, row_point, corner, b)
+                if k >= 0:
+                    on_marked[corner // 3, k] = True
+                corner = following[corner]
         rows, made_from, kept, parents, points_of_rows, point_parents = split(
             rows, row_point, points, on_marked, row_point.shape[0], points.shape[0])
         sources = sources[made_from]
@@ -166,68 +172,127 @@ def refine_rounds(first, mesh, maps, start, end, radius, step, rounds):
         row_t = np.concatenate((row_t, np.full(parents.shape[0], 0.5)))
         # the faces not split keep what was found about them; the halves of a face to be split are
         # asked (a part of one that was not is not either: shorter, on the same side of the surface)
-        half_codes, half_longest, half_wanted = _describe(rows, kept, row_point, points, signed, start, end, radius,
-                                                          step, wanted[made_from[kept:]] == YES)
-        codes = np.concatenate((codes[made_from[:kept]], half_codes))
+        half_longest, half_wanted = _describe(rows, kept, row_point, points, signed, start, end, radius, step,
+                                              wanted[made_from[kept:]] == YES)
         longest = np.concatenate((longest[made_from[:kept]], half_longest))
         wanted = np.concatenate((wanted[made_from[:kept]], half_wanted))
     return (rows, sources, points, point_welded, row_point, row_vertex, row_parents, row_t, taken, OUT_OF_ROUNDS)
 
 
+@helper
+def _corner_lists(rows, row_point, n_points, capacity):
+    """The faces at each point, as lists of corners (corner 3 f + k: corner k of face f): heads (n_points,)
+    the last corner at each point (-1: none), following (3 capacity,) the corner before each at its point;
+    for the faces ``rows`` (F, 3) (``row_point`` (R,) their rows' points), with room for ``capacity``
+    faces (``_add_corners`` adds more)."""
+    heads, following = np.full(n_points, -1, np.int64), np.empty(3 * capacity, np.int64)
+    for f in range(rows.shape[0]):
+        _add_corners(heads, following, rows, row_point, f)
+    return heads, following
+
+
 @inlined
-def _mark(marked, stack, depth, e):
-    """Mark edge e (once: pushed on ``stack`` to be followed); the stack's new depth."""
-    if not marked[e]:
-        marked[e] = True
-        stack[depth] = e
-        depth += 1
-    return depth
+def _add_corners(heads, following, rows, row_point, f):
+    """Add face f's corners to ``_corner_lists``."""
+    for k in range(3):
+        p = row_point[rows[f, k]]
+        following[3 * f + k] = heads[p]
+        heads[p] = 3 * f + k
+
+
+@helper
+def _grown(heads, following, n_points, n_faces):
+    """``_corner_lists`` with room for ``n_points`` points and ``n_faces`` faces (the same lists)."""
+    if heads.shape[0] < n_points:
+        heads = np.concatenate((heads, np.full(n_points - heads.shape[0], -1, np.int64)))
+    if following.shape[0] < 3 * n_faces:
+        following = np.concatenate((following, np.empty(3 * n_faces, np.int64)))
+    return heads, following
+
+
+@inlined
+def _edge_at(rows, row_point, corner, b):
+    """Which corner edge (k -> k + 1) of the face of ``corner`` (3 f + k, at point a) joins a to point b:
+    k, or the edge before it (b -> a), or -1 where b is not a corner of the face."""
+    f, k = corner // 3, corner % 3
+    if row_point[rows[f, (k + 1) % 3]] == b:
+        return k
+    if row_point[rows[f, (k + 2) % 3]] == b:
+        return (k + 2) % 3
+    return -1
+
+
+@inlined
+def _corner_edge(rows, row_point, f, k):
+    """The code (``pair``) of the points of face f's corner edge k -> k + 1."""
+    return pair(row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]])
+
+
+@inlined
+def _mark(marks, marked, n_marked, code):
+    """Mark the edge of ``code`` (once: in the table ``marks`` and appended to ``marked``, to be followed);
+    the number marked."""
+    at = slot(marks, code)
+    if marks[at] != code:
+        marks[at] = code
+        marked[n_marked] = code
+        n_marked += 1
+    return n_marked
+
+
+@helper
+def _rehashed(marks, marked, n_marked, count):
+    """A ``code_table`` for ``count`` codes holding the first ``n_marked`` of ``marked``."""
+    if marks.shape[0] >= 2 * count + 2:
+        return marks
+    table = code_table(count)
+    for i in range(n_marked):
+        table[slot(table, marked[i])] = marked[i]
+    return table
 
 
 @helper
 def _describe(rows, first, row_point, points, signed, start, end, radius, step, ask):
-    """For the faces of ``rows`` from ``first`` on: their edges' codes (k, 3), the corner (k,) whose edge
-    is longest, and whether each is to be split (k,) int8: longer than ``step`` and crossed by the bit's
-    surface (``bit.surface_crosses``; ``signed`` (P,) the points' signed distances), asked where ``ask``
-    (k,) (elsewhere not)."""
+    """For the faces of ``rows`` from ``first`` on: the corner (k,) whose edge is longest, and whether
+    each is to be split (k,) int8: longer than ``step`` and crossed by the bit's surface
+    (``bit.surface_crosses``; ``signed`` (P,) the points' signed distances), asked where ``ask`` (k,)
+    (elsewhere not)."""
     k = rows.shape[0] - first
-    codes, longest, wanted, x = np.empty((k, 3), np.int64), np.empty(k, np.int64), np.zeros(k, np.int8), np.empty(3)
+    longest, wanted, x = np.empty(k, np.int64), np.zeros(k, np.int8), np.empty(3)
     for i in range(k):
         f = first + i
         p, q, r = row_point[rows[f, 0]], row_point[rows[f, 1]], row_point[rows[f, 2]]
-        codes[i, 0], codes[i, 1], codes[i, 2] = pair(p, q), pair(q, r), pair(r, p)
         longest[i], squared = longest_edge(points, p, q, r)
         if ask[i] and squared > step * step and surface_crosses(points, p, q, r, signed, math.sqrt(squared), start,
                                                                 end, radius, x):
             wanted[i] = YES
-    return codes, longest, wanted
+    return longest, wanted
 
 
 @inlined
-def _open_input_edge(emap, e, sources, point_welded, mesh, is_taken):
-    """The input edge (its id in ``mesh``) that edge e of an ``edge_map`` of the patch's faces (from input
-    faces ``sources``) is, if input faces not ``taken`` have it too; else -1. (An edge between two
-    input points is an edge of the input face it lies in: bisection joins a new point to a corner.)"""
-    code = emap[EDGE_CODE][e]
-    wa, wb = point_welded[code >> 32], point_welded[code & LOW_BITS]
+def _open_input_edge(heads, following, rows, row_point, a, b, sources, point_welded, mesh, is_taken):
+    """The input edge (its id in ``mesh``) that the patch's edge between points a and b is, if input faces
+    not ``taken`` have it too; else -1. (An edge between two input points is an edge of the input face
+    it lies in: bisection joins a new point to a corner; ``sources`` (F,) the patch faces' input faces,
+    ``heads``, ``following`` their ``_corner_lists``.)"""
+    wa, wb = point_welded[a], point_welded[b]
+    if wa == NEW_POINT or wb == NEW_POINT:
+        return -1
     welded_faces, face_edges, offsets, edge_faces = mesh[3], mesh[4], mesh[5], mesh[6]
-    incidence = emap[HEAD][e]
-    while wa != NEW_POINT and wb != NEW_POINT and incidence >= 0:
-        s = sources[incidence // 3]
-        incidence = emap[NEXT][incidence]
-        if s < 0:
-            continue
-        for j in range(3):
-            u, v = welded_faces[s, j], welded_faces[s, (j + 1) % 3]
-            if (u == wa and v == wb) or (u == wb and v == wa):
-                edge = face_edges[s, j]
-                for i in range(offsets[edge], offsets[edge + 1]):
-                    if not is_taken[edge_faces[i]]:
-                        return edge
-                return -1
+    corner = heads[a]
+    while corner >= 0:
+        s = sources[corner // 3]
+        if s >= 0 and _edge_at(rows, row_point, corner, b) >= 0:
+            for j in range(3):
+                u, v = welded_faces[s, j], welded_faces[s, (j + 1) % 3]
+                if (u == wa and v == wb) or (u == wb and v == wa):
+                    edge = face_edges[s, j]
+                    for i in range(offsets[edge], offsets[edge + 1]):
+                        if not is_taken[edge_faces[i]]:
+                            return edge
+                    return -1
+        corner = following[corner]
     return -1
-
-
 @helper
 def _faces_on(edges, mesh, is_taken):
     """The distinct input faces (k,) not ``taken`` on the input ``edges`` (e,) (ids in ``mesh``)."""
