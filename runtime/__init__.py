@@ -5,7 +5,7 @@ The runtime calls only the kernels in ``cgaskin.generated`` (emitted by ``cgaski
 import sys as _sys
 
 from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError, NoSkinError,
-                     PlacementWarning)
+                     OpenRimWarning, PlacementWarning)
 from .algebra import versor
 from .animation.pose import Pose, clip_from_poses
 from .animation.poses import Poses

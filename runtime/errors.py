@@ -56,5 +56,10 @@ class PlacementWarning(RuntimeWarning):
 TearPlacementWarning = PlacementWarning
 
 
+class OpenRimWarning(UserWarning):
+    """A drill with ``wall=True`` met an open boundary of the mesh: a rim that runs into it is a chain,
+    not a loop, and the hole gets no wall there (``DrillResult.open_rims``)."""
+
+
 class PlaneMissesMeshWarning(UserWarning):
     """The cutting plane does not cross the mesh: one half is empty."""

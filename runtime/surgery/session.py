@@ -38,7 +38,7 @@ from .._shared.cache import seed
 from .._shared.memory import collection_paused, minor_page_faults, release_free_memory
 from ..errors import InvalidInputError
 from .cut import cut as cut_rig
-from .drill.api import checked_wall
+from .drill.api import checked_wall, warned
 from .drill.bit import bit as checked_bit
 from .dynamic_bvh import DynamicBVH
 from .bone_influences import weight_summary
@@ -210,7 +210,7 @@ class Surgery:
             result, splice = session_drill(self, the_bit, wall, posed)
             self._history.append(self._apply(splice))
             self._snapshot = None
-        return result
+        return warned(result)
 
     def undo(self) -> None:
         """Take back the last operation (raises InvalidInputError when there is none)."""

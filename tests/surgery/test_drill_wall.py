@@ -5,6 +5,7 @@ functional one."""
 from __future__ import annotations
 
 import subprocess
+import warnings
 import sys
 
 import numpy as np
@@ -230,3 +231,42 @@ def test_a_lengthwise_fill_has_about_as_many_faces_as_its_area_needs(capsule):
                                          vertices[faces[:, 2]] - vertices[faces[:, 0]]), axis=1).sum()
     step = RIM_STEP * CASES["grazing lengthwise"][2]
     assert result.wall_faces <= 8.0 * area / (0.5 * step ** 2)
+
+
+def _opened(rig, beyond_x):
+    """``rig`` with every face that has a corner beyond x = ``beyond_x`` taken away: an open tube."""
+    vertices, faces = np.asarray(rig.vertices), np.asarray(rig.faces)
+    keep = ~(vertices[faces][:, :, 0] > beyond_x).any(axis=1)
+    used = np.unique(faces[keep])
+    index = np.full(len(vertices), -1)
+    index[used] = np.arange(len(used))
+    return rig.with_mesh(vertices[used], index[faces[keep]], np.asarray(rig.joints)[used],
+                         np.asarray(rig.weights)[used], {k: np.asarray(v)[used] for k, v in rig.attributes.items()})
+
+
+def test_a_rim_at_an_open_boundary_gets_no_wall_and_a_warning(capsule):
+    """An open tube (the capsule without its end beyond x = 2): a hole away from the opening is walled
+    as in the closed capsule, without a warning; a hole across the opening has two rims that run into
+    it, which no wall joins (``OpenRimWarning``, ``open_rims``), its rims on the bit and no face inside
+    it; a session's drill warns once (not once per region it tries) and is the functional drill."""
+    from tests.surgery.test_drill import check_no_face_inside, check_rim_on_surface, diagonal
+    from tests.surgery.test_session_drill import assert_same_mesh
+    tube = _opened(capsule, 2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        away = cgaskin.drill_details(tube, *CASES["through"])
+    closed = cgaskin.drill_details(capsule, *CASES["through"])
+    assert away.open_rims == 0 and away.wall_faces == closed.wall_faces > 0
+    start, end, radius = [1.95, 0.0, -1.0], [1.95, 0.0, 1.0], 0.2
+    with pytest.warns(cgaskin.OpenRimWarning, match="2 rim"):
+        across = cgaskin.drill_details(tube, start, end, radius)
+    assert across.open_rims == 2 and across.wall_faces == 0
+    tol = 1e-9 * diagonal(np.asarray(tube.vertices))
+    check_rim_on_surface(across, np.array(start), np.array(end), radius, None, tol)
+    check_no_face_inside(across, np.array(start), np.array(end), radius, None, tol)
+    session = cgaskin.Surgery(tube)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        session.drill(start, end, radius)
+    assert [type(w.message) for w in caught] == [cgaskin.OpenRimWarning]
+    assert_same_mesh(session.rig, across.rig)

@@ -29,9 +29,10 @@ import numpy as np
 from ..._shared.cache import rig_cached
 from ..._shared.jit import F1, F2, I2, kernel
 from ..._shared.memory import collection_paused
+from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...animation.skinning import check_pose, skin_affine
-from ...errors import InvalidInputError, MissesMeshError
+from ...errors import InvalidInputError, MissesMeshError, OpenRimWarning
 from ...tolerances import tol
 from ..surface import box_diagonal, mesh_arrays
 from ..topology import rig_topology
@@ -58,8 +59,16 @@ def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) ->
     positions = vertices if affines is None else skin_affine(vertices, joints, weights, affines)
     diagonal = rig_cached(rig, "drill.diagonal", lambda _: box_diagonal(vertices)) if affines is None else \
         box_diagonal(positions)
-    return drill_region(rig, the_bit, wall, affines, positions, diagonal,
-                        lambda p: winding_number(positions, faces, p) > 0.5)
+    return warned(drill_region(rig, the_bit, wall, affines, positions, diagonal,
+                               lambda p: winding_number(positions, faces, p) > 0.5))
+
+
+def warned(result: DrillResult) -> DrillResult:
+    """``result``, with an ``OpenRimWarning`` where rims ran into an open boundary of the mesh."""
+    if result.open_rims:
+        warn(f"{result.open_rims} rim(s) of the hole run into an open boundary of the mesh: no wall joins them, "
+             f"and the hole stays open there (a wall needs a rim that closes around the bit)", OpenRimWarning)
+    return result
 
 
 def checked_wall(wall) -> bool:
@@ -92,8 +101,8 @@ def _drill_region(rig: Rig, the_bit: Bit, wall: bool, affines, positions, diagon
         rim, opened = open_hole(patch, the_bit, tolerance)
     if opened == 0:
         raise missed(the_bit, rig.name)
-    walls = build_walls(patch, rim, the_bit, step, inside) if wall else 0
-    return assemble(rig, patch, rim, opened, walls, the_bit, tolerance, affines, diagonal)
+    walls, open_rims = build_walls(patch, rim, the_bit, step, inside) if wall else (0, 0)
+    return assemble(rig, patch, rim, opened, walls, open_rims, the_bit, tolerance, affines, diagonal)
 
 
 def missed(the_bit: Bit, name: str) -> MissesMeshError:
@@ -130,7 +139,8 @@ def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
         Line the hole with a wall on the bit's surface where the bit passes inside the model (from
         entry to exit, or to a blind hole's round bottom; a rim that does not go around the bit, where
         it grazes the model's side, is filled along the bit), so that a closed model stays closed; with
-        False the hole is open, its rims a boundary of the mesh.
+        False the hole is open, its rims a boundary of the mesh. A rim that runs into an open boundary
+        of the mesh gets no wall (``OpenRimWarning``).
 
     Returns
     -------
@@ -141,6 +151,10 @@ def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
     InvalidInputError : a radius that is not positive and finite, start equal to end, non-finite or
         misshapen points, a pose of another skeleton, an invalid rig.
     MissesMeshError : the bit does not reach into the mesh.
+
+    Warns
+    -----
+    OpenRimWarning : ``wall=True`` and a rim runs into an open boundary of the mesh (no wall there).
     """
     return drill_details(rig, start, end, radius, pose, wall).rig
 

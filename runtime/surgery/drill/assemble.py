@@ -145,11 +145,11 @@ def stacked(values, src, extra) -> np.ndarray:
     return out if direct else out.astype(values.dtype)
 
 
-def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, bit, tolerance: float, affines,
+def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, open_rims: int, bit, tolerance: float, affines,
              diagonal: float) -> DrillResult:
     """The drilled rig: the input vertices it uses (bit for bit), then the new rows it uses; the input
     faces it keeps, then the patch's faces it made; with its bookkeeping. ``rim`` (r,) the patch's rim
-    rows; ``opened``, ``walls``, ``bit``, ``tolerance`` as ``DrillResult`` names them; ``affines`` the
+    rows; ``opened``, ``walls``, ``open_rims``, ``bit``, ``tolerance`` as ``DrillResult`` names them; ``affines`` the
     pose's bone maps (a posed drill: the new vertices are placed in rest space) or None."""
     vertices, faces, joints, weights = mesh_arrays(rig)
     lay = Layout(*_layout(faces, len(vertices), patch.taken, patch.faces, patch.face_source, patch.row_vertex,
@@ -179,7 +179,7 @@ def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, bit, toleranc
                              f"{rig.name}_drilled")
     sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
     return DrillResult(result, sources, new, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions, opened,
-                       lay.replaced, lay.made_in, walls, bit, tolerance, residual)
+                       lay.replaced, lay.made_in, walls, open_rims, bit, tolerance, residual)
 
 
 @kernel((I2, F2, I1, F2, I1), cost=0.2)

@@ -30,6 +30,8 @@ class DrillResult:
     made_in : (k,) int64, for each face made (the last k of the result's), the input face it lies in
         (-1: a wall's)
     wall_faces : int, the walls' faces: the last ``wall_faces`` rows of ``rig.faces``
+    open_rims : int, rims that run into an open boundary of the mesh (``wall=True``): chains, not loops,
+        which no wall joins (the hole stays open there; ``OpenRimWarning``)
     bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
         |skinned new vertex - where it was made| (0 for a drill at rest)
     """
@@ -44,6 +46,7 @@ class DrillResult:
     replaced: np.ndarray
     made_in: np.ndarray
     wall_faces: int
+    open_rims: int
     bit: Bit
     tolerance: float
     residual: float

@@ -178,17 +178,20 @@ def rim_loops(rows, row_point, on_rim):
     """The loops of the boundary edges between rim points (``on_rim`` (P,) per point) of the faces ``rows``
     (F, 3) (``row_point`` (R,) the point of each row; an edge is a boundary if one corner edge of one
     face has its two points): chained as ``topology.directed_loops`` chains them (in the faces' order;
-    where several edges leave a point, the loop's first if it is one, else the first; open chains
-    dropped). Returns the loops' corners, each the tail of an edge: rows (L,) and points (L,), and
-    offsets (k + 1,) (loop i is [offsets[i], offsets[i + 1]))."""
+    where several edges leave a point, the loop's first if it is one, else the first). A chain that
+    does not close (its rim runs into an open boundary of the mesh) comes after the loops, its corners
+    each edge's tail and the last edge's head. Returns the corners: rows (L,) and points (L,), offsets
+    (k + 1,) (loop i is [offsets[i], offsets[i + 1])), and how many of them are loops (the first ones)."""
     n = rows.shape[0]
     tails, heads, codes = np.empty(3 * n, np.int64), np.empty(3 * n, np.int64), np.empty(3 * n, np.int64)
+    head_rows = np.empty(3 * n, np.int64)
     count = 0
     for f in range(n):
         for k in range(3):
             a, b = row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]]
             if on_rim[a] and on_rim[b]:
                 tails[count], heads[count], codes[count] = rows[f, k], b, pair(a, b)
+                head_rows[count] = rows[f, (k + 1) % 3]
                 count += 1
     table = code_table(count)
     sides = np.zeros(table.shape[0], np.int64)          # (how many corner edges each code has)
@@ -214,8 +217,13 @@ def rim_loops(rows, row_point, on_rim):
         fill[p] += 1
     used = np.zeros(n_edges, np.bool_)
     corners, loop, offsets = np.empty(n_edges, np.int64), np.empty(n_edges, np.int64), np.zeros(n_edges + 1, np.int64)
-    n_corners = n_loops = 0
-    for first in range(n_edges):
+    chains, chain_offsets = np.empty(n_edges, np.int64), np.zeros(n_edges + 1, np.int64)
+    arriving = np.zeros(n_points, np.int64)            # (a chain starts where no edge arrives)
+    for e in range(n_edges):
+        arriving[heads[edges[e]]] += 1
+    n_corners = n_loops = n_chain_corners = n_chains = 0
+    for first in np.concatenate((_edges_from(arriving, row_point, tails, edges, True),
+                                 _edges_from(arriving, row_point, tails, edges, False))):
         if used[first]:
             continue
         length, e = 0, first
@@ -232,8 +240,13 @@ def rim_loops(rows, row_point, on_rim):
                     break
                 if pick < 0 and not used[candidate]:
                     pick = candidate
-            if pick < 0:
-                break                               # an open chain: dropped
+            if pick < 0:                            # an open chain
+                for i in range(length):
+                    chains[n_chain_corners + i] = loop[i]
+                n_chain_corners += length
+                n_chains += 1
+                chain_offsets[n_chains] = n_chain_corners
+                break
             if pick == first:
                 for i in range(length):
                     corners[n_corners + i] = loop[i]
@@ -242,8 +255,33 @@ def rim_loops(rows, row_point, on_rim):
                 offsets[n_loops] = n_corners
                 break
             e = pick
-    out_rows, out_points = np.empty(n_corners, np.int64), np.empty(n_corners, np.int64)
+    total = n_corners + n_chain_corners + n_chains
+    out_rows, out_points = np.empty(total, np.int64), np.empty(total, np.int64)
+    out_offsets = np.empty(n_loops + n_chains + 1, np.int64)
+    for i in range(n_loops + 1):
+        out_offsets[i] = offsets[i]
     for c in range(n_corners):
         out_rows[c] = tails[edges[corners[c]]]
+    at = n_corners
+    for i in range(n_chains):
+        for c in range(chain_offsets[i], chain_offsets[i + 1]):
+            out_rows[at] = tails[edges[chains[c]]]
+            at += 1
+        out_rows[at] = head_rows[edges[chains[chain_offsets[i + 1] - 1]]]     # (its last edge's head)
+        at += 1
+        out_offsets[n_loops + 1 + i] = at
+    for c in range(total):
         out_points[c] = row_point[out_rows[c]]
-    return out_rows, out_points, offsets[:n_loops + 1].copy()
+    return out_rows, out_points, out_offsets, n_loops
+
+
+@helper
+def _edges_from(arriving, row_point, tails, edges, starts):
+    """The boundary edges (ids into ``edges`` (e,), in order) whose tail point has no arriving edge
+    (``starts``: a chain's first), or the others."""
+    out, count = np.empty(edges.shape[0], np.int64), 0
+    for e in range(edges.shape[0]):
+        if (arriving[row_point[tails[edges[e]]]] == 0) == starts:
+            out[count] = e
+            count += 1
+    return out[:count]

@@ -44,37 +44,42 @@ ENTRY = 1
 WALL, WALL_FILL = -1, -2
 
 
-def build_walls(patch: Patch, rim, bit, step: float, inside) -> int:
+def build_walls(patch: Patch, rim, bit, step: float, inside) -> tuple:
     """Add the holes' walls to the patch (module docstring); ``inside(point (3,)) -> bool`` says whether a
-    point is inside the input model. Returns the number of wall faces."""
+    point is inside the input model. A rim that runs into an open boundary of the mesh is a chain, not
+    a loop: it gets no wall, and no loop is joined to another, or to the tip, across its heights (the
+    wall there would have no rim to end on). Returns (the number of wall faces, of such chains)."""
     frame = Frame(bit)
-    loops = _rim_loops(patch, rim, frame)
+    loops, chains = _rim_loops(patch, rim, frame)
     before = len(patch.faces)
     around = sorted((loop for loop in loops if loop.winding != 0), key=lambda loop: float(loop.sigma.mean()))
     for a, b in zip(around, around[1:] + [None]):      # None: the tip's pole
         if a.winding != ENTRY:
             continue
+        low, beyond = float(a.sigma.max()), frame.top if b is None else float(b.sigma.min())
+        if any(chain.max() > low and chain.min() < beyond for chain in chains):
+            continue                                    # a chain between: the wall would leave through it
         if b is not None and b.winding != ENTRY:
             tunnel(patch, frame, a, b, step, WALL)      # an entry, then an exit
-            continue
-        beyond = frame.top if b is None else float(b.sigma.min())
-        if inside(frame.axis_point(0.5 * (float(a.sigma.max()) + beyond))):
+        elif inside(frame.axis_point(0.5 * (low + beyond))):
             tunnel(patch, frame, a, b, step, WALL)      # a blind hole (or a surface facing the wrong way)
     fills = [loop for loop in loops if loop.winding == 0]
     for loop in fills:
         _fill(patch, frame, loop, step)
     if fills:
         _refine_fills(patch, frame, step)
-    return len(patch.faces) - before
+    return len(patch.faces) - before, len(chains)
 
 
-def _rim_loops(patch: Patch, rim, frame: Frame) -> list:
+def _rim_loops(patch: Patch, rim, frame: Frame) -> tuple:
     """The loops of boundary edges between rim points (rows ``rim``), as ``Loop``s (point ids welded:
-    seams are one; ``rim.rim_loops``)."""
+    seams are one; ``rim.rim_loops``), and the heights σ (k,) of each chain that does not close."""
     on_rim = np.zeros(patch.n_points, bool)
     on_rim[patch.row_point[rim]] = True
-    rows, points, offsets = rim_loops(patch.faces, patch.row_point, on_rim)
-    return loops(frame, rows, points, patch.point_array()[points], offsets)
+    rows, points, offsets, n_loops = rim_loops(patch.faces, patch.row_point, on_rim)
+    positions = patch.point_array()[points]
+    chains = [frame.coordinates(positions[i:j])[1] for i, j in zip(offsets[n_loops:-1], offsets[n_loops + 1:])]
+    return loops(frame, rows, points, positions, offsets[:n_loops + 1]), chains
 
 
 def _loop_rows(patch: Patch, loop: Loop) -> np.ndarray:
