@@ -7,7 +7,7 @@ Rows (medians; ratios within this run):
 
 * Arm5.glb (5037 faces): a hole through the forearm, walled and open, and in a pose (the forearm bent),
   against ``cgaskin.cut`` of the same rig through the same point (the issue's bar: a drill at most 8x a
-  cut);
+  cut); each sample times calls in a loop of at least 20 ms;
 * the capsule arm of the playing-model issue (``capsule_arm(rings_per_segment=410, segments_around=512)``,
   about 1.5M faces): a hole in a ``Surgery`` then its undo, at rest and in a new pose each hole (the
   bar: 20 ms, growing with the faces near the bit, not with the mesh: the same holes in a capsule a
@@ -42,7 +42,7 @@ def arm_rows(repeat: int) -> list:
              "drill, walled": lambda: cgaskin.drill(rig, start, end, radius),
              "drill, open (wall=False)": lambda: cgaskin.drill(rig, start, end, radius, wall=False),
              "drill, walled, in a pose": lambda: cgaskin.drill(rig, start, end, radius, pose=pose)}
-    # (each sample a loop of 20 ms: a call of a millisecond or less timed alone is mostly noise here)
+    # (a call of a millisecond or less timed alone is mostly noise on a shared machine)
     ms = {name: median_seconds(fn, repeat, min_time=0.02) * 1e3 for name, fn in calls.items()}
     cut_ms = ms["cut through the same point"]
     return [["Arm5.glb", rig.n_faces, name, value, value / cut_ms] for name, value in ms.items()]
