@@ -10,6 +10,7 @@ import numpy as np
 from ..._shared.frozen import kernel_array
 from ..._shared.jit import F2, I1, I2, kernel
 from ..._shared.memory import recycled_empty
+from ..gather import gather_rows
 from ..new_vertices import interpolate_attribute
 
 
@@ -21,27 +22,10 @@ def _assemble(values, pos_src, neg_src, extra, pos_out, neg_out):
     values (n, c) ; pos_src (np,), neg_src (nn,) int64 ; extra (k, c) ;
     pos_out (np + k, c), neg_out (nn + k, c) of values' dtype, written
     """
-    c = values.shape[1]
-    k = extra.shape[0]
+    c, k = values.shape[1], extra.shape[0]
     for src, out in ((pos_src, pos_out), (neg_src, neg_out)):
+        gather_rows(values, src, out)
         n = src.shape[0]
-        if c == 3:              # positions, normals (unrolled: about a fifth faster than the loop)
-            for i in range(n):
-                s = src[i]
-                out[i, 0] = values[s, 0]
-                out[i, 1] = values[s, 1]
-                out[i, 2] = values[s, 2]
-        elif c == 4:            # joints, weights
-            for i in range(n):
-                s = src[i]
-                out[i, 0] = values[s, 0]
-                out[i, 1] = values[s, 1]
-                out[i, 2] = values[s, 2]
-                out[i, 3] = values[s, 3]
-        else:
-            for i in range(n):
-                for j in range(c):
-                    out[i, j] = values[src[i], j]
         for i in range(k):
             for j in range(c):
                 out[n + i, j] = extra[i, j]

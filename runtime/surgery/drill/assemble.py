@@ -18,6 +18,7 @@ from ..._shared.warn import warn
 from ...animation.rig import Rig
 from ...errors import PlacementWarning
 from ...tolerances import tol
+from ..gather import gather_rows
 from ..new_vertices import UNIT, NewVertices, blend_weight_rows, combine, interpolate_attribute, place_in_rest
 from ..surface import mesh_arrays
 from .patch import Patch
@@ -120,9 +121,7 @@ def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
 def _stacked_into(values, src, extra, out):
     """out (a + b, c) := the rows ``values[src]`` (values (n, c), src (a,)), then ``extra`` (b, c)."""
     a, c = src.shape[0], values.shape[1]
-    for i in range(a):
-        for j in range(c):
-            out[i, j] = values[src[i], j]
+    gather_rows(values, src, out)
     for i in range(extra.shape[0]):
         for j in range(c):
             out[a + i, j] = extra[i, j]
