@@ -172,7 +172,7 @@ def attribute_rule(name: str, width: int):
 
 
 @helper
-def combine(values, src, coef, i, rule, out, row):
+def _combine(values, src, coef, i, rule, out, row):
     """out[row] = the row of new vertex i made from ``values`` by ``rule``."""
     c = values.shape[1]
     if rule == DOMINANT:
@@ -201,7 +201,7 @@ def _interpolate(values, src, coef, rule):
     """(k, c) rows of the new vertices ``src``, ``coef`` (k, r) made from ``values`` (n, c) by ``rule``."""
     out = np.empty((src.shape[0], values.shape[1]))
     for i in range(src.shape[0]):
-        combine(values, src, coef, i, rule, out, i)
+        _combine(values, src, coef, i, rule, out, i)
     return out
 
 
@@ -213,7 +213,7 @@ def interpolate_in_place(rows, first, src, coef, rule, copies):
     twins)."""
     k = src.shape[0]
     for i in range(k):
-        combine(rows, src, coef, i, rule, rows, first + i)
+        _combine(rows, src, coef, i, rule, rows, first + i)
     for i in range(copies.shape[0]):
         for q in range(rows.shape[1]):
             rows[first + k + i, q] = rows[copies[i], q]

@@ -7,6 +7,7 @@ compiled gather (``stacked``) into an array made here: the same work a cut does 
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -19,9 +20,9 @@ from ...animation.rig import Rig
 from ...errors import PlacementWarning
 from ...tolerances import tol
 from ..gather import gather_rows
-from ..new_vertices import UNIT, NewVertices, blend_weight_rows, combine, interpolate_attribute, place_in_rest
+from ..new_vertices import LINEAR, NewVertices, attribute_rule, place_in_rest
 from ..surface import mesh_arrays
-from .patch import Patch
+from .patch import Patch, descriptions, row_skins, row_values
 from .result import NEW_VERTEX, DrillResult
 from .wall import WALL
 
@@ -148,52 +149,48 @@ def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, open_rims: in
              diagonal: float) -> DrillResult:
     """The drilled rig: the input vertices it uses (bit for bit), then the new rows it uses; the input
     faces it keeps, then the patch's faces it made; with its bookkeeping. ``rim`` (r,) the patch's rim
-    rows; ``opened``, ``walls``, ``open_rims``, ``bit``, ``tolerance`` as ``DrillResult`` names them; ``affines`` the
-    pose's bone maps (a posed drill: the new vertices are placed in rest space) or None."""
+    rows; ``opened``, ``walls``, ``open_rims``, ``bit``, ``tolerance`` as ``DrillResult`` names them;
+    ``affines`` the pose's bone maps (a posed drill: the new vertices are placed in rest space) or None.
+
+    A new row's weights and attributes blend those of the two rows it was made between
+    (``patch.row_skins``, ``patch.row_values``): a wall's rows the rim rows they lie between."""
     vertices, faces, joints, weights = mesh_arrays(rig)
     lay = Layout(*_layout(faces, len(vertices), patch.taken, patch.faces, patch.face_source, patch.row_vertex,
                           patch.row_point, patch.n_points))
-    src, coef, new_positions = _new_rows(*patch.descriptions(), patch.row_point, patch.point_array(), lay.new_rows)
-    new = NewVertices(src, coef)
+    made = (patch.row_vertex, patch.row_parents, patch.row_t)
+    new_positions = patch.point_array()[patch.row_point[lay.new_rows]]
     # the copies of a new vertex at one point (a seam's sides, a wall's row at its rim) skin alike: their
-    # weights and rest position are the first copy's (blended from other input rows, ties in the blend
-    # could pick other bones), their attributes their own
-    new_joints, new_weights = blend_weight_rows(new.src, new.coef, joints, weights)
+    # weights and rest position are the first copy's (blended from other rows, ties in the blend could
+    # pick other bones), their attributes their own
+    new_joints, new_weights = (skin[lay.new_rows] for skin in row_skins(*made, joints, weights))
     _as_first_copies(new_joints, new_weights, lay.first_copy)
     new_rest, residual = new_positions, 0.0
     if affines is not None and len(lay.new_rows):
-        new_rest, residual = _placed(vertices, new, new_positions, new_joints, new_weights, affines, diagonal)
+        guess = row_values(*made, vertices, LINEAR)[lay.new_rows]
+        new_rest, residual = _placed(guess, new_positions, new_joints, new_weights, affines, diagonal)
         new_rest = new_rest[lay.first_copy]
     attributes = {}
     for name, values in rig.attributes.items():
         values = kernel_array(np.asarray(values))     # (read-only: its writeable buffer, one kernel type)
+        flat = np.ascontiguousarray(values.reshape(len(values), -1), np.float64)
+        extra = row_values(*made, flat, attribute_rule(name, flat.shape[1]))[lay.new_rows]
         if name == "NORMAL" and values.shape[1:] == (3,):
-            extra = _new_normals(values, new, lay.on_wall, new_positions, bit, affines, new_joints, new_weights)
-        else:
-            extra = interpolate_attribute(name, values, new)
-        attributes[name] = stacked(values, lay.kept_input, extra)
+            _wall_normals(extra, lay.on_wall, new_positions, bit, affines, new_joints, new_weights)
+        attributes[name] = stacked(values, lay.kept_input, extra.reshape((len(extra),) + values.shape[1:]))
     out_vertices, out_joints, out_weights = (stacked(values, lay.kept_input, extra) for values, extra in
                                              ((vertices, new_rest), (joints, new_joints), (weights, new_weights)))
     result = Rig._of_checked(out_vertices, lay.faces, out_joints, out_weights, rig.skeleton, rig.clips, attributes,
                              f"{rig.name}_drilled")
     sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
-    return DrillResult(result, sources, new, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions, opened,
-                       lay.replaced, lay.made_in, walls, open_rims, bit, tolerance, residual)
+    return DrillResult(result, sources, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions, opened,
+                       lay.replaced, lay.made_in, walls, open_rims, bit, tolerance, residual,
+                       partial(_described, *(np.array(a) for a in made), lay.new_rows))
 
 
-@kernel((I2, F2, I1, F2, I1), cost=0.2)
-def _new_rows(src, coef, row_point, points, new_rows):
-    """The descriptions (``Patch.descriptions``: ``src``, ``coef`` (R, s)) and positions (k, 3) of the
-    rows ``new_rows`` (k,) (``row_point`` (R,) their points, ``points`` (P, 3))."""
-    k, s = new_rows.shape[0], src.shape[1]
-    out_src, out_coef, positions = np.empty((k, s), np.int64), np.empty((k, s)), np.empty((k, 3))
-    for i in range(k):
-        r = new_rows[i]
-        for j in range(s):
-            out_src[i, j], out_coef[i, j] = src[r, j], coef[r, j]
-        for c in range(3):
-            positions[i, c] = points[row_point[r], c]
-    return out_src, out_coef, positions
+def _described(vertex, parents, t, new_rows) -> NewVertices:
+    """The rows ``new_rows`` (k,) as input vertices and coefficients (``patch.descriptions``)."""
+    src, coef = descriptions(vertex, parents, t)
+    return NewVertices(src[new_rows], coef[new_rows])
 
 
 @kernel((I2, F2, I1), cost=0.1)
@@ -205,31 +202,24 @@ def _as_first_copies(joints, weights, first_copy):
             joints[i, k], weights[i, k] = joints[j, k], weights[j, k]
 
 
-def _new_normals(normals, new: NewVertices, on_wall, points, bit, affines, joints, weights) -> np.ndarray:
-    """The new vertices' normals (k, 3) float64 from the input's ``normals`` (n, 3): interpolated (unit
-    length), and on a wall (``on_wall`` (k,)) pointing into the bit from their ``points`` (k, 3); a posed
-    drill's wall normals carried to rest by their ``joints``, ``weights`` (k, 4) in the pose's bone
-    ``affines``."""
-    out = _interpolated_or_inward(np.ascontiguousarray(normals, np.float64), new.src, new.coef, on_wall, points,
-                                  bit.start, bit.end)
+def _wall_normals(normals, on_wall, points, bit, affines, joints, weights) -> None:
+    """Point the new vertices' ``normals`` (k, 3) float64 that lie ``on_wall`` (k,) into the bit, from
+    their ``points`` (k, 3), in place; a posed drill's carried to rest by their ``joints``, ``weights``
+    (k, 4) in the pose's bone ``affines``."""
+    _inward_into(normals, on_wall, points, bit.start, bit.end)
     if affines is not None and on_wall.any():
         at = np.flatnonzero(on_wall)
-        out[at] = _to_rest_normals(out[at], joints[at], weights[at], affines)
-    return out
+        normals[at] = _to_rest_normals(normals[at], joints[at], weights[at], affines)
 
 
-@kernel((F2, I2, F2, B1, F2, F1, F1), cost=0.3)
-def _interpolated_or_inward(normals, src, coef, on_wall, points, start, end):
-    """(k, 3): the unit normal interpolated from ``normals`` (n, 3) by ``src``, ``coef`` (k, s), or where
-    ``on_wall`` (k,) the unit vector from row i of ``points`` (k, 3) to the nearest point of the bit's
-    travel start -> end (its axis, or a round end's centre): a wall faces the hole."""
-    out = np.empty((src.shape[0], 3))
-    for i in range(src.shape[0]):
+@kernel((F2, B1, F2, F1, F1), cost=0.2)
+def _inward_into(normals, on_wall, points, start, end):
+    """Where ``on_wall`` (k,), the unit vector from row i of ``points`` (k, 3) to the nearest point of the
+    bit's travel start -> end (its axis, or a round end's centre) into ``normals`` (k, 3): a wall faces
+    the hole."""
+    for i in range(points.shape[0]):
         if on_wall[i]:
-            _put_inward(points, i, start, end, out, i)
-        else:
-            combine(normals, src, coef, i, UNIT, out, i)
-    return out
+            _put_inward(points, i, start, end, normals, i)
 
 
 @helper
@@ -252,10 +242,10 @@ def _to_rest_normals(inward, joints, weights, affines) -> np.ndarray:
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-def _placed(vertices, new: NewVertices, targets, new_joints, new_weights, affines, diagonal: float):
-    """Rest positions of the new vertices of a posed drill (``place_in_rest``), and the largest residual
-    (a ``PlacementWarning`` when some miss where they were made)."""
-    guess = interpolate_attribute("POSITION", vertices, new)
+def _placed(guess, targets, new_joints, new_weights, affines, diagonal: float):
+    """Rest positions of the new vertices of a posed drill (``place_in_rest`` from their interpolated
+    rest positions ``guess`` (k, 3)), and the largest residual (a ``PlacementWarning`` when some miss
+    where they were made)."""
     rest, residuals = place_in_rest(targets, guess, new_joints, new_weights, affines)
     residual = float(residuals.max()) if len(residuals) else 0.0
     if residual > tol.placement * diagonal:

@@ -3,17 +3,20 @@ each new row is made.
 
 Faces are rows of the vertex table (attribute-split copies kept apart: a seam edge bisected gets one new
 row per copy, all at one position); points are the welded vertices (one position per place). A new row
-blends two earlier rows, (1 - t) a + t b (a midpoint, a rim's crossing, a wall's row between two rims);
-``descriptions`` resolves every row into input vertices and coefficients, from which its weights and
-attributes are made (``new_vertices.py``). Everything is kept in arrays that grow (``_Growing``): the
-drill's steps read and make whole arrays of faces, rows and points at a time.
+blends two earlier rows, (1 - t) a + t b (a midpoint, a rim's crossing, a wall's row between two rims),
+and so do its weights and attributes, row by row (``row_skins``, ``row_values``); ``descriptions``
+resolves every row into input vertices and coefficients (``DrillResult.new``). Everything is kept in
+arrays that grow (``_Growing``): the drill's steps read and make whole arrays of faces, rows and points
+at a time.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..._shared.jit import F1, I1, I2, helper, kernel
-from ..new_vertices import accumulate, largest_first
+from ..._shared.jit import F1, F2, I1, I2, helper, i8, kernel
+from ..new_vertices import DOMINANT, UNIT, accumulate, largest_first
 
 #: input vertices a new vertex is described by at most: 3 in a face, 6 on a wall (between two rims)
 SOURCES = 6
@@ -70,7 +73,7 @@ class Patch:
     point_welded : (P,) int64, the input's welded id of each point (``NEW_POINT`` for a new one)
     row_point : (R,) int64, the point of each row ; row_vertex : (R,) int64, the input vertex of each row
         (-1 for a new one) ; row_parents : (R, 2) int64 and row_t : (R,): a new row blends earlier rows
-        as (1 - t) row_parents[:, 0] + t row_parents[:, 1] (``descriptions`` resolves them)
+        as (1 - t) row_parents[:, 0] + t row_parents[:, 1]
     faces : (F, 3) int64 rows, wound as the input's ; face_source : (F,) int64, the input face each
         descends from (a wall's: negative, ``wall.WALL``)
     taken : (T,) int64, the input faces taken, in the order taken ; is_taken : (m,) bool, per input face
@@ -138,11 +141,6 @@ class Patch:
         self._faces.replace(np.asarray(rows, np.int64).reshape(-1, 3))
         self._face_source.replace(np.asarray(sources, np.int64))
 
-    def descriptions(self) -> tuple:
-        """(src (R, SOURCES) int64, coef (R, SOURCES) float64): each row as input vertices and their
-        coefficients (``_descriptions``)."""
-        return _descriptions(self.row_vertex, self.row_parents, self.row_t)
-
     # -- arrays --------------------------------------------------------------------------------------
     def point_array(self) -> np.ndarray:
         """(P, 3) the points so far (a view, valid until the next point is added)."""
@@ -166,7 +164,7 @@ class Patch:
 
 
 @kernel((I1, I2, F1), cost=0.4)
-def _descriptions(vertex, parents, t):
+def descriptions(vertex, parents, t):
     """Rows as input vertices and coefficients: row r is input vertex ``vertex[r]`` (>= 0), or the blend
     (1 - t[r]) of row parents[r, 0] and t[r] of row parents[r, 1] (earlier rows), of whose input
     vertices the SOURCES with the largest coefficients are kept and renormalised (in one face there are
@@ -199,6 +197,65 @@ def _descriptions(vertex, parents, t):
             src[r, slot] = keys[slot] if slot < kept else keys[0]
             coef[r, slot] = values[slot] / total if slot < kept else 0.0
     return src, coef
+
+
+@kernel((I1, I2, F1, I2, F2), cost=0.4)
+def row_skins(vertex, parents, t, joints, weights):
+    """Every row's joints and weights (R, 4): an input row's (``vertex[r]`` >= 0) its vertex's; a new
+    row's the blend (1 - t[r]) of row parents[r, 0]'s and t[r] of row parents[r, 1]'s (earlier rows:
+    two rim rows for a wall's), the 4 largest kept and renormalised, largest first, unused slots bone 0
+    with weight 0 (``new_vertices.blend_weight_rows``' layout); a copy's (t 0 or 1) its parent's."""
+    rows = vertex.shape[0]
+    out_j, out_w = np.zeros((rows, 4), np.int64), np.zeros((rows, 4))
+    bones, values = np.empty(8, np.int64), np.empty(8)
+    for r in range(rows):
+        if vertex[r] >= 0 or t[r] == 0.0 or t[r] == 1.0:
+            row_j, row_w = (joints, weights) if vertex[r] >= 0 else (out_j, out_w)
+            v = vertex[r] if vertex[r] >= 0 else parents[r, 0] if t[r] == 0.0 else parents[r, 1]
+            for s in range(4):
+                out_j[r, s], out_w[r, s] = row_j[v, s], row_w[v, s]
+            continue
+        count = 0
+        for side in range(2):
+            p, scale = parents[r, side], t[r] if side == 1 else 1.0 - t[r]
+            for s in range(4):
+                if out_w[p, s] > 0.0:
+                    count = accumulate(bones, values, count, out_j[p, s], scale * out_w[p, s])
+        kept = min(4, count)
+        total = largest_first(bones, values, count, kept)
+        for s in range(kept):
+            out_j[r, s], out_w[r, s] = bones[s], values[s] / total
+    return out_j, out_w
+
+
+@kernel((I1, I2, F1, F2, i8), cost=0.3)
+def row_values(vertex, parents, t, values, rule):
+    """Every row's rows (R, c) of a per-vertex array ``values`` (n, c): an input row's its vertex's; a
+    new row's made from its parents' (earlier rows) by ``rule`` (``new_vertices.attribute_rule``):
+    LINEAR (1 - t) a + t b, UNIT that at unit length (zero stays zero), DOMINANT the parent with the
+    larger share (the first on a tie); a copy's (t 0 or 1) its parent's."""
+    rows, c = vertex.shape[0], values.shape[1]
+    out = np.empty((rows, c))
+    for r in range(rows):
+        if vertex[r] >= 0:
+            for q in range(c):
+                out[r, q] = values[vertex[r], q]
+            continue
+        a, b, w = parents[r, 0], parents[r, 1], t[r]
+        if w == 0.0 or w == 1.0 or rule == DOMINANT:
+            p = a if w <= 0.5 else b
+            for q in range(c):
+                out[r, q] = out[p, q]
+            continue
+        length = 0.0
+        for q in range(c):
+            out[r, q] = (1.0 - w) * out[a, q] + w * out[b, q]
+            length += out[r, q] * out[r, q]
+        if rule == UNIT and length > 0.0:
+            inverse = 1.0 / math.sqrt(length)
+            for q in range(c):
+                out[r, q] *= inverse
+    return out
 
 
 @helper

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import Callable
 
 import numpy as np
 
@@ -19,9 +21,7 @@ class DrillResult:
 
     rig : Rig, the drilled rig
     sources : (n_out,) int64, the input vertex of each output vertex, ``NEW_VERTEX`` for a new one
-    new : NewVertices, the input vertices each new vertex lies between and its coefficients there
-        (new vertex j is output vertex ``first_new + j``)
-    first_new : int
+    first_new : int, the first new vertex (new vertex j is output vertex ``first_new + j``)
     rim : (r,) int64, the output vertices on the bit's surface
     new_positions : (k, 3) float64, the new vertices in the space that was drilled (rest, or posed)
     removed_faces : int, input faces (after refinement) taken away or cut by the bit
@@ -34,11 +34,13 @@ class DrillResult:
         which no wall joins (the hole stays open there; ``OpenRimWarning``)
     bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
         |skinned new vertex - where it was made| (0 for a drill at rest)
+    new : NewVertices, the input vertices each new vertex lies between and its coefficients there (made
+        when first asked: the drill itself blends each new vertex from the two vertices it was made
+        between, ``patch.row_skins``)
     """
 
     rig: Rig
     sources: np.ndarray
-    new: NewVertices
     first_new: int
     rim: np.ndarray
     new_positions: np.ndarray
@@ -50,3 +52,8 @@ class DrillResult:
     bit: Bit
     tolerance: float
     residual: float
+    _describe: Callable[[], NewVertices]
+
+    @cached_property
+    def new(self) -> NewVertices:
+        return self._describe()
