@@ -35,7 +35,8 @@ class Layout(NamedTuple):
         a wall's) ; replaced : (t,) int64 the input faces not kept (ascending)
     kept_input : (a,) int64 the input vertices the result uses (ascending): its first vertices
     new_rows : (b,) int64 the patch's new rows it uses (ascending): its vertices after them
-    first_copy : (b,) int64 for each of those, the first of them at the same point (itself if none)
+    skin_rows : (b,) int64 for each of those, the first of them at the same point (itself if none): the
+        copies of a new vertex at one point skin alike ; positions : (b, 3) float64 their points
     on_wall : (b,) bool whether a wall face uses it ; row_out : (R,) int64 each row's output vertex (-1)
     """
 
@@ -44,17 +45,18 @@ class Layout(NamedTuple):
     replaced: np.ndarray
     kept_input: np.ndarray
     new_rows: np.ndarray
-    first_copy: np.ndarray
+    skin_rows: np.ndarray
+    positions: np.ndarray
     on_wall: np.ndarray
     row_out: np.ndarray
 
 
-@kernel((I2, i8, I1, I2, I1, I1, I1, i8), cost=0.9)
-def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
+@kernel((I2, i8, I1, I2, I1, I1, I1, F2), cost=0.9)
+def _layout(faces, n, taken, rows, sources, row_vertex, row_point, points):
     """The result's faces and vertices (``Layout``, as a plain tuple) from the input ``faces`` (m, 3) over
     ``n`` vertices, the input faces the patch ``taken`` (T,), the patch's faces ``rows`` (F, 3) from
     input faces ``sources`` (F,), its rows' input vertices ``row_vertex`` (R,) (-1: new) and points
-    ``row_point`` (R,) of ``n_points``. A patch face that is its input face as it was (its corners, in
+    ``row_point`` (R,) of ``points`` (P, 3). A patch face that is its input face as it was (its corners, in
     their order) keeps that face's place."""
     m, n_rows = faces.shape[0], row_vertex.shape[0]
     kept = np.ones(m, np.bool_)
@@ -88,14 +90,16 @@ def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
         vertex_out[kept_input[i]] = i
     new_rows = np.flatnonzero(uses_row)
     row_out = np.full(n_rows, -1, np.int64)
-    first_at_point = np.full(n_points, -1, np.int64)
-    first_copy, on_wall = np.empty(new_rows.shape[0], np.int64), np.empty(new_rows.shape[0], np.bool_)
+    first_at_point = np.full(points.shape[0], -1, np.int64)
+    skin_rows, on_wall = np.empty(new_rows.shape[0], np.int64), np.empty(new_rows.shape[0], np.bool_)
+    positions = np.empty((new_rows.shape[0], 3))
     for j in range(new_rows.shape[0]):
-        r = new_rows[j]
+        r, p = new_rows[j], row_point[new_rows[j]]
         row_out[r] = kept_input.shape[0] + j
-        if first_at_point[row_point[r]] < 0:
-            first_at_point[row_point[r]] = j
-        first_copy[j], on_wall[j] = first_at_point[row_point[r]], on_wall_row[r]
+        if first_at_point[p] < 0:
+            first_at_point[p] = r
+        skin_rows[j], on_wall[j] = first_at_point[p], on_wall_row[r]
+        positions[j, 0], positions[j, 1], positions[j, 2] = points[p, 0], points[p, 1], points[p, 2]
     for r in range(n_rows):
         if row_vertex[r] >= 0:
             row_out[r] = vertex_out[row_vertex[r]]
@@ -115,7 +119,7 @@ def _layout(faces, n, taken, rows, sources, row_vertex, row_point, n_points):
                 out[at, k] = row_out[rows[f, k]]
             made_in[at - n_kept] = max(sources[f], -1)
             at += 1
-    return out, made_in, np.flatnonzero(~kept), kept_input, new_rows, first_copy, on_wall, row_out
+    return out, made_in, np.flatnonzero(~kept), kept_input, new_rows, skin_rows, positions, on_wall, row_out
 
 
 @kernel((F2, I1, F2, F2), (I2, I1, I2, I2), cost=0.3)
@@ -156,24 +160,21 @@ def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, open_rims: in
     (``patch.row_skins``, ``patch.row_values``): a wall's rows the rim rows they lie between."""
     vertices, faces, joints, weights = mesh_arrays(rig)
     lay = Layout(*_layout(faces, len(vertices), patch.taken, patch.faces, patch.face_source, patch.row_vertex,
-                          patch.row_point, patch.n_points))
-    made = (patch.row_vertex, patch.row_parents, patch.row_t)
-    new_positions = patch.point_array()[patch.row_point[lay.new_rows]]
+                          patch.row_point, patch.point_array()))
+    made, new_positions = (patch.row_vertex, patch.row_parents, patch.row_t), lay.positions
     # the copies of a new vertex at one point (a seam's sides, a wall's row at its rim) skin alike: their
-    # weights and rest position are the first copy's (blended from other rows, ties in the blend could
-    # pick other bones), their attributes their own
-    new_joints, new_weights = (skin[lay.new_rows] for skin in row_skins(*made, joints, weights))
-    _as_first_copies(new_joints, new_weights, lay.first_copy)
+    # weights and rest position are the first copy's (``skin_rows``: blended from other rows, ties in
+    # the blend could pick other bones), their attributes their own
+    new_joints, new_weights = row_skins(*made, joints, weights, lay.skin_rows)
     new_rest, residual = new_positions, 0.0
     if affines is not None and len(lay.new_rows):
-        guess = row_values(*made, vertices, LINEAR)[lay.new_rows]
+        guess = row_values(*made, vertices, LINEAR, lay.skin_rows)
         new_rest, residual = _placed(guess, new_positions, new_joints, new_weights, affines, diagonal)
-        new_rest = new_rest[lay.first_copy]
     attributes = {}
     for name, values in rig.attributes.items():
         values = kernel_array(np.asarray(values))     # (read-only: its writeable buffer, one kernel type)
         flat = np.ascontiguousarray(values.reshape(len(values), -1), np.float64)
-        extra = row_values(*made, flat, attribute_rule(name, flat.shape[1]))[lay.new_rows]
+        extra = row_values(*made, flat, attribute_rule(name, flat.shape[1]), lay.new_rows)
         if name == "NORMAL" and values.shape[1:] == (3,):
             _wall_normals(extra, lay.on_wall, new_positions, bit, affines, new_joints, new_weights)
         attributes[name] = stacked(values, lay.kept_input, extra.reshape((len(extra),) + values.shape[1:]))
@@ -191,15 +192,6 @@ def _described(vertex, parents, t, new_rows) -> NewVertices:
     """The rows ``new_rows`` (k,) as input vertices and coefficients (``patch.descriptions``)."""
     src, coef = descriptions(vertex, parents, t)
     return NewVertices(src[new_rows], coef[new_rows])
-
-
-@kernel((I2, F2, I1), cost=0.1)
-def _as_first_copies(joints, weights, first_copy):
-    """Give each row of ``joints``, ``weights`` (k, 4) the values of row ``first_copy[i]`` (<= i), in place."""
-    for i in range(first_copy.shape[0]):
-        j = first_copy[i]
-        for k in range(joints.shape[1]):
-            joints[i, k], weights[i, k] = joints[j, k], weights[j, k]
 
 
 def _wall_normals(normals, on_wall, points, bit, affines, joints, weights) -> None:

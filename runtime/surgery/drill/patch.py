@@ -199,12 +199,13 @@ def descriptions(vertex, parents, t):
     return src, coef
 
 
-@kernel((I1, I2, F1, I2, F2), cost=0.4)
-def row_skins(vertex, parents, t, joints, weights):
-    """Every row's joints and weights (R, 4): an input row's (``vertex[r]`` >= 0) its vertex's; a new
-    row's the blend (1 - t[r]) of row parents[r, 0]'s and t[r] of row parents[r, 1]'s (earlier rows:
-    two rim rows for a wall's), the 4 largest kept and renormalised, largest first, unused slots bone 0
-    with weight 0 (``new_vertices.blend_weight_rows``' layout); a copy's (t 0 or 1) its parent's."""
+@kernel((I1, I2, F1, I2, F2, I1), cost=0.4)
+def row_skins(vertex, parents, t, joints, weights, wanted):
+    """The joints and weights (k, 4) of the rows ``wanted`` (k,), made for every row: an input row's
+    (``vertex[r]`` >= 0) its vertex's; a new row's the blend (1 - t[r]) of row parents[r, 0]'s and t[r]
+    of row parents[r, 1]'s (earlier rows: two rim rows for a wall's), the 4 largest kept and
+    renormalised, largest first, unused slots bone 0 with weight 0 (``new_vertices.blend_weight_rows``'
+    layout); a copy's (t 0 or 1) its parent's."""
     rows = vertex.shape[0]
     out_j, out_w = np.zeros((rows, 4), np.int64), np.zeros((rows, 4))
     bones, values = np.empty(8, np.int64), np.empty(8)
@@ -225,15 +226,16 @@ def row_skins(vertex, parents, t, joints, weights):
         total = largest_first(bones, values, count, kept)
         for s in range(kept):
             out_j[r, s], out_w[r, s] = bones[s], values[s] / total
-    return out_j, out_w
+    return _rows_at(out_j, wanted), _rows_at(out_w, wanted)
 
 
-@kernel((I1, I2, F1, F2, i8), cost=0.3)
-def row_values(vertex, parents, t, values, rule):
-    """Every row's rows (R, c) of a per-vertex array ``values`` (n, c): an input row's its vertex's; a
-    new row's made from its parents' (earlier rows) by ``rule`` (``new_vertices.attribute_rule``):
-    LINEAR (1 - t) a + t b, UNIT that at unit length (zero stays zero), DOMINANT the parent with the
-    larger share (the first on a tie); a copy's (t 0 or 1) its parent's."""
+@kernel((I1, I2, F1, F2, i8, I1), cost=0.3)
+def row_values(vertex, parents, t, values, rule, wanted):
+    """The rows (k, c) of a per-vertex array ``values`` (n, c) for the rows ``wanted`` (k,), made for
+    every row: an input row's its vertex's; a new row's made from its parents' (earlier rows) by
+    ``rule`` (``new_vertices.attribute_rule``): LINEAR (1 - t) a + t b, UNIT that at unit length (zero
+    stays zero), DOMINANT the parent with the larger share (the first on a tie); a copy's (t 0 or 1)
+    its parent's."""
     rows, c = vertex.shape[0], values.shape[1]
     out = np.empty((rows, c))
     for r in range(rows):
@@ -255,6 +257,16 @@ def row_values(vertex, parents, t, values, rule):
             inverse = 1.0 / math.sqrt(length)
             for q in range(c):
                 out[r, q] *= inverse
+    return _rows_at(out, wanted)
+
+
+@helper
+def _rows_at(values, rows):
+    """(k, c) the rows ``rows`` (k,) of ``values`` (R, c)."""
+    out = np.empty((rows.shape[0], values.shape[1]), values.dtype)
+    for i in range(rows.shape[0]):
+        for q in range(values.shape[1]):
+            out[i, q] = values[rows[i], q]
     return out
 
 
