@@ -22,6 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.frozen import kernel_array
 from .._shared.ids import ascending, distinct
 from ..animation.rig import Rig
 from ..animation.skinning import skin_affine
@@ -29,7 +30,7 @@ from .drill.api import DrillResult, bit_reach, drill_region, missed
 from .drill.inside import winding_number
 from .dynamic_bvh import dyn_faces_near_plane
 from .posed_bounds import pose_region
-from .surface import TEAR_LABEL, _labels, mesh_arrays
+from .surface import TEAR_LABEL, MeshArrays, _labels, mesh_arrays
 from .topology import boundary_flags
 from .weld import _weld
 
@@ -140,10 +141,16 @@ def _inside(session, affines):
     return inside
 
 
+def _own_arrays(rig) -> MeshArrays:
+    """The mesh arrays of a rig the drill made (as ``mesh_arrays`` gives them, not checked again: an
+    empty one too, where the bit took away every face of the region)."""
+    return MeshArrays(*(kernel_array(a) for a in (rig.vertices, rig.faces, rig.joints, rig.weights)))
+
+
 def _splice(session, result: DrillResult, region, rows) -> DrillSplice:
     """The region's drill in the session's rows: the new vertices after its ``n`` rows, the pieces'
     corners as session rows."""
-    out, n, first = mesh_arrays(result.rig), session.n_vertices, result.first_new
+    out, n, first = _own_arrays(result.rig), session.n_vertices, result.first_new
     n_new = len(out.vertices) - first
     n_kept = len(region) - len(result.replaced)
     row_of = np.concatenate([rows[result.sources[:first]], n + np.arange(n_new)])
@@ -151,8 +158,8 @@ def _splice(session, result: DrillResult, region, rows) -> DrillSplice:
     labels = _labels(result.rig)
     flags = boundary_flags(out.vertices, out.faces, labels)
     touched = distinct(out.faces[n_kept:])
-    attributes = {name: np.array(result.rig.attributes[name][first:], np.float64).reshape(n_new, -1)
-                  for name in session.attributes}
+    attributes = {name: np.array(result.rig.attributes[name][first:], np.float64).reshape(n_new, rows_.shape[1])
+                  for name, (rows_, _) in session.attributes.items()}
     none = np.empty(0, np.int64)
     return DrillSplice(rows=none, changed=none, vertices=out.vertices[first:], labels=labels[first:],
                        joints=out.joints[first:], weights=out.weights[first:], attributes=attributes,

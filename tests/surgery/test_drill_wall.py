@@ -10,10 +10,16 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, Phase, assume, given, settings, strategies as st
 
 import cgaskin
 from cgaskin.surgery.drill import RIM_STEP
 from cgaskin.surgery.topology import topology
+
+from tests.helpers.cut_checks import random_closed_rig
+from tests.surgery.test_drill import (barycentric_grid, boundary_edges, check_no_face_inside, check_rim_on_surface,
+                                      check_weights, diagonal, max_depth, segment_distance, through, unit_vectors,
+                                      welded)
 
 manifold3d = pytest.importorskip("manifold3d", reason="manifold3d (pip, in the test extras) is the drill's oracle")
 
@@ -233,10 +239,11 @@ def test_a_lengthwise_fill_has_about_as_many_faces_as_its_area_needs(capsule):
     assert result.wall_faces <= 8.0 * area / (0.5 * step ** 2)
 
 
-def _opened(rig, beyond_x):
-    """``rig`` with every face that has a corner beyond x = ``beyond_x`` taken away: an open tube."""
+def _opened(rig, normal, point):
+    """``rig`` with every face that has a corner beyond the plane through ``point`` with ``normal``
+    taken away (and the vertices no face uses): an open surface."""
     vertices, faces = np.asarray(rig.vertices), np.asarray(rig.faces)
-    keep = ~(vertices[faces][:, :, 0] > beyond_x).any(axis=1)
+    keep = ~((vertices[faces] - point) @ np.asarray(normal, float) > 0.0).any(axis=1)
     used = np.unique(faces[keep])
     index = np.full(len(vertices), -1)
     index[used] = np.arange(len(used))
@@ -249,9 +256,8 @@ def test_a_rim_at_an_open_boundary_gets_no_wall_and_a_warning(capsule):
     as in the closed capsule, without a warning; a hole across the opening has two rims that run into
     it, which no wall joins (``OpenRimWarning``, ``open_rims``), its rims on the bit and no face inside
     it; a session's drill warns once (not once per region it tries) and is the functional drill."""
-    from tests.surgery.test_drill import check_no_face_inside, check_rim_on_surface, diagonal
     from tests.surgery.test_session_drill import assert_same_mesh
-    tube = _opened(capsule, 2.0)
+    tube = _opened(capsule, [1.0, 0.0, 0.0], [2.0, 0.0, 0.0])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         away = cgaskin.drill_details(tube, *CASES["through"])
@@ -270,3 +276,91 @@ def test_a_rim_at_an_open_boundary_gets_no_wall_and_a_warning(capsule):
         session.drill(start, end, radius)
     assert [type(w.message) for w in caught] == [cgaskin.OpenRimWarning]
     assert_same_mesh(session.rig, across.rig)
+
+
+def _rim_chains(result) -> int:
+    """How many of the boundary edges between rim vertices of an open (``wall=False``) drill's result form
+    chains rather than loops (their ends where the rim runs into the mesh's boundary), positions welded;
+    None where a rim vertex has more than two such edges."""
+    ids = welded(result.rig.vertices)
+    edges = boundary_edges(ids[np.asarray(result.rig.faces)])
+    on_rim = np.zeros(ids.max() + 1, bool)
+    on_rim[ids[result.rim]] = True
+    edges = edges[on_rim[edges[:, 0]] & on_rim[edges[:, 1]]]
+    degree = np.bincount(edges.ravel(), minlength=len(on_rim))
+    if (degree > 2).any():
+        return None
+    return int(np.count_nonzero(degree == 1)) // 2        # (a chain has two ends; a loop none)
+
+
+@pytest.mark.parametrize("shape", ["sphere", "torus", "box", "capsule"])
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+          phases=[Phase.explicit, Phase.reuse, Phase.generate])
+@given(seed=st.integers(0, 2 ** 32 - 1), data=st.data())
+def test_walled_holes_in_random_open_meshes(shape, seed, data):
+    """Random closed meshes with seams, opened by taking away the faces beyond a random plane, drilled
+    with walls through a random vertex: the rims lie on the bit and no face but a wall's reaches into it
+    (the walls' corners lie on it), as in any drill; the rims it reports running into the open boundary
+    (``open_rims``, with an ``OpenRimWarning``) are the chains among the rim's boundary edges that the
+    same hole leaves without walls (an oracle on the output's boundary)."""
+    rig = random_closed_rig(shape, seed, 0.3)
+    vertices = np.asarray(rig.vertices)
+    diag = diagonal(vertices)
+    opened = _opened(rig, data.draw(unit_vectors()), vertices[data.draw(st.integers(0, len(vertices) - 1))])
+    points = np.asarray(opened.vertices)
+    assume(opened.n_faces >= 8)
+    point = points[data.draw(st.integers(0, len(points) - 1))]
+    radius = data.draw(st.floats(0.02, 0.15)) * diag
+    start, end = through(point, data.draw(unit_vectors()), 0.3 * diag, 0.3 * diag)
+    try:
+        bare = cgaskin.drill_details(opened, start, end, radius, wall=False)
+    except cgaskin.MissesMeshError:
+        assume(False)
+    if bare.rig.n_faces == 0:                   # (the bit took the whole surface: nothing left to wall)
+        assert cgaskin.drill(opened, start, end, radius).n_faces == 0
+        return
+    chains = _rim_chains(bare)
+    assume(chains is not None)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        walled = cgaskin.drill_details(opened, start, end, radius)
+    tol = 1e-9 * diag
+    check_rim_on_surface(walled, start, end, radius, None, tol)
+    out = np.asarray(walled.rig.vertices)
+    faces = np.asarray(walled.rig.faces)
+    surface, walls = faces[:len(faces) - walled.wall_faces], faces[len(faces) - walled.wall_faces:]
+    samples = np.einsum("gk,fkc->fgc", barycentric_grid(6), out[surface])
+    assert segment_distance(samples, start, end).min(initial=np.inf) >= radius - max_depth(radius) - tol
+    assert np.abs(segment_distance(out[np.unique(walls)], start, end) - radius).max(initial=0.0) <= tol
+    check_weights(walled, rig.skeleton.n_bones)
+    assert walled.open_rims == chains
+    assert [type(w.message) for w in caught] == ([cgaskin.OpenRimWarning] if chains else [])
+
+
+def test_a_bit_that_takes_a_whole_part_away(capsule):
+    """A bit that takes away a whole separate part of the mesh (a small copy of the arm beside it) makes
+    no new vertex: the part goes, the rest stays as it was, in a session as in the functional drill, and
+    undo brings the part back; a bit that takes everything leaves an empty rig, and an empty session
+    that undo restores."""
+    from tests.surgery.test_session_drill import assert_same_mesh
+    v, f = np.asarray(capsule.vertices), np.asarray(capsule.faces)
+    two = capsule.with_mesh(np.concatenate([v, 0.1 * v + [1.0, 1.0, 0.0]]), np.concatenate([f, f + len(v)]),
+                            np.concatenate([capsule.joints] * 2), np.concatenate([capsule.weights] * 2),
+                            {k: np.concatenate([np.asarray(a)] * 2) for k, a in capsule.attributes.items()})
+    start, end = [1.15, 1.0, -1.0], [1.15, 1.0, 1.0]
+    result = cgaskin.drill_details(two, start, end, 0.3)
+    assert result.removed_faces == capsule.n_faces and len(result.sources) == capsule.n_vertices
+    np.testing.assert_array_equal(result.rig.faces, capsule.faces)
+    np.testing.assert_array_equal(result.rig.vertices, capsule.vertices)
+    session = cgaskin.Surgery(two)
+    session.drill(start, end, 0.3)
+    assert_same_mesh(session.rig, result.rig)
+    session.undo()
+    np.testing.assert_array_equal(session.rig.faces, two.faces)
+    everything = ([-1.0, 0.0, 0.0], [4.0, 0.0, 0.0], 1.0)
+    assert cgaskin.drill(capsule, *everything).n_faces == 0
+    session = cgaskin.Surgery(capsule)
+    session.drill(*everything)
+    assert session.rig.n_faces == 0
+    session.undo()
+    np.testing.assert_array_equal(session.rig.faces, capsule.faces)

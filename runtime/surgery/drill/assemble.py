@@ -143,9 +143,9 @@ def stacked(values, src, extra) -> np.ndarray:
     direct = flat.dtype in (np.float64, np.int64)
     if not direct:
         flat = flat.astype(np.float64)
-    out = recycled_empty(shape, flat.dtype)
-    _stacked_into(flat, src, np.ascontiguousarray(np.asarray(extra, flat.dtype).reshape(len(extra), -1)),
-                  out.reshape(len(out), -1))
+    out, width = recycled_empty(shape, flat.dtype), flat.shape[1]       # (explicit widths: no rows at all)
+    _stacked_into(flat, src, np.ascontiguousarray(np.asarray(extra, flat.dtype).reshape(len(extra), width)),
+                  out.reshape(len(out), width))
     return out if direct else out.astype(values.dtype)
 
 
