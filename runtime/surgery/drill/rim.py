@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, kernel
+from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, inlined, kernel
 from .bisection import EMPTY, code_table, pair, slot
 from .bit import crossing, put_on_edge, segment_distance, signed_distances
 from .patch import Patch, put_face, squared_distance
@@ -241,18 +241,10 @@ def rim_loops(rows, row_point, on_rim):
                 if pick < 0 and not used[candidate]:
                     pick = candidate
             if pick < 0:                            # an open chain
-                for i in range(length):
-                    chains[n_chain_corners + i] = loop[i]
-                n_chain_corners += length
-                n_chains += 1
-                chain_offsets[n_chains] = n_chain_corners
+                n_chain_corners, n_chains = _kept(chains, chain_offsets, n_chain_corners, n_chains, loop, length)
                 break
             if pick == first:
-                for i in range(length):
-                    corners[n_corners + i] = loop[i]
-                n_corners += length
-                n_loops += 1
-                offsets[n_loops] = n_corners
+                n_corners, n_loops = _kept(corners, offsets, n_corners, n_loops, loop, length)
                 break
             e = pick
     total = n_corners + n_chain_corners + n_chains
@@ -273,6 +265,16 @@ def rim_loops(rows, row_point, on_rim):
     for c in range(total):
         out_points[c] = row_point[out_rows[c]]
     return out_rows, out_points, out_offsets, n_loops
+
+
+@inlined
+def _kept(corners, offsets, n_corners, n_groups, loop, length):
+    """Append ``loop[:length]`` to ``corners`` as group ``n_groups`` (its end in ``offsets``); the new
+    counts of corners and groups."""
+    for i in range(length):
+        corners[n_corners + i] = loop[i]
+    offsets[n_groups + 1] = n_corners + length
+    return n_corners + length, n_groups + 1
 
 
 @helper
