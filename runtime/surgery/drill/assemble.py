@@ -197,11 +197,10 @@ def _described(vertex, parents, t, new_rows) -> NewVertices:
 def _wall_normals(normals, on_wall, points, bit, affines, joints, weights) -> None:
     """Point the new vertices' ``normals`` (k, 3) float64 that lie ``on_wall`` (k,) into the bit, from
     their ``points`` (k, 3), in place; a posed drill's carried to rest by their ``joints``, ``weights``
-    (k, 4) in the pose's bone ``affines``."""
+    (k, 4) in the pose's bone ``affines`` (B, 12)."""
     _inward_into(normals, on_wall, points, bit.start, bit.end)
-    if affines is not None and on_wall.any():
-        at = np.flatnonzero(on_wall)
-        normals[at] = _to_rest_normals(normals[at], joints[at], weights[at], affines)
+    if affines is not None:
+        _to_rest_into(normals, on_wall, joints, weights, affines)
 
 
 @kernel((F2, B1, F2, F1, F1), cost=0.2)
@@ -214,6 +213,26 @@ def _inward_into(normals, on_wall, points, start, end):
             _put_inward(points, i, start, end, normals, i)
 
 
+@kernel((F2, B1, I2, F2, F2), cost=0.2)
+def _to_rest_into(normals, on_wall, joints, weights, affines):
+    """Carry the rows of posed ``normals`` (k, 3) that lie ``on_wall`` (k,) to rest, in place: by the
+    transpose of the row's blended linear map (sum of w A over its ``joints``, ``weights`` (k, 4), the
+    bone ``affines`` (B, 12) row-major 3x4; a normal transforms by the inverse transpose), unit length."""
+    for i in range(normals.shape[0]):
+        if not on_wall[i]:
+            continue
+        n0, n1, n2 = normals[i, 0], normals[i, 1], normals[i, 2]
+        x = y = z = 0.0
+        for s in range(joints.shape[1]):
+            w, b = weights[i, s], joints[i, s]
+            if w != 0.0:
+                x += w * (affines[b, 0] * n0 + affines[b, 4] * n1 + affines[b, 8] * n2)
+                y += w * (affines[b, 1] * n0 + affines[b, 5] * n1 + affines[b, 9] * n2)
+                z += w * (affines[b, 2] * n0 + affines[b, 6] * n1 + affines[b, 10] * n2)
+        norm = math.sqrt(x * x + y * y + z * z)
+        normals[i, 0], normals[i, 1], normals[i, 2] = x / norm, y / norm, z / norm
+
+
 @helper
 def _put_inward(points, i, start, end, out, row):
     """Write the unit vector from row i of ``points`` to the nearest point of start -> end to ``out[row]``."""
@@ -224,14 +243,6 @@ def _put_inward(points, i, start, end, out, row):
     dx, dy, dz = start[0] + s * ux - points[i, 0], start[1] + s * uy - points[i, 1], start[2] + s * uz - points[i, 2]
     norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     out[row, 0], out[row, 1], out[row, 2] = dx / norm, dy / norm, dz / norm
-
-
-def _to_rest_normals(inward, joints, weights, affines) -> np.ndarray:
-    """Posed normals (k, 3) carried to rest by the transpose of each row's blended linear map (normals
-    transform by its inverse transpose), unit length."""
-    linear = np.einsum("kb,kbij->kij", weights, affines[joints].reshape(-1, 4, 3, 4)[..., :3])
-    out = np.einsum("kji,kj->ki", linear, inward)
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
 def _placed(guess, targets, new_joints, new_weights, affines, diagonal: float):
