@@ -1,8 +1,8 @@
 """The walls of a hole: the part of the bit's surface inside the model, joined to the rims.
 
 A point of the bit's surface is (θ, σ), its angle around the axis and its height along the profile
-(``bit_surface.Frame``). The rims (``rim.py``) are closed loops of the mesh's new boundary on that
-surface (``bit_surface.Loop``):
+(``bit_surface.Frame``). The rims (``rim.py``) are loops of the mesh's new boundary on that surface
+(``bit_surface.Loop``), where the mesh is closed around the bit:
 
 * a loop that winds once around the axis is an entry or an exit: the boundary of a surface around a
   hole runs clockwise seen from the side the surface faces, so on an outward-facing surface an entry
@@ -15,7 +15,9 @@ surface (``bit_surface.Loop``):
   apart), zipped together by angle (``tunnel.py``); its vertices lie on the bit's surface;
 * a loop that does not wind around the axis (a bit grazing the model's side) is filled with the part of
   the surface it encloses: its two chains zipped by angle (or ear-clipped in the unrolled (r θ, σ)
-  plane and refined, ``_refine_fills``).
+  plane and refined, ``_refine_fills``);
+* a rim that runs into an open boundary of the mesh is a chain, not a loop: it gets no wall, and no
+  tunnel passes its heights (``build_walls``).
 
 Wall faces face the axis (their outside is the hole). Wall vertices are rows of their own (the rims'
 positions, other normals): described, for weights and attributes, by the rim rows nearest in angle on
