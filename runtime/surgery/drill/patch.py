@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from ..._shared.jit import F1, F2, I1, I2, helper, i8, kernel
+from ..gather import gather_rows
 from ..new_vertices import DOMINANT, UNIT, accumulate, largest_first
 
 #: input vertices a new vertex is described by at most: 3 in a face, 6 on a wall (between two rims)
@@ -262,11 +263,9 @@ def row_values(vertex, parents, t, values, rule, wanted):
 
 @helper
 def _rows_at(values, rows):
-    """(k, c) the rows ``rows`` (k,) of ``values`` (R, c)."""
+    """(k, c) the rows ``rows`` (k,) of ``values`` (R, c), a new array (``gather.gather_rows``)."""
     out = np.empty((rows.shape[0], values.shape[1]), values.dtype)
-    for i in range(rows.shape[0]):
-        for q in range(values.shape[1]):
-            out[i, q] = values[rows[i], q]
+    gather_rows(values, rows, out)
     return out
 
 
