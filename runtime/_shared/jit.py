@@ -28,7 +28,8 @@ from typing import NamedTuple
 
 from numba import njit, types
 
-from .cache_keys import keyed
+from . import shipped
+from .cache_keys import is_keyed, keyed
 
 __all__ = ["kernel", "helper", "inlined", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
 
@@ -70,8 +71,12 @@ SIGNATURES: list = []
 
 
 def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3, fused: bool = False):
-    """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it."""
+    """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it.
+    A generated kernel (``cache=True``: numba's own cache) gets the runtime's cache, which loads the
+    shipped kernels."""
     function = getattr(dispatcher, "py_func", dispatcher)       # (a plain function under NUMBA_DISABLE_JIT=1)
+    if hasattr(dispatcher, "_cache") and not is_keyed(dispatcher):
+        keyed(dispatcher, shipped=shipped.FOR_KERNELS)
     for argtypes in signatures:
         SIGNATURES.append(Signature(function.__module__, function.__name__, tuple(argtypes),
                                     cost, fused))
@@ -83,13 +88,14 @@ def kernel(*signatures: tuple, cost: float = 0.3, fused: bool = False):
     own calls (precompiled), ``cost`` the cold compile seconds of each (for a ``fused`` one, its own
     seconds once its callees are compiled)."""
     def wrap(function):
-        return precompiled(keyed(njit(**_OPTIONS)(function)), *signatures, cost=cost, fused=fused)
+        return precompiled(keyed(njit(**_OPTIONS)(function), shipped=shipped.FOR_KERNELS), *signatures, cost=cost,
+                           fused=fused)
     return wrap
 
 
 def helper(function):
     """Compile a function that only other compiled functions call (no Python entry point)."""
-    return keyed(njit(**_OPTIONS, no_cpython_wrapper=True)(function))
+    return keyed(njit(**_OPTIONS, no_cpython_wrapper=True)(function), shipped=shipped.FOR_HELPERS)
 
 
 def inlined(function):

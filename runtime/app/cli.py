@@ -8,6 +8,12 @@ from pathlib import Path
 
 
 def _build(args) -> int:
+    if args.kernels:
+        if args.catalogue or args.out or args.target or args.report:
+            print("cgaskin build: error: --kernels builds the shipped kernels alone (no --catalogue, --out, "
+                  "--target or --report)", file=sys.stderr)
+            return 2
+        return _check_kernels() if args.check else _build_kernels(args.jobs)
     if (args.catalogue is None) != (args.out is None):
         print("cgaskin build: error: --catalogue FILE and --out DIR go together", file=sys.stderr)
         return 2
@@ -29,7 +35,32 @@ def _build(args) -> int:
     except CodegenError as exc:                       # the user's catalogue or arguments: one line, no traceback
         print(f"cgaskin build: error: {exc}", file=sys.stderr)
         return 2
+    if args.check and args.catalogue is None:
+        return max(1 if stale else 0, _check_kernels())
     return 1 if (args.check and stale) else 0
+
+
+def _check_kernels() -> int:
+    """List the shipped kernels stale against the sources; 1 when there is one."""
+    from .ship import check_kernels
+    stale, notes = check_kernels()
+    for note in notes:
+        print(f"cgaskin build: {note}")
+    if stale:
+        print("stale shipped kernels (rebuild them with `cgaskin build --kernels`):\n  " + "\n  ".join(stale))
+        return 1
+    return 0
+
+
+def _build_kernels(jobs) -> int:
+    from .ship import StaleKernels, build_kernels
+    try:
+        built = build_kernels(jobs)
+    except StaleKernels as exc:
+        print(f"cgaskin build: error: {exc}", file=sys.stderr)
+        return 1
+    print(f"built {len(built)} shipped kernels" if built else "the shipped kernels are up to date")
+    return 0
 
 
 def _verify(args) -> int:
@@ -117,6 +148,11 @@ def main(argv=None) -> int:
                                                     "(kept fresh once there), beside the module for --catalogue")
     p.add_argument("--report", action="store_true", help="print each kernel's operation counts after CSE "
                                                          "(mul, add, div, sqrt, other; hoisted parts apart)")
+    p.add_argument("--kernels", action="store_true", help="compile the kernels that ship with the package "
+                                                          "(cgaskin/_kernels) where their sources changed, for "
+                                                          "a portable x86-64 target, on every core; with "
+                                                          "--check: only list the stale ones")
+    p.add_argument("--jobs", type=int, default=None, help="with --kernels: processes (default: one per core)")
     p.set_defaults(run=_build)
 
     p = sub.add_parser("verify", help="run every kernel of a catalogue three ways (generated, clifford, the "

@@ -44,11 +44,21 @@ def _dispatcher(index: int):
 
 
 def _is_cached(dispatcher, argtypes) -> bool:
-    """Whether numba's cache holds the kernel for these argument types (loads it, compiles nothing)."""
+    """Whether the kernel for these argument types loads without compiling (from the shipped kernels or
+    numba's cache). What loads is kept by the dispatcher, as numba's own cache hit does, so that its
+    first call does not load it again."""
+    from numba.core.compiler_lock import global_compiler_lock
+    if tuple(argtypes) in dispatcher.overloads:
+        return True
     try:
-        return dispatcher._cache.load_overload(argtypes, dispatcher.targetctx) is not None
+        with global_compiler_lock:
+            cres = dispatcher._cache.load_overload(argtypes, dispatcher.targetctx)
+            if cres is not None:
+                dispatcher.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+                dispatcher.add_overload(cres)
     except Exception:           # numba's internals moved: count it as missing (costs time, not results)
         return False
+    return cres is not None
 
 
 def _shares(indices: list, jobs: int) -> list:
@@ -108,6 +118,21 @@ def _in_parallel(shares: list) -> list:
     return failed
 
 
+def compile_in_parallel(indices: list, jobs: int) -> list:
+    """Compile these entries of ``KERNELS`` in ``jobs`` processes, the fused ones last (the callees they
+    inline are then in the cache, compiled in parallel); returns a line for each that failed."""
+    failed = []
+    for stage in ([i for i in indices if not KERNELS[i].fused], [i for i in indices if KERNELS[i].fused]):
+        if stage:
+            failed += _in_parallel(_shares(stage, jobs))
+    return failed
+
+
+def default_jobs() -> int:
+    """The cores this process may run on (``os.cpu_count()`` counts the machine's)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
 def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     """Compile every kernel of ``KERNELS`` that numba's cache does not hold yet, in ``jobs``
     processes (default: one per core); returns how many were missing. Kernels the cache holds cost
@@ -116,8 +141,8 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     from numba.core import config
     if config.DISABLE_JIT:
         return 0
-    if jobs is None:        # the cores this process may run on (os.cpu_count() counts the machine's)
-        jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    if jobs is None:
+        jobs = default_jobs()
     if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
         raise InvalidInputError(f"jobs must be a whole number of processes >= 1, got {jobs!r}")
     jobs = int(jobs)
@@ -128,11 +153,7 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     if verbose:
         print(f"compiling {len(missing)} numba kernels in {min(jobs, len(missing))} processes (once: they are "
               f"cached for later runs)", flush=True)
-    # fused kernels last: the callees they inline are then in the cache, compiled in parallel
-    failed = []
-    for stage in ([i for i in missing if not KERNELS[i].fused], [i for i in missing if KERNELS[i].fused]):
-        if stage:
-            failed += _in_parallel(_shares(stage, jobs))
+    failed = compile_in_parallel(missing, jobs)
     if verbose:
         print(f"compiled in {time.perf_counter() - start:.1f} s", flush=True)
         for line in failed:
