@@ -20,7 +20,7 @@ from pathlib import Path
 
 import sympy
 
-from . import catalogue, layouts, pipeline
+from . import catalogue, layouts, pipeline, printer
 from .headers import digest, python_header, stamp, without_sympy_version
 from .ir import CodegenError
 from .trace import Compiled
@@ -34,7 +34,8 @@ def builtin() -> pipeline.Catalogue:
     """The built-in catalogue as the pipeline builds it."""
     return pipeline.Catalogue(
         compiled=tuple(Compiled.of(make()) for make in catalogue.KERNELS), label=SOURCE, command=COMMAND,
-        title="CGA kernels (scalar form and row loops).", prefix="cgaskin", source=SOURCE, skinning=True)
+        title="CGA kernels (scalar form and row loops).", prefix="cgaskin", source=SOURCE, skinning=True,
+        decorator=printer.RUNTIME_DECORATOR)
 
 
 def _header(title: str, spec_hash: str, imports: dict[str, str]) -> str:
@@ -111,11 +112,11 @@ def skinning_module(kernels_hash: str, affine) -> str:
 
     body = "\n\n".join([
         "from numba import njit, prange\n\nfrom .kernels import affine_point\n",
-        # 'contract' lets LLVM fuse a += w * r into one FMA (one rounding instead of two: no less
-        # accurate, ~8% faster); no other fast-math flag (the results must stay IEEE-exact otherwise)
-        blend("skin_blend", "@njit(cache=True, error_model='numpy', nogil=True, fastmath={'contract'})", "range"),
-        blend("skin_blend_parallel",
-              "@njit(cache=True, error_model='numpy', nogil=True, parallel=True, fastmath={'contract'})", "prange"),
+        # no fast-math, not even 'contract' (a += w * r fused into one FMA where the CPU has it): the
+        # same bits on every machine, from the shipped kernels (a portable CPU without FMA) and from
+        # kernels compiled on the host alike
+        blend("skin_blend", printer.RUNTIME_DECORATOR, "range"),
+        blend("skin_blend_parallel", "@njit(error_model='numpy', nogil=True, parallel=True)", "prange"),
     ])
     return _header("Hoisted skinning: blend per-bone affine coefficients, apply once per vertex.",
                    digest(body), {"kernels": kernels_hash}) + "\n" + body

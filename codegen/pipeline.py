@@ -35,6 +35,7 @@ class Catalogue:
     documented: bool = False          # scalar kernels get ``documented``'s docstring (types, op counts)
     source: str | None = None         # where the specs are, named in the numba module's stamp
     skinning: bool = False            # the other targets also emit the skinning loop
+    decorator: str = printer.NUMBA_DECORATOR     # of the numba module's kernels
 
 
 def spec_hash(kernels) -> str:
@@ -65,16 +66,16 @@ def documented(c: Compiled, source: str) -> Kernel:
     return replace(c.kernel, doc=doc)
 
 
-def batch(c: Compiled) -> str:
+def batch(c: Compiled, decorator: str) -> str:
     """``name_batch``: uniform inputs once, the others per row; hoisted stages when there are some."""
     if not c.uniform:
-        return printer.print_batch(c.kernel)
+        return printer.print_batch(c.kernel, decorator)
     params, _ = c.spec.signature()
     names = [n for n, _ in params]
     shapes = ", ".join(f"{n} {_shape(t, n not in c.uniform)}" for n, t in params)
     what = (f"hoisted: ``_{c.name}_uniform`` once, then ``_{c.name}_row`` per row" if c.stages else
             "passed once; nothing is hoisted (it would not save work per row): the scalar kernel per row")
-    lines = [printer.NUMBA_DECORATOR,
+    lines = [decorator,
              f"def {c.name}_batch({', '.join(names)}, out):",
              f'    """``{c.name}`` on every row: {shapes}; out (N, {c.out_size}).',
              "",
@@ -95,9 +96,9 @@ def numba_module(cat: Catalogue) -> tuple[str, dict[str, str]]:
     name a stale kernel."""
     chunks = {}
     for c in cat.compiled:
-        parts = [printer.print_kernel(documented(c, cat.label) if cat.documented else c.kernel)]
-        parts += [printer.print_kernel(s) for s in c.stages or ()]
-        parts.append(batch(c))
+        parts = [printer.print_kernel(documented(c, cat.label) if cat.documented else c.kernel, cat.decorator)]
+        parts += [printer.print_kernel(s, cat.decorator) for s in c.stages or ()]
+        parts.append(batch(c, cat.decorator))
         chunks[c.name] = "\n\n".join(parts)
     kernels = [c.kernel for c in cat.compiled] + [s for c in cat.compiled for s in c.stages or ()]
     names = ", ".join(repr(c.name) for c in cat.compiled)

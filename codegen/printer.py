@@ -5,7 +5,12 @@ from __future__ import annotations
 from .expressions import PYTHON, Dialect, kernel_body
 from .ir import CodegenError, Kernel
 
+#: a catalogue's kernels are cached by numba beside their module; cgaskin's own catalogue is printed with
+#: ``RUNTIME_DECORATOR``: the runtime gives each of those kernels its own cache, which also loads the
+#: compiled kernels shipped with the package (numba's cache=True would make its folder at import, and
+#: fail the import where no folder is writable)
 NUMBA_DECORATOR = "@njit(cache=True, error_model='numpy', nogil=True)"
+RUNTIME_DECORATOR = "@njit(error_model='numpy', nogil=True)"
 
 
 def docstring(kernel: Kernel, width: int = 110) -> list[str]:
@@ -49,13 +54,13 @@ def store_rows(call: str, n_out: int) -> list[str]:
     return [f"        r = {call}"] + [f"        out[row, {j}] = r[{j}]" for j in range(n_out)]
 
 
-def print_batch(kernel: Kernel) -> str:
+def print_batch(kernel: Kernel, decorator: str = NUMBA_DECORATOR) -> str:
     """Source of ``name_batch(inputs (N, ...)..., out (N, k))``: the scalar kernel over rows."""
     args = [i.name for i in kernel.inputs]
     if "row" in args:
         raise CodegenError(f"{kernel.name}: an input named 'row' would shadow the batch loop index")
     n_out = len(kernel.outputs)
-    lines = ["@njit(cache=True, error_model='numpy', nogil=True)",
+    lines = [decorator,
              f"def {kernel.name}_batch({', '.join(args)}, out):",
              f'    """``{kernel.name}`` on every row: inputs (N, ...) or (N,), out (N, {n_out})."""',
              "    for row in range(out.shape[0]):"]

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_translator(t):
     """Translator T(t) = 1 − ½ t e∞ as a versor; t : (3,).
 
@@ -50,7 +50,7 @@ def versor_translator(t):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_translator_batch(t, out):
     """``versor_translator`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -69,7 +69,7 @@ def versor_translator_batch(t, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_rotor(axis, angle):
     """Rotor about ``axis`` (3,), any nonzero length, by ``angle`` radians (right-handed).
 
@@ -112,7 +112,7 @@ def versor_rotor(axis, angle):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_rotor_batch(axis, angle, out):
     """``versor_rotor`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -131,7 +131,7 @@ def versor_rotor_batch(axis, angle, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_rotor_quaternion(q):
     """Rotor of the quaternion q = (x, y, z, w) (normalised here): w − x e23 + y e13 − z e12.
 
@@ -171,7 +171,7 @@ def versor_rotor_quaternion(q):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_rotor_quaternion_batch(q, out):
     """``versor_rotor_quaternion`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -190,7 +190,7 @@ def versor_rotor_quaternion_batch(q, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_dilator(scale):
     """Dilator about the origin by factor ``scale`` > 0: apply(D, x) = scale · x. D = cosh(ln s/2) − sinh(ln s/2) e∞0, written with √s to avoid log/exp.
 
@@ -230,7 +230,7 @@ def versor_dilator(scale):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_dilator_batch(scale, out):
     """``versor_dilator`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -249,7 +249,7 @@ def versor_dilator_batch(scale, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_from_matrix(m):
     """Versor T R D of a 4x4 similarity matrix m (16,) row-major: uniform scale s = cbrt(det), rotation by Shepperd's method on the linear part / s.
 
@@ -354,7 +354,7 @@ def versor_from_matrix(m):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_from_matrix_batch(m, out):
     """``versor_from_matrix`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -373,7 +373,7 @@ def versor_from_matrix_batch(m, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def gp_motor_motor(a, b):
     """Geometric product a b of two motors (b applies first).
 
@@ -415,7 +415,7 @@ def gp_motor_motor(a, b):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def gp_motor_motor_batch(a, b, out):
     """``gp_motor_motor`` on every row: inputs (N, ...) or (N,), out (N, 8)."""
     for row in range(out.shape[0]):
@@ -430,7 +430,7 @@ def gp_motor_motor_batch(a, b, out):
         out[row, 7] = r[7]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def gp_versor_versor(a, b):
     """Geometric product a b of two versors (b applies first).
 
@@ -488,7 +488,7 @@ def gp_versor_versor(a, b):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def gp_versor_versor_batch(a, b, out):
     """``gp_versor_versor`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -507,7 +507,7 @@ def gp_versor_versor_batch(a, b, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def reverse_versor(v):
     """Reverse Ṽ (grades 2 and 3 change sign).
 
@@ -553,7 +553,7 @@ def reverse_versor(v):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def reverse_versor_batch(v, out):
     """``reverse_versor`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -572,7 +572,7 @@ def reverse_versor_batch(v, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def inverse_versor(v):
     """Inverse Ṽ / ⟨V Ṽ⟩₀ (exact for versors, whose V Ṽ is a scalar).
 
@@ -619,7 +619,7 @@ def inverse_versor(v):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def inverse_versor_batch(v, out):
     """``inverse_versor`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -638,7 +638,7 @@ def inverse_versor_batch(v, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_residual(v):
     """How far V is from a similarity versor: (largest |non-scalar coefficient of V Ṽ|, ⟨V Ṽ⟩₀). A versor has the first 0 and the second > 0.
 
@@ -668,7 +668,7 @@ def versor_residual(v):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_residual_batch(v, out):
     """``versor_residual`` on every row: inputs (N, ...) or (N,), out (N, 2)."""
     for row in range(out.shape[0]):
@@ -677,7 +677,7 @@ def versor_residual_batch(v, out):
         out[row, 1] = r[1]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_normalise(v):
     """Nearest similarity versor T R D(s) with ⟨V Ṽ⟩₀ = 1 to any 12-blade multivector V (e.g. a linear blend): V = T R D has rotor part c R, e∞0 part −sh R, e∞ part −½(c − sh) t e∞ R. So R = rotor part normalised, tanh(ln s/2) = sh/c, t read off the e∞ part times R̃.
 
@@ -757,7 +757,7 @@ def versor_normalise(v):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_normalise_batch(v, out):
     """``versor_normalise`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -776,7 +776,7 @@ def versor_normalise_batch(v, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def sandwich_versor_point(v, x):
     """down(V up(x) Ṽ): the full sandwich on one point (use versor_to_affine for many).
 
@@ -833,7 +833,7 @@ def sandwich_versor_point(v, x):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def sandwich_versor_point_batch(v, x, out):
     """``sandwich_versor_point`` on every row: inputs (N, ...) or (N,), out (N, 3)."""
     for row in range(out.shape[0]):
@@ -843,7 +843,7 @@ def sandwich_versor_point_batch(v, x, out):
         out[row, 2] = r[2]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_to_affine(v):
     """The hoisted form of the point sandwich: down(V up(x) Ṽ) = A[:, :3] x + A[:, 3] for every x, found by collecting V up(x) Ṽ by powers of x (the e0 weight and the x² terms drop out of the Euclidean part). Returns A (3, 4) row-major.
 
@@ -926,7 +926,7 @@ def versor_to_affine(v):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_to_affine_batch(v, out):
     """``versor_to_affine`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):
@@ -945,7 +945,7 @@ def versor_to_affine_batch(v, out):
         out[row, 11] = r[11]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def affine_point(a, x):
     """The per-vertex half of the hoist: A[:, :3] x + A[:, 3]; A (12,) row-major.
 
@@ -976,7 +976,7 @@ def affine_point(a, x):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def affine_point_batch(a, x, out):
     """``affine_point`` on every row: inputs (N, ...) or (N,), out (N, 3)."""
     for row in range(out.shape[0]):
@@ -986,7 +986,7 @@ def affine_point_batch(a, x, out):
         out[row, 2] = r[2]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def plane_from_normal_distance(n, d):
     """Dual plane n̂ + d e∞ (n normalised, d scaled to match) of {x : n·x = d}.
 
@@ -1008,7 +1008,7 @@ def plane_from_normal_distance(n, d):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def plane_from_normal_distance_batch(n, d, out):
     """``plane_from_normal_distance`` on every row: inputs (N, ...) or (N,), out (N, 4)."""
     for row in range(out.shape[0]):
@@ -1019,7 +1019,7 @@ def plane_from_normal_distance_batch(n, d, out):
         out[row, 3] = r[3]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def plane_from_points(a, b, c):
     """Dual plane through a, b, c (normal along (b−a)×(c−a)), computed relative to a for accuracy far from the origin: π' = −(e0 ∧ up(b−a) ∧ up(c−a) ∧ e∞)*, then normalised and moved back by d = n̂·a.
 
@@ -1066,7 +1066,7 @@ def plane_from_points(a, b, c):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def plane_from_points_batch(a, b, c, out):
     """``plane_from_points`` on every row: inputs (N, ...) or (N,), out (N, 4)."""
     for row in range(out.shape[0]):
@@ -1077,7 +1077,7 @@ def plane_from_points_batch(a, b, c, out):
         out[row, 3] = r[3]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def plane_transform(v, plane):
     """The plane moved by a versor: V π Ṽ, renormalised to a unit normal.
 
@@ -1153,7 +1153,7 @@ def plane_transform(v, plane):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def plane_transform_batch(v, plane, out):
     """``plane_transform`` on every row: inputs (N, ...) or (N,), out (N, 4)."""
     for row in range(out.shape[0]):
@@ -1164,7 +1164,7 @@ def plane_transform_batch(v, plane, out):
         out[row, 3] = r[3]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def point_plane_distance(plane, x):
     """Signed distance up(x)·π = n·x − d of a point from a unit dual plane π = n + d e∞.
 
@@ -1181,14 +1181,14 @@ def point_plane_distance(plane, x):
     return (((plane_e1 * x0) + ((plane_e2 * x1) + (plane_e3 * x2))) - plane_ei)
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def point_plane_distance_batch(plane, x, out):
     """``point_plane_distance`` on every row: inputs (N, ...) or (N,), out (N, 1)."""
     for row in range(out.shape[0]):
         out[row, 0] = point_plane_distance(plane[row], x[row])
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def segment_plane(plane, a, b):
     """Where segment a→b meets plane π: t = d_a / (d_a − d_b) with d the signed distances up(·)·π, and the point a + t (b − a). t is outside [0, 1] when the segment misses.
 
@@ -1222,7 +1222,7 @@ def segment_plane(plane, a, b):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def segment_plane_batch(plane, a, b, out):
     """``segment_plane`` on every row: inputs (N, ...) or (N,), out (N, 4)."""
     for row in range(out.shape[0]):
@@ -1233,7 +1233,7 @@ def segment_plane_batch(plane, a, b, out):
         out[row, 3] = r[3]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def point_line_distance(a, u, x):
     """Distance |(x − a) ∧ u| / |u| of the point x from the line through a with direction u (u need not be unit), relative to a: with q = x − a and B = q ∧ u, d = sqrt(⟨B B̃⟩₀ / u·u). NaN for u = 0.
 
@@ -1264,14 +1264,14 @@ def point_line_distance(a, u, x):
     return (math.sqrt(((b12 * b12) + ((b13 * b13) + (b23 * b23)))) / math.sqrt(((u0 * u0) + ((u1 * u1) + (u2 * u2)))))
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def point_line_distance_batch(a, u, x, out):
     """``point_line_distance`` on every row: inputs (N, ...) or (N,), out (N, 1)."""
     for row in range(out.shape[0]):
         out[row, 0] = point_line_distance(a[row], u[row], x[row])
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def barycentric(a, b, c, p):
     """Barycentric coordinates (λa, λb, λc) of p projected on triangle abc, relative to a: with u = b−a, w = c−a, q = p−a: λb = (q∧w)·(u∧w)~/|u∧w|², λc = (u∧q)·(u∧w)~/|u∧w|².
 
@@ -1345,7 +1345,7 @@ def barycentric(a, b, c, p):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def barycentric_batch(a, b, c, p, out):
     """``barycentric`` on every row: inputs (N, ...) or (N,), out (N, 3)."""
     for row in range(out.shape[0]):
@@ -1355,7 +1355,7 @@ def barycentric_batch(a, b, c, p, out):
         out[row, 2] = r[2]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_log(v):
     """Logarithm of a similarity versor V = exp(Λ_M) exp(−½ ln s e∞0): Λ_M = −½(ω₁e23 − ω₂e13 + ω₃e12 + v·e∞) is the motor's bivector (the screw twist (ω, v), t = J(ω) v) and the last coefficient is −½ ln s. Returns the 7 coefficients on (e12, e13, e23, e1∞, e2∞, e3∞, e∞0). V is normalised first; the rotation angle is taken in [0, π].
 
@@ -1444,7 +1444,7 @@ def versor_log(v):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_log_batch(v, out):
     """``versor_log`` on every row: inputs (N, ...) or (N,), out (N, 7)."""
     for row in range(out.shape[0]):
@@ -1458,7 +1458,7 @@ def versor_log_batch(v, out):
         out[row, 6] = r[6]
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_exp(L):
     """Inverse of versor_log: L (7,) on (e12, e13, e23, e1∞, e2∞, e3∞, e∞0) -> exp(Λ_M) exp(L_e∞0 e∞0), with exp(Λ_M) = T(J(ω) v) R(ω) the screw motion of twist (ω, v), J(ω) = I + b [ω]× + c [ω]×², b = (1 − cos θ)/θ², c = (θ − sin θ)/θ³.
 
@@ -1544,7 +1544,7 @@ def versor_exp(L):
     )
 
 
-@njit(cache=True, error_model='numpy', nogil=True)
+@njit(error_model='numpy', nogil=True)
 def versor_exp_batch(L, out):
     """``versor_exp`` on every row: inputs (N, ...) or (N,), out (N, 12)."""
     for row in range(out.shape[0]):

@@ -4,6 +4,11 @@ The runtime calls only the kernels in ``cgaskin.generated`` (emitted by ``cgaski
 """
 import sys as _sys
 
+from ._shared.jit import cache_generated as _cache_generated
+from .generated import kernels as _kernels, skinning as _skinning
+
+_cache_generated(_kernels, _skinning)         # before anything compiles: they load the shipped kernels
+
 from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError, NoSkinError,
                      OpenRimWarning, PlacementWarning)
 from .algebra import versor

@@ -31,7 +31,7 @@ from numba import njit, types
 from . import shipped
 from .cache_keys import is_keyed, keyed
 
-__all__ = ["kernel", "helper", "inlined", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
+__all__ = ["kernel", "helper", "cache_generated", "inlined", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
 
 _OPTIONS = {"nogil": True, "error_model": "numpy"}       # and cached, by ``keyed`` (not numba's cache=True)
 
@@ -71,16 +71,23 @@ SIGNATURES: list = []
 
 
 def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3, fused: bool = False):
-    """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it.
-    A generated kernel (``cache=True``: numba's own cache) gets the runtime's cache, which loads the
-    shipped kernels."""
+    """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it."""
     function = getattr(dispatcher, "py_func", dispatcher)       # (a plain function under NUMBA_DISABLE_JIT=1)
-    if hasattr(dispatcher, "_cache") and not is_keyed(dispatcher):
-        keyed(dispatcher, shipped=shipped.FOR_KERNELS)
     for argtypes in signatures:
         SIGNATURES.append(Signature(function.__module__, function.__name__, tuple(argtypes),
                                     cost, fused))
     return dispatcher
+
+
+def cache_generated(*modules) -> None:
+    """Give every numba function of these generated modules the cache of a ``kernel``: keyed by what
+    it imports, and loading the shipped kernels (``cgaskin build`` prints them without numba's
+    ``cache=True``: ``codegen.printer.RUNTIME_DECORATOR``)."""
+    from numba.core.dispatcher import Dispatcher
+    for module in modules:
+        for value in vars(module).values():
+            if isinstance(value, Dispatcher) and not is_keyed(value):
+                keyed(value, shipped=shipped.FOR_KERNELS)
 
 
 def kernel(*signatures: tuple, cost: float = 0.3, fused: bool = False):

@@ -27,7 +27,7 @@ from pathlib import Path
 from .._shared import cache_keys, shipped
 from .._shared.jit import SIGNATURES
 
-__all__ = ["build_kernels", "check_kernels", "StaleKernels"]
+__all__ = ["build_kernels", "check_kernels", "escaped_modules", "StaleKernels"]
 
 #: the builder process: compiles the kernels named on stdin for the generic CPU, prints their records
 _BUILDER = "import sys; from cgaskin.app.ship import _build_here; _build_here(sys.argv[1], int(sys.argv[2]))"
@@ -194,18 +194,25 @@ def _write_kernel(folder: Path, name: str, module: str, texts: list) -> dict:
     missing = [text for text in texts if text not in payloads]
     if missing:
         raise SystemExit(f"{name}: numba's cache holds no entry for {missing} (not cachable?)")
-    closure = set(cache_keys.closure(module))
     for text, raw in payloads.items():
-        escaped = sorted(m for m in _linked_modules(raw) if m.split(".")[0] == "cgaskin" and m not in closure)
-        foreign = sorted(m for m in _linked_modules(raw) if m.split(".")[0] not in ("cgaskin", "numba"))
-        if escaped or foreign:
-            raise SystemExit(f"{name} {text} links code of {', '.join(escaped + foreign)}, which its key does not "
-                             f"cover: import what it calls at module level in {module} or a module it imports")
+        escaped = escaped_modules(raw, module)
+        if escaped:
+            raise SystemExit(f"{name} {text} links code of {', '.join(escaped)}, which its key does not cover: "
+                             f"import what it calls at module level in {module} or in a module it imports")
     data = pickle.dumps({text: payloads[text] for text in texts}, protocol=4)
     relative = f"{module}/{name.rpartition('.')[2]}.nbk"
     (folder / module).mkdir(parents=True, exist_ok=True)
     (folder / relative).write_bytes(data)
     return {"file": relative, "sha256": hashlib.sha256(data).hexdigest(), "signatures": texts}
+
+
+def escaped_modules(raw: bytes, module: str) -> list:
+    """The modules whose code a kernel of ``module`` links (``raw``: its entry in numba's cache) that its
+    key does not cover: of its own package but outside its import closure, or of a package other than
+    its own and numba (whose version the layer records)."""
+    top, closure = module.split(".")[0], set(cache_keys.closure(module))
+    return sorted(name for name in _linked_modules(raw)
+                  if name not in closure and (name.split(".")[0] == top or name.split(".")[0] != "numba"))
 
 
 def _linked_modules(raw: bytes) -> set:
