@@ -6,7 +6,10 @@ The spec: Fox.glb, Arm5.glb and 3Cylinder4bones.glb at rest with a random dilati
 ``--count`` cuts, tears and drills and one posed copy (3 x (3 count + 1) items). Each cluster is
 started, then warmed by a batch of the same spec with another seed (the workers load the cache of
 compiled kernels and the rigs), then timed over ``--repeat`` batches into fresh folders (median):
-what a long batch sees per item, the cluster's start (printed apart) left out. The scaling goal on
+what a long batch sees per item, the cluster's start (printed apart) left out. Then a fresh worker's
+first item: a new cluster of one worker process whose numba cache is an empty folder (a worker on a
+new machine), timed from the batch's start to its end (one item), with what that worker loaded from
+the shipped kernels and what it compiled. The scaling goal on
 a 2-core machine: 2 workers >= 1.7x the items per second of 1. ``ms/item`` is an item's own time on
 its worker: when it grows from 1 to 2 workers the workers did not get a core each (the machine's load
 average, printed, says what else ran).
@@ -58,6 +61,34 @@ def measure(workers: int, count: int, repeat: int, folder: Path) -> list:
     return [workers, len(manifest.rows), started, median, item_ms, len(manifest.rows) / median, len(manifest.errors)]
 
 
+def _kernel_counts() -> tuple:
+    """(kernels loaded from the shipped ones, kernels compiled) in this (worker) process."""
+    from cgaskin._shared import shipped
+    from cgaskin.app.precompile import KERNELS, _dispatcher
+    compiled = sum(sum(_dispatcher(i)[0].stats.cache_misses.values()) for i in range(len(KERNELS)))
+    return sum(shipped.LOADED.values()), compiled
+
+
+def fresh_worker(folder: Path) -> list:
+    """[seconds of a one-item batch on a new worker with an empty numba cache, kernels it loaded, compiled]."""
+    from dask.distributed import Client, LocalCluster
+
+    from cgaskin.batch import run
+    spec = folder / "one.toml"
+    spec.write_text(f'seed = 7\n[[models]]\npath = "{models_dir() / MODELS[0]}"\n[[poses]]\nrest = true\n'
+                    f'[[operations]]\nkind = "tear"\ncount = 1\n', encoding="utf-8")
+    cache = folder / "fresh-numba-cache"
+    cache.mkdir()
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, silence_logs=logging.ERROR,
+                      dashboard_address=":0", env={"NUMBA_CACHE_DIR": str(cache)}) as cluster, Client(cluster) as client:
+        begin = time.perf_counter()
+        manifest = run(spec, folder / "fresh", client=client)
+        seconds = time.perf_counter() - begin
+        (loaded, compiled), = client.run(_kernel_counts).values()
+    assert len(manifest.rows) == 1 and not manifest.errors, manifest.errors
+    return [seconds, loaded, compiled]
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=5, help="instances of each operation per model")
@@ -68,11 +99,14 @@ def main(argv=None):
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
         rows = [measure(n, args.count, args.repeat, Path(tmp)) for n in (1, 2)]
+        fresh = fresh_worker(Path(tmp))
     rows[0].append(1.0)
     rows[1].append(rows[1][5] / rows[0][5])
     print_table(f"cgaskin batch on a LocalCluster (median of the timed batches; start apart; {_cores()} cores, "
                 f"load average {load:.2f} before, {os.getloadavg()[0]:.2f} after)",
                 ["workers", "items", "start s", "batch s", "ms/item", "items/s", "failed", "x 1 worker"], rows)
+    print_table("a fresh worker's first item (a new worker process, an empty numba cache; one tear of Fox)",
+                ["first item s", "kernels loaded", "kernels compiled"], [fresh])
 
 
 def _cores() -> int:

@@ -1,11 +1,14 @@
 """What a fresh install waits for: the first tear, skin, cut and drill in one process, and ``cgaskin demo``,
-each with an empty numba cache, with the compile seconds of every compiled function.
+each with an empty numba cache: the kernels it loads from those shipped compiled with the package, and
+the compile seconds of every function compiled.
 
     python -m benchmarks.bench_cold_start [first_tear|first_skin|first_cut|first_drill|demo ...] [--top N] [--variants]
-                                          [--phases]
+                                          [--phases] [--compiled]
 
 Each case runs in a child process whose ``NUMBA_CACHE_DIR`` is a new empty folder (a fresh install:
-nothing compiled, nothing cached). numba's event API (``numba:compile`` events) gives each function's
+nothing compiled, nothing cached). ``--compiled`` runs it without the shipped kernels too
+(``CGASKIN_SHIPPED_KERNELS=0``: what an install for another numba, NumPy or Python compiles, or one
+whose sources were edited). numba's event API (``numba:compile`` events) gives each function's
 compile time; a function's *own* seconds leave out the functions compiled while it was (its callees),
 so that the own column adds up to the compile total. Goals (issue 23, 2-core machine): first tear
 <= 15 s, cold demo <= 20 s.
@@ -76,9 +79,11 @@ start = time.perf_counter()
 with event.install_recorder("numba:compile") as recorder:
     exec(sys.argv[1])
 wall = time.perf_counter() - start
+from cgaskin._shared import shipped
 events = [(t, e.is_start, e.data["dispatcher"].py_func.__qualname__ + " " + e.data["dispatcher"].py_func.__module__,
            str(e.data.get("args"))) for t, e in recorder.buffer]
-print("@@" + json.dumps({"wall": wall, "events": events, "phases": phases, "instructions": instructions}))
+print("@@" + json.dumps({"wall": wall, "events": events, "phases": phases, "instructions": instructions,
+                        "loaded": sum(shipped.LOADED.values())}))
 """
 
 
@@ -99,31 +104,34 @@ def _own_seconds(events: list) -> dict:
     return own
 
 
-def run_case(case: str, phases: bool = False) -> tuple[float, dict, dict]:
+def run_case(case: str, phases: bool = False, shipped: bool = True) -> tuple[float, dict, dict]:
     """Wall seconds of ``case`` in a fresh process with an empty cache, its compile table, and (with
-    ``phases``) LLVM's seconds and instruction counts (else zeros)."""
+    ``phases``) LLVM's seconds and instruction counts (else zeros), with the count of kernels loaded
+    from the shipped ones (``shipped=False``: none)."""
     with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache, CGASKIN_SHIPPED_KERNELS="1" if shipped else "0")
         done = subprocess.run([sys.executable, "-c", _CHILD, CASES[case], "phases" if phases else "-"], env=env,
                               capture_output=True, text=True, check=True)
     line = next(line for line in done.stdout.splitlines() if line.startswith("@@"))
     result = json.loads(line[2:])
-    return result["wall"], _own_seconds(result["events"]), {**result["phases"], **result["instructions"]}
+    return result["wall"], _own_seconds(result["events"]), {**result["phases"], **result["instructions"],
+                                                            "loaded": result["loaded"]}
 
 
 def main(argv: list[str]) -> None:
-    top, variants, phases = 15, "--variants" in argv, "--phases" in argv
-    argv = [a for a in argv if a not in ("--variants", "--phases")]
+    top, variants, phases, compiled = 15, "--variants" in argv, "--phases" in argv, "--compiled" in argv
+    argv = [a for a in argv if a not in ("--variants", "--phases", "--compiled")]
     if "--top" in argv:
         i = argv.index("--top")
         top = int(argv[i + 1])
         del argv[i:i + 2]
     cases = argv or ["first_tear", "demo"]
-    for case in cases:
+    for case, shipped in [(case, shipped) for case in cases for shipped in ((True, False) if compiled else (True,))]:
         started = time.perf_counter()
-        wall, table, llvm = run_case(case, phases)
+        wall, table, llvm = run_case(case, phases, shipped)
         compile_total = sum(seconds for seconds, _ in table.values())
-        print(f"\n{case}: {wall:.1f} s in the process ({time.perf_counter() - started:.1f} s with its start), "
+        print(f"\n{case} ({'shipped kernels' if shipped else 'CGASKIN_SHIPPED_KERNELS=0'}): {wall:.1f} s in the "
+              f"process ({time.perf_counter() - started:.1f} s with its start), {llvm['loaded']} kernels loaded, "
               f"{compile_total:.1f} s compiling {len(table)} variants")
         if phases:
             in_llvm = llvm["function passes"] + llvm["module passes"] + llvm["machine code"]

@@ -47,6 +47,11 @@ class StaleGeneratedError(CgaskinError):
     """``generated/`` does not match what ``codegen/`` emits now."""
 
 
+class KernelBuildError(CgaskinError):
+    """``cgaskin build --kernels`` could not build the shipped kernels: one did not compile, or one
+    links code from a module its key does not cover."""
+
+
 class PlacementWarning(RuntimeWarning):
     """A new vertex made on a posed mesh (a posed cut or tear) could not be placed exactly on its
     posed target: its blended transform is singular or nearly so."""

@@ -1,13 +1,17 @@
-"""numba's on-disk cache for cgaskin's kernels, keyed by every cgaskin source a kernel is built from.
+"""The cache of cgaskin's kernels: the kernels shipped compiled first, then numba's on-disk cache keyed
+by every cgaskin source a kernel is built from.
 
 numba keys a cached function by the source of its own file only. A kernel compiles the helpers and
 constants it imports from other modules into its machine code, so a changed helper in another file
 would leave every kernel that uses it stale (an upgraded install, a developer's edit) with no error.
-``keyed(dispatcher)``, which ``_shared.jit`` calls on each dispatcher it makes, gives that dispatcher a
-cache whose key is numba's key plus the digest of the kernel's module and of every module of its
-package that it imports, transitively (read from the import statements, so constants count too).
-Nothing global changes: numba's classes, other libraries' functions and generated/'s kernels (whose
-stamped headers carry the hashes of what they import) keep numba's key.
+``keyed(dispatcher)``, which ``_shared.jit`` calls on each dispatcher it makes (and on the generated
+ones), gives that dispatcher a cache that asks the shipped kernels first (``_shared.shipped``, keyed
+the same way), then numba's on-disk cache with numba's key plus the digest of the kernel's module and
+of every module of its package that it imports, transitively (read from the import statements, so
+constants count too). numba's on-disk cache of a kernel is made at its first use (numba makes its
+folder then: a process that runs only shipped kernels writes nothing), and where no folder can hold it
+kernels compile in memory. Every entry loaded is checked against the signature asked for. Nothing
+global changes: numba's classes and other libraries' functions keep numba's cache and key.
 
 The numba internals this relies on (``missing()`` checks them; tests/app/test_cache_keys.py fails
 naming the one that is gone):

@@ -4,9 +4,9 @@ Every compiled function is either a ``kernel`` (called from Python) or a ``helpe
 other compiled functions; a ``callee`` is a helper that precompile compiles ahead), each with one
 fixed set of options:
 
-* cached: machine code is cached beside the source, so only a fresh install compiles; the cache is
-  keyed by every cgaskin module the kernel imports (``cache_keys.keyed``), so a changed helper
-  recompiles the kernels that use it;
+* shipped and cached: the package ships every recorded signature compiled (``shipped``), and what
+  compiles is cached beside the source; both are keyed by every cgaskin module the kernel imports
+  (``cache_keys.keyed``), so a changed helper recompiles the kernels that use it;
 * ``nogil=True``: callers may run kernels in threads;
 * ``error_model="numpy"``: division by zero gives inf/NaN like numpy (the kernels check for it)
   instead of raising from compiled code;

@@ -53,10 +53,11 @@ def _check_kernels() -> int:
 
 
 def _build_kernels(jobs) -> int:
-    from .ship import StaleKernels, build_kernels
+    from ..errors import KernelBuildError
+    from .ship import build_kernels
     try:
         built = build_kernels(jobs)
-    except StaleKernels as exc:
+    except KernelBuildError as exc:
         print(f"cgaskin build: error: {exc}", file=sys.stderr)
         return 1
     print(f"built {len(built)} shipped kernels" if built else "the shipped kernels are up to date")
@@ -85,6 +86,7 @@ def _verify(args) -> int:
 
 BENCHMARKS = {"skinning": "bench_skinning", "frame": "bench_frame", "animation": "bench_animation",
               "cut": "bench_cut", "tear": "bench_tear", "drill": "bench_drill", "batch": "bench_batch",
+              "shipped": "bench_shipped", "cold": "bench_cold_start",
               "fig1": "fig1_compare"}
 
 

@@ -26,15 +26,12 @@ from pathlib import Path
 
 from .._shared import cache_keys, shipped
 from .._shared.jit import SIGNATURES
+from ..errors import KernelBuildError
 
-__all__ = ["build_kernels", "check_kernels", "escaped_modules", "StaleKernels"]
+__all__ = ["build_kernels", "check_kernels", "escaped_modules"]
 
-#: the builder process: compiles the kernels named on stdin for the generic CPU, prints their records
-_BUILDER = "import sys; from cgaskin.app.ship import _build_here; _build_here(sys.argv[1], int(sys.argv[2]))"
-
-
-class StaleKernels(RuntimeError):
-    """The shipped kernels cannot be built: a kernel links code its key does not cover, or fails."""
+#: a builder process: compiles the kernels named as arguments for the generic CPU, prints their entries
+_BUILDER = "import sys; from cgaskin.app.ship import _build_here; _build_here(sys.argv[1], sys.argv[2:])"
 
 
 def _wanted() -> dict:
@@ -115,7 +112,7 @@ def check_kernels() -> tuple[list, list]:
 
 def build_kernels(jobs: int | None = None, verbose: bool = True) -> list:
     """Compile the stale kernels of this setup's layer and write them (and the manifest); returns their
-    names. Raises ``StaleKernels`` when a kernel fails to compile or links code its key misses."""
+    names. Raises ``KernelBuildError`` when a kernel fails to compile or links code its key misses."""
     from .precompile import default_jobs
     wanted = _wanted()
     modules = _module_digests(wanted)
@@ -148,57 +145,66 @@ def build_kernels(jobs: int | None = None, verbose: bool = True) -> list:
 
 
 def _compile_generic(names: list, folder: Path, jobs: int) -> dict:
-    """Compile ``names`` in a builder process set for the generic CPU (and its workers); their entries."""
+    """Compile ``names`` in ``jobs`` builder processes set for the generic CPU; their manifest entries.
+    Each builder has an empty numba cache of its own: everything its kernels call compiles in it, so
+    that the code linked into each kernel can be read (``escaped_modules``)."""
+    from .precompile import KERNELS, _shares
     env = {key: value for key, value in os.environ.items() if not key.startswith("NUMBA_")}
-    with tempfile.TemporaryDirectory(prefix="cgaskin-kernels-") as cache:
-        env.update(NUMBA_CPU_NAME="generic", NUMBA_DISABLE_INTEL_SVML="1", NUMBA_CACHE_DIR=cache)
-        done = subprocess.run([sys.executable, "-c", _BUILDER, str(folder), str(jobs)], input="\n".join(names),
-                              capture_output=True, text=True, env=env)
-    if done.returncode:
-        raise StaleKernels(f"building the shipped kernels failed:\n{done.stderr.strip()}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    env.update(NUMBA_CPU_NAME="generic", NUMBA_DISABLE_INTEL_SVML="1")
+    indices = [i for i, s in enumerate(KERNELS) if f"{s.module}.{s.name}" in names]
+    shares = [sorted({f"{KERNELS[i].module}.{KERNELS[i].name}" for i in share}) for share in _shares(indices, jobs)]
+    with tempfile.TemporaryDirectory(prefix="cgaskin-kernels-") as caches:
+        builders = [subprocess.Popen([sys.executable, "-c", _BUILDER, str(folder), *share],
+                                     env={**env, "NUMBA_CACHE_DIR": str(Path(caches, str(k)))}, stdin=subprocess.DEVNULL,
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                    for k, share in enumerate(shares)]
+        reports = [builder.communicate() for builder in builders]
+    failed = [error.strip() for builder, (_, error) in zip(builders, reports) if builder.returncode]
+    if failed:
+        raise KernelBuildError("building the shipped kernels failed:\n" + "\n".join(failed))
+    entries = {}
+    for output, _ in reports:
+        entries.update(json.loads(output.strip().splitlines()[-1]))
+    return entries
 
 
-def _build_here(folder: str, jobs: int) -> None:
-    """In the builder process: compile the kernels named on stdin, write their files into ``folder``,
-    print their manifest entries (JSON, one line)."""
+def _build_here(folder: str, names: list) -> None:
+    """In a builder process: compile these kernels, check the code linked into each, write their files
+    into ``folder``, print their manifest entries (JSON, one line)."""
+    import importlib
+
     from numba.core import config
     from numba.core.registry import cpu_target
-    from .precompile import KERNELS, compile_in_parallel
     magic = cpu_target.target_context.codegen().magic_tuple()
     if magic[1:] != ("generic", "") or config.USING_SVML:
         raise SystemExit(f"the builder's numba targets {magic[1:]} (SVML {config.USING_SVML}), not the generic CPU")
-    names = set(sys.stdin.read().split())
-    indices = [i for i, s in enumerate(KERNELS) if f"{s.module}.{s.name}" in names]
-    failed = compile_in_parallel(indices, jobs)
-    if failed:
-        raise SystemExit("kernels that did not compile:\n" + "\n".join(failed))
-    entries = {}
-    for name, (module, texts) in _wanted().items():
-        if name in names:
-            entries[name] = _write_kernel(Path(folder), name, module, texts)
+    wanted, entries = _wanted(), {}
+    for name in names:
+        module, texts = wanted[name]
+        dispatcher = importlib.import_module(module).__dict__[name.rpartition(".")[2]]
+        for signature in SIGNATURES:
+            if f"{signature.module}.{signature.name}" == name:
+                dispatcher.compile(tuple(signature.argtypes))
+                escaped = escaped_modules(dispatcher.overloads[tuple(signature.argtypes)].library, module)
+                if escaped:
+                    raise SystemExit(f"{name} links code of {', '.join(escaped)}, which its key does not cover: "
+                                     f"import what it calls at module level in {module} or in a module it imports")
+        entries[name] = _write_kernel(Path(folder), name, dispatcher, texts)
     print(json.dumps(entries))
 
 
-def _write_kernel(folder: Path, name: str, module: str, texts: list) -> dict:
-    """Write one kernel's file from the builder's numba cache; its manifest entry (without its key)."""
-    import importlib
-    function = importlib.import_module(module).__dict__[name.rpartition(".")[2]]
-    cache = function._cache.disk()                       # numba's cache of it (the builder's empty folder)
-    index = cache._cache_file._load_index()
+def _write_kernel(folder: Path, name: str, dispatcher, texts: list) -> dict:
+    """Write one kernel's file from its builder's numba cache; its manifest entry (without its key)."""
+    cache = dispatcher._cache.disk()                     # numba's cache of it (the builder's empty folder)
     payloads = {}
-    for key, data_name in index.items():
+    for key, data_name in cache._cache_file._load_index().items():
         text = shipped.signature_text(cache_keys.argument_types(key[0]))
         if text in texts:
             payloads[text] = Path(cache._cache_file._data_path(data_name)).read_bytes()
     missing = [text for text in texts if text not in payloads]
     if missing:
         raise SystemExit(f"{name}: numba's cache holds no entry for {missing} (not cachable?)")
-    for text, raw in payloads.items():
-        escaped = escaped_modules(raw, module)
-        if escaped:
-            raise SystemExit(f"{name} {text} links code of {', '.join(escaped)}, which its key does not cover: "
-                             f"import what it calls at module level in {module} or in a module it imports")
+    module = dispatcher.py_func.__module__
     data = pickle.dumps({text: payloads[text] for text in texts}, protocol=4)
     relative = f"{module}/{name.rpartition('.')[2]}.nbk"
     (folder / module).mkdir(parents=True, exist_ok=True)
@@ -206,37 +212,50 @@ def _write_kernel(folder: Path, name: str, module: str, texts: list) -> dict:
     return {"file": relative, "sha256": hashlib.sha256(data).hexdigest(), "signatures": texts}
 
 
-def escaped_modules(raw: bytes, module: str) -> list:
-    """The modules whose code a kernel of ``module`` links (``raw``: its entry in numba's cache) that its
-    key does not cover: of its own package but outside its import closure, or of a package other than
-    its own and numba (whose version the layer records)."""
+def escaped_modules(library, module: str) -> list:
+    """The modules whose code a compiled kernel of ``module`` holds (``library``: its numba code library,
+    as compiled in this process) that its key does not cover: of its own package but outside its
+    import closure, or of a package other than its own and numba (whose version the layer records)."""
     top, closure = module.split(".")[0], set(cache_keys.closure(module))
-    return sorted(name for name in _linked_modules(raw)
+    return sorted(name for name in _linked_modules(library)
                   if name not in closure and (name.split(".")[0] == top or name.split(".")[0] != "numba"))
 
 
-def _linked_modules(raw: bytes) -> set:
-    """The Python modules whose compiled functions a cached kernel's code defines (its own and every
-    callee numba linked in), read from the mangled names (``_ZN<len><part>...``) of its bitcode."""
-    import llvmlite.binding as llvm
-    library = pickle.loads(raw)[0]                       # numba's (name, "object", (object code, bitcode))
-    modules = set()
-    for function in llvm.parse_bitcode(library[2][1]).functions:
-        start = function.name.find("_ZN")
-        if function.is_declaration or start < 0:
+def _linked_modules(library) -> set:
+    """The Python modules of the compiled functions in ``library`` and every library numba linked into it,
+    read from their mangled names (``_ZN<len><part>...``). (Once optimised, a kernel's own code no longer
+    names the callees inlined into it: the libraries it links still do.)"""
+    modules, stack, seen = set(), [library], set()
+    while stack:
+        library = stack.pop()
+        if id(library) in seen:
             continue
-        parts, name, i = [], function.name, start + 3
-        while i < len(name) and name[i].isdigit():
-            j = i
-            while name[j].isdigit():
-                j += 1
-            parts.append(name[j:j + int(name[i:j])])
-            i = j + int(name[i:j])
-        for k in range(len(parts) - 1, 0, -1):          # the longest leading run of parts that is a module
-            if cache_keys.module_file(".".join(parts[:k])) is not None or ".".join(parts[:k]) in sys.modules:
-                modules.add(".".join(parts[:k]))
-                break
+        seen.add(id(library))
+        stack.extend(library._linking_libraries)
+        for llvm_module in (library._final_module, library._shared_module):
+            for function in () if llvm_module is None else llvm_module.functions:
+                if not function.is_declaration:
+                    modules.update(_module_of(function.name))
     return modules
+
+
+def _module_of(symbol: str) -> set:
+    """{the module of a numba-mangled function name}, or an empty set for another symbol."""
+    start = symbol.find("_ZN")
+    if start < 0:
+        return set()
+    parts, i = [], start + 3
+    while i < len(symbol) and symbol[i].isdigit():
+        j = i
+        while symbol[j].isdigit():
+            j += 1
+        parts.append(symbol[j:j + int(symbol[i:j])])
+        i = j + int(symbol[i:j])
+    for k in range(len(parts) - 1, 0, -1):          # the longest leading run of parts that is a module
+        name = ".".join(parts[:k])
+        if name in sys.modules or cache_keys.module_file(name) is not None:
+            return {name}
+    return set()
 
 
 def _remove_empty_folders(folder: Path) -> None:

@@ -75,8 +75,9 @@ def _forget_digests():
 
 @NO_JIT
 def test_cgaskins_dispatchers_use_the_key_and_nothing_else_does(tmp_path):
-    assert type(walk._walk._cache).__name__ == "ClosureKeyedCache"
-    assert walk._walk._cache._impl.locator.get_source_stamp() == \
+    assert type(walk._walk._cache).__name__ == "KernelCache" and cache_keys.is_keyed(walk._walk)
+    assert type(walk._walk._cache.disk()).__name__ == "ClosureKeyedCache"
+    assert walk._walk._cache.disk()._impl.locator.get_source_stamp() == \
         cache_keys.source_stamp(caching.FunctionCache(walk._walk.py_func)._impl.locator.get_source_stamp(),
                                 "cgaskin.surgery.tear.walk")
     # numba's own classes are untouched: a function outside cgaskin keeps numba's cache and key
@@ -93,6 +94,7 @@ def test_cgaskins_dispatchers_use_the_key_and_nothing_else_does(tmp_path):
 def test_without_the_internals_kernels_compile_uncached_with_a_warning(monkeypatch):
     monkeypatch.setattr(caching.FunctionCache, "_impl_class", None)
     cache_keys._cache_class.cache_clear()
+    cache_keys._disk_class.cache_clear()
     try:
         assert "_impl_class" in cache_keys.missing()
         with pytest.warns(RuntimeWarning, match="compile without that cache"):
@@ -103,6 +105,7 @@ def test_without_the_internals_kernels_compile_uncached_with_a_warning(monkeypat
     finally:
         monkeypatch.undo()
         cache_keys._cache_class.cache_clear()
+        cache_keys._disk_class.cache_clear()
 
 
 # a tiny package whose kernel calls a helper from another module, compiled by cgaskin's jit wrapper or,

@@ -1,0 +1,100 @@
+"""The kernels shipped with the package (compiled for a portable x86-64 CPU) against the same kernels
+compiled by numba on this machine: skin, cut, a tear stroke and a drill, in one run.
+
+    python -m benchmarks.bench_shipped [--repeat 15] [--rings 200]
+
+Two fresh interpreters, each with an empty ``NUMBA_CACHE_DIR``: *host* with ``CGASKIN_SHIPPED_KERNELS=0``
+(numba compiles every kernel for this CPU, SIMD extensions and all) and *shipped* (the kernels load
+from ``cgaskin/_kernels``). Each reports what compiled and what loaded, the seconds of its first
+operation from the process's start, the median thread CPU time of each operation (single thread:
+the machine is shared, and CPU time leaves out time another process took), and a digest of every
+output. The table gives shipped / host speed (> 1: the shipped code is faster); the outputs must be
+equal bit for bit. The rig: the built-in capsule arm with ``--rings`` rings of 256 vertices per bone.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+from ._timing import print_table
+
+# in each child: build the rig, time the operations, print counts, medians and digests (one JSON line)
+_CHILD = """
+import hashlib, json, statistics, sys, time
+start = time.perf_counter()
+from numba.core import event
+compiles = []
+
+class Recorder(event.Listener):
+    def on_start(self, ev):
+        compiles.append(ev.data["dispatcher"].py_func.__qualname__)
+
+    def on_end(self, ev):
+        pass
+
+event.register("numba:compile", Recorder())
+import numpy as np
+import cgaskin
+from cgaskin._shared import shipped
+
+repeat, rings = int(sys.argv[1]), int(sys.argv[2])
+rig = cgaskin.capsule_arm(rings_per_segment=rings, segments_around=256)
+pose = rig.pose("wave", 0.7)
+blade = lambda x: ([x, 0.05, 1.0], [x, 0.05, 0.0])
+operations = {
+    "skin": lambda: (cgaskin.skin(rig, pose),),
+    "cut": lambda: (lambda a, b: (a.vertices, a.faces, b.vertices, b.faces))(*cgaskin.cut(rig, [1, 0.2, 0], [1.5, 0, 0])),
+    "tear stroke": lambda: (lambda t: (t.vertices, t.faces))(cgaskin.tear(rig, blade(1.0), blade(1.3), opening=0.01)),
+    "drill": lambda: (lambda d: (d.vertices, d.faces))(cgaskin.drill(rig, [1.4, 0.0, -1.0], [1.4, 0.0, 1.0], 0.1)),
+}
+digests, medians, first = {}, {}, None
+for name, operation in operations.items():
+    outputs = operation()                      # (the first call: loads or compiles its kernels)
+    first = first or time.perf_counter() - start
+    digests[name] = hashlib.sha256(b"".join(np.ascontiguousarray(a).tobytes() for a in outputs)).hexdigest()
+    samples = []
+    for _ in range(repeat):
+        began = time.thread_time()
+        operation()
+        samples.append(time.thread_time() - began)
+    medians[name] = statistics.median(samples)
+print("@@" + json.dumps({"compiles": len(compiles), "loads": sum(shipped.LOADED.values()), "first": first,
+                        "medians": medians, "digests": digests, "vertices": len(rig.vertices),
+                        "faces": len(rig.faces)}))
+"""
+
+
+def run(shipped: bool, repeat: int, rings: int) -> dict:
+    """What one fresh interpreter measured (an empty numba cache; the shipped kernels on or off)."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = {key: value for key, value in os.environ.items() if not key.startswith("NUMBA_")}
+        env.update(NUMBA_CACHE_DIR=cache, CGASKIN_SHIPPED_KERNELS="1" if shipped else "0")
+        done = subprocess.run([sys.executable, "-c", _CHILD, str(repeat), str(rings)], env=env,
+                              capture_output=True, text=True, check=True)
+    return json.loads(next(line for line in done.stdout.splitlines() if line.startswith("@@"))[2:])
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=15, help="timed calls per operation (median)")
+    parser.add_argument("--rings", type=int, default=200, help="rings of 256 vertices per bone of the capsule arm")
+    args = parser.parse_args(argv)
+    host = run(False, args.repeat, args.rings)
+    shipped = run(True, args.repeat, args.rings)
+    for label, result in (("host", host), ("shipped", shipped)):
+        print(f"{label}: {result['compiles']} compiles, {result['loads']} kernels loaded from the shipped layer; "
+              f"first operation {result['first']:.1f} s from the process's start")
+    rows = [[name, 1e3 * host["medians"][name], 1e3 * shipped["medians"][name],
+             host["medians"][name] / shipped["medians"][name],
+             "yes" if host["digests"][name] == shipped["digests"][name] else "NO"] for name in host["medians"]]
+    print_table(f"shipped (generic x86-64) against host-compiled kernels: capsule arm, {host['vertices']} vertices, "
+                f"{host['faces']} faces; median thread CPU ms of {args.repeat} calls",
+                ["operation", "host ms", "shipped ms", "shipped speed", "same output"], rows)
+
+
+if __name__ == "__main__":
+    main()
