@@ -1,13 +1,14 @@
 """The kernels shipped with the package (compiled for a portable x86-64 CPU) against the same kernels
 compiled by numba on this machine: skin, cut, a tear stroke and a drill, in one run.
 
-    python -m benchmarks.bench_shipped [--repeat 15] [--rings 200]
+    python -m benchmarks.bench_shipped [--repeat 30] [--rounds 3] [--rings 200]
 
-Two fresh interpreters, each with an empty ``NUMBA_CACHE_DIR``: *host* with ``CGASKIN_SHIPPED_KERNELS=0``
-(numba compiles every kernel for this CPU, SIMD extensions and all) and *shipped* (the kernels load
-from ``cgaskin/_kernels``). Each reports what compiled and what loaded, the seconds of its first
-operation from the process's start, the median thread CPU time of each operation (single thread:
-the machine is shared, and CPU time leaves out time another process took), and a digest of every
+Fresh interpreters, alternating: *host* with ``CGASKIN_SHIPPED_KERNELS=0`` (numba compiles every kernel
+for this CPU, SIMD extensions and all, in the first round, into a cache the later rounds load) and
+*shipped* (an empty ``NUMBA_CACHE_DIR`` every round: the kernels load from ``cgaskin/_kernels``, each
+for the best CPU level this machine runs). Each reports what compiled and what loaded, the seconds of its first
+operation from the process's start, the median thread CPU time of each operation (on one thread,
+``NUMBA_NUM_THREADS=1``: the machine is shared, and CPU time leaves out time another process took), and a digest of every
 output. The table gives shipped / host speed (> 1: the shipped code is faster); the outputs must be
 equal bit for bit. The rig: the built-in capsule arm with ``--rings`` rings of 256 vertices per bone.
 """
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -62,38 +64,48 @@ for name, operation in operations.items():
         operation()
         samples.append(time.thread_time() - began)
     medians[name] = statistics.median(samples)
-print("@@" + json.dumps({"compiles": len(compiles), "loads": sum(shipped.LOADED.values()), "first": first,
+print("@@" + json.dumps({"compiles": len(compiles), "compiled": sorted(set(compiles)), "loads": sum(shipped.LOADED.values()), "first": first,
                         "medians": medians, "digests": digests, "vertices": len(rig.vertices),
                         "faces": len(rig.faces)}))
 """
 
 
-def run(shipped: bool, repeat: int, rings: int) -> dict:
-    """What one fresh interpreter measured (an empty numba cache; the shipped kernels on or off)."""
-    with tempfile.TemporaryDirectory() as cache:
-        env = {key: value for key, value in os.environ.items() if not key.startswith("NUMBA_")}
-        env.update(NUMBA_CACHE_DIR=cache, CGASKIN_SHIPPED_KERNELS="1" if shipped else "0")
-        done = subprocess.run([sys.executable, "-c", _CHILD, str(repeat), str(rings)], env=env,
-                              capture_output=True, text=True, check=True)
+def run(shipped: bool, repeat: int, rings: int, cache: str) -> dict:
+    """What one fresh interpreter measured (numba's cache ``cache``; the shipped kernels on or off)."""
+    env = {key: value for key, value in os.environ.items() if not key.startswith("NUMBA_")}
+    # one thread: CPU time then measures all the work (skin's blend loop is a prange above 1e5 vertices)
+    env.update(NUMBA_CACHE_DIR=cache, CGASKIN_SHIPPED_KERNELS="1" if shipped else "0", NUMBA_NUM_THREADS="1")
+    done = subprocess.run([sys.executable, "-c", _CHILD, str(repeat), str(rings)], env=env,
+                          capture_output=True, text=True, check=True)
     return json.loads(next(line for line in done.stdout.splitlines() if line.startswith("@@"))[2:])
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=15, help="timed calls per operation (median)")
+    parser.add_argument("--repeat", type=int, default=30, help="timed calls per operation (median)")
+    parser.add_argument("--rounds", type=int, default=3, help="host and shipped processes, alternating")
     parser.add_argument("--rings", type=int, default=200, help="rings of 256 vertices per bone of the capsule arm")
     args = parser.parse_args(argv)
-    host = run(False, args.repeat, args.rings)
-    shipped = run(True, args.repeat, args.rings)
-    for label, result in (("host", host), ("shipped", shipped)):
+    hosts, shipped = [], []
+    with tempfile.TemporaryDirectory() as host_cache:       # (the host's kernels compile in its first round)
+        for _ in range(args.rounds):
+            hosts.append(run(False, args.repeat, args.rings, host_cache))
+            with tempfile.TemporaryDirectory() as empty:
+                shipped.append(run(True, args.repeat, args.rings, empty))
+    for label, result in (("host, first round", hosts[0]), ("shipped, every round", shipped[0])):
         print(f"{label}: {result['compiles']} compiles, {result['loads']} kernels loaded from the shipped layer; "
               f"first operation {result['first']:.1f} s from the process's start")
-    rows = [[name, 1e3 * host["medians"][name], 1e3 * shipped["medians"][name],
-             host["medians"][name] / shipped["medians"][name],
-             "yes" if host["digests"][name] == shipped["digests"][name] else "NO"] for name in host["medians"]]
-    print_table(f"shipped (generic x86-64) against host-compiled kernels: capsule arm, {host['vertices']} vertices, "
-                f"{host['faces']} faces; median thread CPU ms of {args.repeat} calls",
-                ["operation", "host ms", "shipped ms", "shipped speed", "same output"], rows)
+    if any(result["compiles"] for result in shipped):
+        print(f"  compiled with the shipped kernels (not among them): {', '.join(shipped[0]['compiled'])}")
+    rows = []
+    for name in hosts[0]["medians"]:
+        host_ms = 1e3 * statistics.median(result["medians"][name] for result in hosts)
+        shipped_ms = 1e3 * statistics.median(result["medians"][name] for result in shipped)
+        same = all(result["digests"][name] == hosts[0]["digests"][name] for result in hosts + shipped)
+        rows.append([name, host_ms, shipped_ms, host_ms / shipped_ms, "yes" if same else "NO"])
+    print_table(f"shipped against host-compiled kernels: capsule arm, {hosts[0]['vertices']} vertices, "
+                f"{hosts[0]['faces']} faces; thread CPU ms, median of {args.rounds} alternating rounds' medians "
+                f"of {args.repeat} calls", ["operation", "host ms", "shipped ms", "shipped speed", "same output"], rows)
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ from numba import njit, types
 from . import shipped
 from .cache_keys import is_keyed, keyed
 
-__all__ = ["kernel", "helper", "cache_generated", "inlined", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
+__all__ = ["kernel", "helper", "cache_generated", "GENERIC", "WIDE", "inlined", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
 
 _OPTIONS = {"nogil": True, "error_model": "numpy"}       # and cached, by ``keyed`` (not numba's cache=True)
 
@@ -55,27 +55,35 @@ def record(*fields):
     return types.Tuple(list(fields))
 
 
+#: the CPUs a kernel ships compiled for (``shipped``): every kernel for LLVM's generic x86-64 (any
+#: x86-64 runs it); a kernel whose loop the generic CPU runs markedly slower also for x86-64-v3 (AVX2,
+#: FMA: every x86-64 CPU since 2013-2015; skinning's blend loop ran at 0.75x the host's speed generic,
+#: at 1.0x so), which loads where the CPU has those features
+GENERIC, WIDE = ("generic",), ("generic", "x86-64-v3")
+
+
 class Signature(NamedTuple):
     """One compiled variant that precompile makes: ``module.name`` for ``argtypes`` (``fused``: after
-    every other one)."""
+    every other one), shipped compiled for ``targets``."""
 
     module: str
     name: str
     argtypes: tuple
     cost: float
     fused: bool = False
+    targets: tuple = GENERIC
 
 
 #: every (kernel, argument types) that the runtime calls from Python, in import order
 SIGNATURES: list = []
 
 
-def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3, fused: bool = False):
+def precompiled(dispatcher, *signatures: tuple, cost: float = 0.3, fused: bool = False, targets: tuple = GENERIC):
     """Record argument types that the runtime calls ``dispatcher`` (a numba kernel) with; returns it."""
     function = getattr(dispatcher, "py_func", dispatcher)       # (a plain function under NUMBA_DISABLE_JIT=1)
     for argtypes in signatures:
         SIGNATURES.append(Signature(function.__module__, function.__name__, tuple(argtypes),
-                                    cost, fused))
+                                    cost, fused, targets))
     return dispatcher
 
 
@@ -90,13 +98,13 @@ def cache_generated(*modules) -> None:
                 keyed(value, shipped=shipped.FOR_KERNELS)
 
 
-def kernel(*signatures: tuple, cost: float = 0.3, fused: bool = False):
+def kernel(*signatures: tuple, cost: float = 0.3, fused: bool = False, targets: tuple = GENERIC):
     """Compile a function that Python calls; ``signatures`` are the argument types of the runtime's
     own calls (precompiled), ``cost`` the cold compile seconds of each (for a ``fused`` one, its own
-    seconds once its callees are compiled)."""
+    seconds once its callees are compiled), ``targets`` the CPUs it ships compiled for."""
     def wrap(function):
         return precompiled(keyed(njit(**_OPTIONS)(function), shipped=shipped.FOR_KERNELS), *signatures, cost=cost,
-                           fused=fused)
+                           fused=fused, targets=targets)
     return wrap
 
 

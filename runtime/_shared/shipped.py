@@ -2,11 +2,12 @@
 
 numba compiles a kernel at its first call: a first tear on a fresh machine would compile for a minute
 or two. ``cgaskin build --kernels`` (``cgaskin.app.ship``) compiles every signature that ``precompile``
-records for a portable x86-64 target (LLVM's ``generic`` CPU, no SVML, numba's default options) and
-keeps each kernel's compile result, as numba's cache pickles it (object code, and the bitcode that
-callers compiled later link against), in one file per kernel under ``cgaskin/_kernels/<layer>/``,
-with a ``manifest.json``: the versions and target it was built for, the digest of each source module,
-and for each kernel its key, its argument types and its file's sha256.
+records for a portable x86-64 target (LLVM's ``generic`` CPU, no SVML, numba's default options; the
+kernels ``jit.WIDE`` marks also for x86-64-v3, loaded where the CPU has its features) and keeps each
+kernel's compile result, as numba's cache pickles it (object code, and the bitcode that callers
+compiled later link against), in one file per kernel and CPU under ``cgaskin/_kernels/<layer>/``, with
+a ``manifest.json``: the versions it was built for, the digest of each source module, and for each
+kernel its key, its argument types and its files' sha256.
 
 A kernel's cache (``cache_keys``) asks ``load`` for what the user's numba cache lacks. ``load`` returns
 the compile result, rebuilt in this process's target context (numba's dispatcher then registers it as
@@ -55,6 +56,11 @@ CODE_SETTINGS = {"NUMBA_OPT": "OPT", "NUMBA_BOUNDSCHECK": "BOUNDSCHECK", "NUMBA_
                  "NUMBA_CPU_NAME": "CPU_NAME", "NUMBA_CPU_FEATURES": "CPU_FEATURES"}
 #: switches the layer off (a benchmark of host-compiled code, say): ``CGASKIN_SHIPPED_KERNELS=0``
 SWITCH = "CGASKIN_SHIPPED_KERNELS"
+#: the CPUs kernels ship compiled for, best first, and the features (LLVM's names) each assumes: a
+#: kernel loads for the first one whose features this machine has
+CPUS = {"x86-64-v3": ("avx", "avx2", "bmi", "bmi2", "f16c", "fma", "lzcnt", "movbe", "xsave", "cx16", "popcnt",
+                      "sahf", "sse3", "sse4.1", "sse4.2", "ssse3"),
+        "generic": ()}
 
 #: "module.function" -> how many of its signatures this process loaded from the layer
 LOADED: collections.Counter = collections.Counter()
@@ -64,7 +70,7 @@ class Layer(NamedTuple):
     """A shipped layer that this process can load from."""
 
     folder: Path
-    kernels: dict       # "module.function" -> {"file", "sha256", "key", "signatures"}
+    kernels: dict       # "module.function" -> {"key", "signatures", "files": {cpu: {"file", "sha256"}}}
     modules: dict       # module -> {"sha256": of its file, "syntax": syntax_digest of it}
 
 
@@ -179,7 +185,11 @@ class Loader(NamedTuple):
             return None, f"no shipped kernel takes {signature}"
         if sources_key(py_func.__module__, layer.modules) != entry["key"]:
             return None, "its sources differ from those of the shipped kernel"
-        cres, why = _rebuild(layer.folder / entry["file"], entry["sha256"], signature, target_context)
+        cpu = next((cpu for cpu in CPUS if cpu in entry["files"] and _runs(cpu)), None)
+        if cpu is None:
+            return None, f"this CPU lacks the features of {', '.join(entry['files'])}"
+        built = entry["files"][cpu]
+        cres, why = _rebuild(layer.folder / built["file"], built["sha256"], signature, target_context)
         if cres is not None and tuple(cres.signature.args) != tuple(argument_types):
             return None, "the shipped entry has another signature"
         if cres is not None:
@@ -200,6 +210,19 @@ class Loader(NamedTuple):
 FOR_KERNELS, FOR_HELPERS = Loader(quiet=False), Loader(quiet=True)
 #: what ``Loader.compiling`` said in this process (it says one line at most)
 _SAID: list = []
+
+
+@functools.lru_cache(maxsize=None)
+def _runs(cpu: str) -> bool:
+    """Whether this machine's CPU has every feature that code built for ``cpu`` assumes."""
+    if not CPUS[cpu]:
+        return True
+    try:
+        import llvmlite.binding as llvm
+        features = llvm.get_host_cpu_features()
+    except RuntimeError:               # LLVM cannot tell on this host: only the generic code
+        return False
+    return all(features.get(feature, False) for feature in CPUS[cpu])
 
 
 def _rebuild(path: Path, sha256: str, signature: str, target_context) -> tuple:

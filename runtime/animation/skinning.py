@@ -11,7 +11,7 @@ import numpy as np
 
 from .._shared.checks import float_array, index_array
 from .._shared.frozen import kernel_array
-from .._shared.jit import F2, F3, I2, kernel, precompiled
+from .._shared.jit import F2, F3, I2, WIDE, kernel, precompiled
 from ..algebra.versor import _versor_arg
 from ..errors import InvalidInputError
 from ..generated import kernels as K
@@ -22,9 +22,10 @@ from .rig import Rig
 
 # numba's thread pool costs ~10 ms per parallel call on a 2-core machine; below this many vertices
 # the serial loop wins (benchmarks/bench_skinning.py measures the crossover).
-precompiled(skin_blend, (F2, I2, F2, F2, F2), cost=0.4)
-
 PARALLEL_THRESHOLD = 100_000
+
+precompiled(skin_blend, (F2, I2, F2, F2, F2), cost=0.4, targets=WIDE)
+precompiled(skin_blend_parallel, (F2, I2, F2, F2, F2), cost=1.5, targets=WIDE)
 
 
 def _mesh_args(rest, joints, weights):
@@ -163,7 +164,7 @@ def _skin_poses(rig: Rig, poses: Poses, out) -> np.ndarray:
     return out
 
 
-@kernel((F2, I2, F2, F3, F3), cost=0.3, fused=True)
+@kernel((F2, I2, F2, F3, F3), cost=0.3, fused=True, targets=WIDE)
 def _skin_frames(rest, joints, weights, affines, out):
     """``skin_blend`` of every frame: affines (T, B, 12) -> out (T, n, 3); whether any frame reported
     a bad joint index, weight or result."""

@@ -1,9 +1,9 @@
 """Build the kernels that ship compiled (``cgaskin build --kernels``) and check them (``--check``).
 
 The layer (``cgaskin._shared.shipped`` loads it) holds every signature ``precompile`` records, compiled
-for LLVM's ``generic`` x86-64 CPU, without SVML and with numba's default options, by ``precompile``'s
-parallel compile run in processes whose numba is set so (``NUMBA_CPU_NAME=generic``: that setting
-changes every function of a process, so it is never set in the user's). Only the kernels whose key
+for LLVM's ``generic`` x86-64 CPU (and the kernels ``jit.WIDE`` marks for x86-64-v3 too), without SVML
+and with numba's default options, in builder processes whose numba is set so (``NUMBA_CPU_NAME``:
+that setting changes every function of a process, so it is never set in the user's). Only the kernels whose key
 changed are compiled and rewritten (numba's object code names functions by a per-process counter, so
 a rebuilt kernel's file differs even when its code does not): a change rewrites the files it touches.
 
@@ -23,6 +23,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import NamedTuple
 
 from .._shared import cache_keys, shipped
 from .._shared.jit import SIGNATURES
@@ -30,16 +31,25 @@ from ..errors import KernelBuildError
 
 __all__ = ["build_kernels", "check_kernels", "escaped_modules"]
 
-#: a builder process: compiles the kernels named as arguments for the generic CPU, prints their entries
+#: a builder process: compiles the kernels named as arguments for the CPU its numba is set to, writes
+#: their files, prints their entries
 _BUILDER = "import sys; from cgaskin.app.ship import _build_here; _build_here(sys.argv[1], sys.argv[2:])"
 
 
+class Wanted(NamedTuple):
+    """What the layer must hold of one kernel: its module, its argument types' texts, its CPUs."""
+
+    module: str
+    signatures: list
+    cpus: tuple
+
+
 def _wanted() -> dict:
-    """'module.function' -> (its module, [its argument types' texts]) for every recorded signature."""
+    """'module.function' -> ``Wanted`` for every kernel with a recorded signature."""
     wanted = {}
     for signature in SIGNATURES:
         name = f"{signature.module}.{signature.name}"
-        texts = wanted.setdefault(name, (signature.module, []))[1]
+        texts = wanted.setdefault(name, Wanted(signature.module, [], signature.targets)).signatures
         text = shipped.signature_text(tuple(signature.argtypes))
         if text not in texts:
             texts.append(text)
@@ -49,8 +59,8 @@ def _wanted() -> dict:
 def _module_digests(wanted: dict) -> dict:
     """module -> {"sha256", "syntax"} for every module in the closure of a wanted kernel."""
     modules = {}
-    for module, _ in wanted.values():
-        for name in cache_keys.closure(module):
+    for kernel in wanted.values():
+        for name in cache_keys.closure(kernel.module):
             if name not in modules:
                 source = cache_keys.module_file(name).read_bytes()
                 modules[name] = {"sha256": hashlib.sha256(source).hexdigest(),
@@ -67,26 +77,32 @@ def _read_manifest(folder: Path) -> dict | None:
 
 
 def _stale(manifest: dict | None, folder: Path, wanted: dict, keys: dict) -> list:
-    """The wanted kernels that ``manifest``'s layer lacks or holds for other sources or types."""
+    """The wanted kernels that ``manifest``'s layer lacks, or holds for other sources, types or CPUs."""
     entries = manifest["kernels"] if manifest else {}
     stale = []
-    for name, (_, texts) in wanted.items():
+    for name, kernel in wanted.items():
         entry = entries.get(name)
-        if entry is None or entry["key"] != keys[name] or entry["signatures"] != texts:
+        if entry is None or entry["key"] != keys[name] or entry["signatures"] != kernel.signatures \
+                or sorted(entry["files"]) != sorted(kernel.cpus):
             stale.append(name)
-            continue
-        path = folder / entry["file"]
-        if not path.is_file() or hashlib.sha256(path.read_bytes()).hexdigest() != entry["sha256"]:
+        elif any(not (folder / built["file"]).is_file()
+                 or hashlib.sha256((folder / built["file"]).read_bytes()).hexdigest() != built["sha256"]
+                 for built in entry["files"].values()):
             stale.append(name)
     return stale
+
+
+def _keys(wanted: dict) -> tuple[dict, dict]:
+    """(the modules' digests, each wanted kernel's key) for the sources as they are."""
+    modules = _module_digests(wanted)
+    return modules, {name: shipped.sources_key(kernel.module, modules) for name, kernel in wanted.items()}
 
 
 def check_kernels() -> tuple[list, list]:
     """(the stale kernels, notes): the layers of this Python and platform checked against the sources
     (a layer for another numba or NumPy is checked too: only its machine code cannot be used here)."""
     wanted = _wanted()
-    modules = _module_digests(wanted)
-    keys = {name: shipped.sources_key(module, modules) for name, (module, _) in wanted.items()}
+    _, keys = _keys(wanted)
     here = shipped.setup()
     layers = [path.parent for path in sorted(shipped.ROOT.glob("*/manifest.json"))]
     mine = [folder for folder in layers
@@ -115,28 +131,29 @@ def build_kernels(jobs: int | None = None, verbose: bool = True) -> list:
     names. Raises ``KernelBuildError`` when a kernel fails to compile or links code its key misses."""
     from .precompile import default_jobs
     wanted = _wanted()
-    modules = _module_digests(wanted)
-    keys = {name: shipped.sources_key(module, modules) for name, (module, _) in wanted.items()}
+    modules, keys = _keys(wanted)
     here = shipped.setup()
     folder = shipped.ROOT / shipped.layer_name(here)
     manifest = _read_manifest(folder)
     if manifest is not None and manifest["built_for"] != here:
         manifest = None                         # another numba: every kernel is rebuilt
     stale = _stale(manifest, folder, wanted, keys)
-    removed = sorted(set(manifest["kernels"]) - set(wanted)) if manifest else []
-    entries = {name: entry for name, entry in (manifest["kernels"] if manifest else {}).items() if name in wanted}
+    old = manifest["kernels"] if manifest else {}
     if verbose:
         print(f"shipped kernels ({folder}): {len(stale)} of {len(wanted)} to build", flush=True)
-    if stale:
-        entries.update(_compile_generic(stale, folder, jobs or default_jobs()))
-    for name in removed:
-        (folder / manifest["kernels"][name]["file"]).unlink(missing_ok=True)
-    for name in stale:
-        entries[name]["key"] = keys[name]
-    for name, (module, _) in wanted.items():     # (what each depends on, for a reader of the manifest)
-        entries[name]["modules"] = list(cache_keys.closure(module))
+    for built in [built for name, entry in old.items() if name not in wanted or name in stale
+                  for built in entry["files"].values()]:
+        (folder / built["file"]).unlink(missing_ok=True)
+    entries = {name: old[name] for name in wanted if name not in stale}
+    for cpu in shipped.CPUS:
+        names = [name for name in stale if cpu in wanted[name].cpus]
+        for name, built in (_compile_for(cpu, names, folder, jobs or default_jobs()) if names else {}).items():
+            entries.setdefault(name, {"key": keys[name], "signatures": wanted[name].signatures, "files": {}})
+            entries[name]["files"][cpu] = built
+    for name, kernel in wanted.items():         # (what each depends on, for a reader of the manifest)
+        entries[name]["modules"] = list(cache_keys.closure(kernel.module))
     layer = {"format": shipped.FORMAT, "built_for": here,
-             "target": {"cpu_name": "generic", "cpu_features": "", "svml": False, "options": "numba's defaults"},
+             "target": {"cpus": list(shipped.CPUS), "cpu_features": "", "svml": False, "options": "numba's defaults"},
              "modules": modules, "kernels": dict(sorted(entries.items()))}
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "manifest.json").write_text(json.dumps(layer, indent=1) + "\n", encoding="utf-8")
@@ -144,13 +161,14 @@ def build_kernels(jobs: int | None = None, verbose: bool = True) -> list:
     return stale
 
 
-def _compile_generic(names: list, folder: Path, jobs: int) -> dict:
-    """Compile ``names`` in ``jobs`` builder processes set for the generic CPU; their manifest entries.
-    Each builder has an empty numba cache of its own: everything its kernels call compiles in it, so
-    that the code linked into each kernel can be read (``escaped_modules``)."""
+def _compile_for(cpu: str, names: list, folder: Path, jobs: int) -> dict:
+    """Compile ``names`` in ``jobs`` builder processes whose numba targets ``cpu``; name -> {"file",
+    "sha256"}. Each builder has an empty numba cache of its own: everything its kernels call compiles
+    in it, so that the code linked into each kernel can be read (``escaped_modules``)."""
     from .precompile import KERNELS, _shares
     env = {key: value for key, value in os.environ.items() if not key.startswith("NUMBA_")}
-    env.update(NUMBA_CPU_NAME="generic", NUMBA_DISABLE_INTEL_SVML="1")
+    # (an empty feature list: a named CPU otherwise adds the host's features)
+    env.update(NUMBA_CPU_NAME=cpu, NUMBA_CPU_FEATURES="", NUMBA_DISABLE_INTEL_SVML="1")
     indices = [i for i, s in enumerate(KERNELS) if f"{s.module}.{s.name}" in names]
     shares = [sorted({f"{KERNELS[i].module}.{KERNELS[i].name}" for i in share}) for share in _shares(indices, jobs)]
     with tempfile.TemporaryDirectory(prefix="cgaskin-kernels-") as caches:
@@ -161,26 +179,27 @@ def _compile_generic(names: list, folder: Path, jobs: int) -> dict:
         reports = [builder.communicate() for builder in builders]
     failed = [error.strip() for builder, (_, error) in zip(builders, reports) if builder.returncode]
     if failed:
-        raise KernelBuildError("building the shipped kernels failed:\n" + "\n".join(failed))
-    entries = {}
+        raise KernelBuildError(f"building the shipped kernels for {cpu} failed:\n" + "\n".join(failed))
+    built = {}
     for output, _ in reports:
-        entries.update(json.loads(output.strip().splitlines()[-1]))
-    return entries
+        built.update(json.loads(output.strip().splitlines()[-1]))
+    return built
 
 
 def _build_here(folder: str, names: list) -> None:
     """In a builder process: compile these kernels, check the code linked into each, write their files
-    into ``folder``, print their manifest entries (JSON, one line)."""
+    into ``folder``, print name -> {"file", "sha256"} (JSON, one line)."""
     import importlib
 
     from numba.core import config
     from numba.core.registry import cpu_target
-    magic = cpu_target.target_context.codegen().magic_tuple()
-    if magic[1:] != ("generic", "") or config.USING_SVML:
-        raise SystemExit(f"the builder's numba targets {magic[1:]} (SVML {config.USING_SVML}), not the generic CPU")
-    wanted, entries = _wanted(), {}
+    cpu, features = cpu_target.target_context.codegen().magic_tuple()[1:]
+    if cpu not in shipped.CPUS or features or config.USING_SVML:
+        raise SystemExit(f"the builder's numba targets {cpu} with features {features!r} (SVML {config.USING_SVML}), "
+                         f"not one of {list(shipped.CPUS)} alone")
+    wanted, built = _wanted(), {}
     for name in names:
-        module, texts = wanted[name]
+        module = wanted[name].module
         dispatcher = importlib.import_module(module).__dict__[name.rpartition(".")[2]]
         for signature in SIGNATURES:
             if f"{signature.module}.{signature.name}" == name:
@@ -189,12 +208,12 @@ def _build_here(folder: str, names: list) -> None:
                 if escaped:
                     raise SystemExit(f"{name} links code of {', '.join(escaped)}, which its key does not cover: "
                                      f"import what it calls at module level in {module} or in a module it imports")
-        entries[name] = _write_kernel(Path(folder), name, dispatcher, texts)
-    print(json.dumps(entries))
+        built[name] = _write_kernel(Path(folder), name, dispatcher, wanted[name].signatures, cpu)
+    print(json.dumps(built))
 
 
-def _write_kernel(folder: Path, name: str, dispatcher, texts: list) -> dict:
-    """Write one kernel's file from its builder's numba cache; its manifest entry (without its key)."""
+def _write_kernel(folder: Path, name: str, dispatcher, texts: list, cpu: str) -> dict:
+    """Write one kernel's file for ``cpu`` from its builder's numba cache; {"file", "sha256"}."""
     cache = dispatcher._cache.disk()                     # numba's cache of it (the builder's empty folder)
     payloads = {}
     for key, data_name in cache._cache_file._load_index().items():
@@ -206,10 +225,10 @@ def _write_kernel(folder: Path, name: str, dispatcher, texts: list) -> dict:
         raise SystemExit(f"{name}: numba's cache holds no entry for {missing} (not cachable?)")
     module = dispatcher.py_func.__module__
     data = pickle.dumps({text: payloads[text] for text in texts}, protocol=4)
-    relative = f"{module}/{name.rpartition('.')[2]}.nbk"
+    relative = f"{module}/{name.rpartition('.')[2]}{'' if cpu == 'generic' else '.' + cpu}.nbk"
     (folder / module).mkdir(parents=True, exist_ok=True)
     (folder / relative).write_bytes(data)
-    return {"file": relative, "sha256": hashlib.sha256(data).hexdigest(), "signatures": texts}
+    return {"file": relative, "sha256": hashlib.sha256(data).hexdigest()}
 
 
 def escaped_modules(library, module: str) -> list:

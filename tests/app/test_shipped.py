@@ -174,7 +174,7 @@ def test_a_users_function_compiles_as_without_cgaskin(tmp_path):
 
 
 @pytest.mark.parametrize("doctor, why", [
-    ("corrupt", "its shipped file skin_blend.nbk is not the one the manifest lists"),
+    ("corrupt", "its shipped file skin_blend"),
     ("numba", "the shipped kernels are for numba 0.0.1; this is numba "),
     ("opt", "NUMBA_OPT set: the shipped kernels are built with numba's defaults"),
 ])
@@ -184,8 +184,9 @@ def test_what_does_not_match_compiles_correctly_and_says_so_once(tmp_path, docto
     copy = tmp_path / "layers" / layer.folder.name
     shutil.copytree(layer.folder, copy)
     env = {}
-    if doctor == "corrupt":
-        path = copy / layer.kernels["cgaskin.generated.skinning.skin_blend"]["file"]
+    if doctor == "corrupt":                                 # the file this machine would load
+        files = layer.kernels["cgaskin.generated.skinning.skin_blend"]["files"]
+        path = copy / files[next(cpu for cpu in shipped.CPUS if cpu in files and shipped._runs(cpu))]["file"]
         data = bytearray(path.read_bytes())
         data[len(data) // 2] ^= 0xFF
         path.write_bytes(bytes(data))
@@ -212,11 +213,11 @@ def test_a_loaded_entry_of_another_signature_is_not_used(tmp_path, monkeypatch):
     first, second = entry["signatures"]
     copy = tmp_path / layer.folder.name
     shutil.copytree(layer.folder, copy)
-    path = copy / entry["file"]
+    path = copy / entry["files"]["generic"]["file"]
     payloads = pickle.loads(path.read_bytes())
     path.write_bytes(pickle.dumps({first: payloads[second], second: payloads[first]}, protocol=4))
     manifest = json.loads((copy / "manifest.json").read_text())
-    manifest["kernels"][name]["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+    manifest["kernels"][name]["files"]["generic"]["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
     (copy / "manifest.json").write_text(json.dumps(manifest))
     monkeypatch.setattr(shipped, "ROOT", tmp_path)
     shipped._layer.cache_clear()
@@ -368,3 +369,24 @@ def test_a_wheel_carries_the_kernels_and_its_first_tear_compiles_nothing(tmp_pat
     result, stderr = run(TEAR, tmp_path / "cache", python=python, cwd=tmp_path)
     assert result["file"].startswith(str(venv)), result["file"]
     assert result["compiled"] == [] and result["loaded"], stderr
+
+
+def test_a_kernel_loads_for_the_best_cpu_this_machine_runs(monkeypatch):
+    """Skinning's blend ships for x86-64-v3 too: it loads that where the CPU has AVX2 and FMA and the
+    rest of that level, else the generic code (never code this CPU cannot run)."""
+    layer = _usable_layer()
+    from numba.core.registry import cpu_target
+
+    from cgaskin.generated import skinning
+    assert sorted(layer.kernels["cgaskin.generated.skinning.skin_blend"]["files"]) == ["generic", "x86-64-v3"]
+    assert shipped._runs("generic")
+    argtypes = next(tuple(s.argtypes) for s in ship.SIGNATURES if s.name == "skin_blend")
+    for runs_v3 in (True, False):
+        read = []
+        rebuild = shipped._rebuild
+        monkeypatch.setattr(shipped, "_runs", lambda cpu: runs_v3 or cpu == "generic")
+        monkeypatch.setattr(shipped, "_rebuild", lambda path, *rest: read.append(path.name) or rebuild(path, *rest))
+        cres, why = shipped.FOR_KERNELS.load(skinning.skin_blend.py_func, argtypes, cpu_target.target_context)
+        assert cres is not None, why
+        assert read == ["skin_blend.x86-64-v3.nbk" if runs_v3 else "skin_blend.nbk"]
+        monkeypatch.undo()
