@@ -69,8 +69,9 @@ def _kernel_counts() -> tuple:
     return sum(shipped.LOADED.values()), compiled
 
 
-def fresh_worker(folder: Path) -> list:
-    """[seconds of a one-item batch on a new worker with an empty numba cache, kernels it loaded, compiled]."""
+def fresh_worker(folder: Path, shipped: bool = True) -> list:
+    """[seconds of a one-item batch on a new worker with an empty numba cache, kernels it loaded, compiled]
+    (``shipped=False``: a worker where the shipped kernels do not serve)."""
     from dask.distributed import Client, LocalCluster
 
     from cgaskin.batch import run
@@ -80,7 +81,9 @@ def fresh_worker(folder: Path) -> list:
     cache = folder / "fresh-numba-cache"
     cache.mkdir()
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, silence_logs=logging.ERROR,
-                      dashboard_address=":0", env={"NUMBA_CACHE_DIR": str(cache)}) as cluster, Client(cluster) as client:
+                      dashboard_address=":0", env={"NUMBA_CACHE_DIR": str(cache),
+                                                   "CGASKIN_SHIPPED_KERNELS": "1" if shipped else "0"}) as cluster, \
+            Client(cluster) as client:
         begin = time.perf_counter()
         manifest = run(spec, folder / "fresh", client=client)
         seconds = time.perf_counter() - begin

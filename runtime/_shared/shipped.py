@@ -51,9 +51,11 @@ __all__ = ["Loader", "FOR_KERNELS", "FOR_HELPERS", "LOADED", "setup", "layer_nam
 ROOT = Path(__file__).resolve().parent.parent / "_kernels"
 #: the layout of a layer's files: a layer of another format is not read
 FORMAT = 1
-#: numba's settings that change the machine code of every function (``numba.core.config`` names)
-CODE_SETTINGS = {"NUMBA_OPT": "OPT", "NUMBA_BOUNDSCHECK": "BOUNDSCHECK", "NUMBA_DEBUGINFO": "DEBUGINFO_DEFAULT",
-                 "NUMBA_CPU_NAME": "CPU_NAME", "NUMBA_CPU_FEATURES": "CPU_FEATURES"}
+#: numba's settings that change the machine code of every function: variable -> (``numba.core.config``'s
+#: name, its default)
+CODE_SETTINGS = {"NUMBA_OPT": ("OPT", 3), "NUMBA_BOUNDSCHECK": ("BOUNDSCHECK", None),
+                 "NUMBA_DEBUGINFO": ("DEBUGINFO_DEFAULT", 0), "NUMBA_CPU_NAME": ("CPU_NAME", None),
+                 "NUMBA_CPU_FEATURES": ("CPU_FEATURES", None)}
 #: switches the layer off (a benchmark of host-compiled code, say): ``CGASKIN_SHIPPED_KERNELS=0``
 SWITCH = "CGASKIN_SHIPPED_KERNELS"
 #: the CPUs kernels ship compiled for, best first, and the features (LLVM's names) each assumes: a
@@ -134,9 +136,8 @@ def sources_key(module: str, modules: dict) -> str:
 def _settings_changed() -> list:
     """The numba settings, of ``CODE_SETTINGS``, that this process runs with other than their defaults."""
     from numba.core import config
-    defaults = {"OPT": 3, "BOUNDSCHECK": None, "DEBUGINFO_DEFAULT": 0, "CPU_NAME": None, "CPU_FEATURES": None}
-    return [variable for variable, name in CODE_SETTINGS.items()
-            if variable in os.environ or getattr(config, name, None) != defaults[name]]
+    return [variable for variable, (name, default) in CODE_SETTINGS.items()
+            if variable in os.environ or getattr(config, name, None) != default]
 
 
 @functools.lru_cache(maxsize=1)
