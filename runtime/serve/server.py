@@ -5,10 +5,14 @@ and returns the page for ``GET /`` (built once: the viewer page of ``cgaskin vie
 everything inlined, so the page makes no other request), 404 for any other path, and lets WebSocket
 upgrades through to ``Server.connection``. No part of a URL or a message ever reaches the file system.
 
-Why the checks on Host and Origin: a server on 127.0.0.1 is still reachable from any web page the
-user opens (a script there may open ws://127.0.0.1:PORT, and a DNS name rebound to 127.0.0.1 may
-fetch the page). A browser always sends Origin with a WebSocket handshake, so the handshake must come
-from this server's own page; and on a loopback address the Host must name a loopback host.
+Why the checks: a server on 127.0.0.1 is still reachable from any web page the user opens (a script
+there may open ws://127.0.0.1:PORT, a sandboxed iframe or a file:// page sends ``Origin: null``, and a
+DNS name rebound to this machine may fetch the page). So every request needs the per-launch secret
+token of the URL the server prints (``?token=...``, as Jupyter does): neither a foreign page nor a
+guessed port is enough. Besides, a request's one Host header must name this server (a loopback name
+when it listens on loopback; else its address or this machine's names) at its port, and a browser's
+Origin, which it always sends with a WebSocket handshake, must be this page's own (``null`` is not).
+A client without a browser sends no Origin, and the token in the WebSocket's URL.
 
 The surgery runs on one worker thread (``_pool``): the event loop stays free to answer other tabs and
 pings while a drill computes, and sessions never run at the same time (numba kernels and the shared
@@ -17,11 +21,14 @@ caches see one operation at a time).
 from __future__ import annotations
 
 import asyncio
+import hmac
 import http
 import ipaddress
+import secrets
+import socket
 import threading
 from concurrent.futures import ThreadPoolExecutor
-from urllib.parse import urlsplit
+from urllib.parse import parse_qs, urlsplit
 
 from ..errors import InvalidInputError
 from ..view.model import as_rig, clip_name, rig_glb, rim_edges
@@ -67,6 +74,33 @@ def _loopback(host: str) -> bool:
         return False
 
 
+def _address(host: str) -> str:
+    """An address in one spelling (``::1`` and ``0:0::1`` alike); a name as it is, lower case."""
+    try:
+        return str(ipaddress.ip_address(host.strip("[]")))
+    except ValueError:
+        return host.lower().rstrip(".")
+
+
+def _this_machine() -> set:
+    """This machine's names and the addresses they resolve to (what a request to a server listening on
+    every interface names)."""
+    names = {socket.gethostname(), socket.getfqdn()}
+    try:
+        names |= {info[4][0] for name in list(names) for info in socket.getaddrinfo(name, None)}
+    except OSError:
+        pass
+    return {_address(name) for name in names if name}
+
+
+class _Refused(Exception):
+    """Why a request is refused, and with which HTTP status."""
+
+    def __init__(self, status: http.HTTPStatus, why: str):
+        super().__init__(why)
+        self.status = status
+
+
 class Server:
     """``cgaskin serve`` on ``model`` (a Rig or a model path) at ``host``:``port`` (port 0: any free
     port). ``run()`` serves until interrupted; ``start()`` serves on a thread (tests, notebooks) until
@@ -81,33 +115,58 @@ class Server:
         self.host, self.port = host, port
         self.page = serve_page(self.rig, clip).encode("utf-8")
         self.address = None               # (host, port) bound
+        self.token = secrets.token_urlsafe(24)      # in the URL: every request must carry it
         self.tabs = 0                     # connections served so far
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="cgaskin-surgery")
         self._thread = self._loop = self._stop = None
 
     @property
     def url(self) -> str:
+        """The page's address, with the token every request needs."""
         host, port = self.address
-        return f"http://{f'[{host}]' if ':' in host else host}:{port}/"
+        return f"http://{f'[{host}]' if ':' in host else host}:{port}/?token={self.token}"
 
     # ---- HTTP ---------------------------------------------------------------------------------------
-    def _allowed(self, request) -> str | None:
-        """Why a request is refused (None: allowed)."""
-        host = request.headers.get("Host", "")
+    def _check(self, request) -> None:
+        """Raise ``_Refused`` unless ``request`` names this server, comes from its page or from no
+        browser, and carries the token."""
+        hosts = request.headers.get_all("Host")
+        if len(hosts) != 1:
+            raise _Refused(http.HTTPStatus.BAD_REQUEST, f"{len(hosts)} Host headers: a request has one")
+        try:
+            named = urlsplit(f"//{hosts[0]}")
+            hostname, port = named.hostname or "", named.port
+        except ValueError:
+            raise _Refused(http.HTTPStatus.BAD_REQUEST, f"Host {hosts[0]!r} is no host[:port]") from None
+        if port not in (None, self.address[1]) or not self._serves(hostname):
+            raise _Refused(http.HTTPStatus.FORBIDDEN, f"Host {hosts[0]!r}: not this server's address")
+        origins = request.headers.get_all("Origin")
+        if origins and (len(origins) > 1 or origins[0].lower() != f"http://{hosts[0]}".lower()):
+            raise _Refused(http.HTTPStatus.FORBIDDEN, f"Origin {', '.join(origins)!r}: only this server's own page "
+                                                      "may connect")
+        try:
+            token = parse_qs(urlsplit(request.path).query).get("token", [""])[-1]
+        except ValueError:
+            token = ""
+        if not hmac.compare_digest(token.encode(), self.token.encode()):
+            raise _Refused(http.HTTPStatus.FORBIDDEN, "open the address that cgaskin serve printed (its token)")
+
+    def _serves(self, hostname: str) -> bool:
+        """Whether a request naming ``hostname`` is for this server (a DNS name rebound to its address is
+        not): a loopback name when it listens on loopback, else its address or this machine's names."""
         if _loopback(self.host):
-            hostname = urlsplit(f"//{host}").hostname or ""
-            if not _loopback(hostname):
-                return f"Host {host!r}: this server answers only to a loopback name"
-        origin = request.headers.get("Origin")
-        if origin is not None and origin != "null" and urlsplit(origin).netloc != host:
-            return f"Origin {origin!r}: only this server's own page may connect"
-        return None
+            return _loopback(hostname)
+        if _address(hostname) == _address(self.host) or _loopback(hostname):
+            return True
+        wildcard = _address(self.host) in ("0.0.0.0", "::")
+        return wildcard and _address(hostname) in _this_machine()
 
     def process_request(self, connection, request):
         _, Headers, Response = _websockets()
-        refused = self._allowed(request)
-        if refused:
-            return connection.respond(http.HTTPStatus.FORBIDDEN, refused + "\n")
+        try:
+            self._check(request)
+        except _Refused as refused:
+            return connection.respond(refused.status, f"{refused}\n")
         if request.headers.get("Upgrade", "").lower() == "websocket":
             return None                                          # (on to the handshake)
         if urlsplit(request.path).path != PAGE_PATH:
@@ -139,10 +198,15 @@ class Server:
             await self._stop
 
     def run(self, announce=print) -> None:
-        """Serve until interrupted (Ctrl-C); ``announce`` gets the page's URL once bound."""
+        """Serve until interrupted (Ctrl-C); ``announce`` gets the page's URL once bound. Raises
+        ``InvalidInputError`` when the address cannot be bound (a port in use, say)."""
         async def main():
             task = asyncio.ensure_future(self._serve(ready := asyncio.Event()))
-            await ready.wait()
+            waiting = asyncio.ensure_future(ready.wait())
+            await asyncio.wait({task, waiting}, return_when=asyncio.FIRST_COMPLETED)
+            if task.done():                 # (it failed before it was bound)
+                waiting.cancel()
+                task.result()
             announce(self.url)
             await task
 
@@ -150,8 +214,16 @@ class Server:
             asyncio.run(main())
         except KeyboardInterrupt:
             pass
+        except OSError as exc:
+            raise self._unbound(exc) from None
         finally:
             self._pool.shutdown(wait=False, cancel_futures=True)
+
+    def _unbound(self, exc: OSError) -> InvalidInputError:
+        """The error for an address that cannot be served."""
+        why = (exc.strerror or str(exc)).split(": ")[-1]
+        return InvalidInputError(f"cannot serve on {self.host}:{self.port}: {why}; give another --port "
+                                 "(0: any free one) or --host")
 
     def start(self) -> "Server":
         """Serve on a daemon thread; returns once the port is bound."""
@@ -168,7 +240,7 @@ class Server:
         self._thread.start()
         ready.wait()
         if failed:
-            raise failed[0]
+            raise self._unbound(failed[0]) if isinstance(failed[0], OSError) else failed[0]
         return self
 
     def close(self) -> None:

@@ -7,9 +7,12 @@ error replies while the server goes on.
 One server (a thread, port 0, 127.0.0.1) and one browser (tests/clients/js/serve_page.mjs) for the
 page tests; the screenshot goes to $CGASKIN_VIEW_SCREENSHOTS when set (how docs/view/ is made)."""
 import base64
+import http.client
 import json
 import os
+import socket
 import subprocess
+import sys
 import time
 import urllib.error
 import urllib.request
@@ -217,9 +220,10 @@ def test_hostile_messages_get_error_replies_and_the_server_goes_on(server, fox):
 def test_http_serves_the_page_and_nothing_else(server):
     with urllib.request.urlopen(server.url) as response:
         assert response.headers["Content-Type"].startswith("text/html") and b"cgaskin serve" in response.read()
+    base = f"http://127.0.0.1:{server.address[1]}/"
     for path in ("etc/passwd", "../pyproject.toml", "runtime/serve/server.py", "assets/viewer/main.js", "%2e%2e/"):
         with pytest.raises(urllib.error.HTTPError) as refused:
-            urllib.request.urlopen(server.url + path)
+            urllib.request.urlopen(f"{base}{path}?token={server.token}")
         assert refused.value.code == 404
     other = urllib.request.Request(server.url, headers={"Host": "attacker.example"})   # (DNS rebinding)
     with pytest.raises(urllib.error.HTTPError) as refused:
@@ -227,6 +231,103 @@ def test_http_serves_the_page_and_nothing_else(server):
     assert refused.value.code == 403
     with pytest.raises(InvalidStatus):            # a WebSocket from another site's page
         connect(_ws(server), origin="http://attacker.example")
+
+
+def _status(port: int, path: str, headers: list) -> tuple[int, str]:
+    """(status, body) of a GET with exactly these headers (Host included, as given: none, or twice)."""
+    connection = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+    connection.putrequest("GET", path, skip_host=True, skip_accept_encoding=True)
+    for name, value in headers:
+        connection.putheader(name, value)
+    connection.endheaders()
+    response = connection.getresponse()
+    status, body = response.status, response.read().decode()
+    connection.close()
+    return status, body
+
+
+def test_every_request_needs_the_token_its_own_origin_and_one_host(server):
+    port, token = server.address[1], server.token
+    host = ("Host", f"127.0.0.1:{port}")
+    assert _status(port, f"/?token={token}", [host])[0] == 200
+    for path in ("/", "/?token=", f"/?token={token[:-1]}", f"/?token={token}x", "/?token=a&token=b"):
+        status, body = _status(port, path, [host])
+        assert status == 403 and "token" in body, path
+    for headers in ([], [host, host], [("Host", "["), ], [("Host", "127.0.0.1:notaport")]):
+        status, body = _status(port, f"/?token={token}", headers)
+        assert status == 400 and "Host" in body, headers
+    assert _status(port, f"/?token={token}", [("Host", f"127.0.0.1:{port + 1}")])[0] == 403
+    for origin in ("null", f"http://127.0.0.2:{port}", f"https://127.0.0.1:{port}", "file://"):
+        assert _status(port, f"/?token={token}", [host, ("Origin", origin)])[0] == 403, origin
+    # WebSockets: the page's own Origin or none (a client without a browser), and the token, or no handshake
+    with connect(_ws(server), origin=f"http://127.0.0.1:{port}") as ws:
+        ws.send('{"op": "hello"}')
+        assert json.loads(ws.recv(timeout=30))["ok"] is True
+    for url, origin in ((f"ws://127.0.0.1:{port}/", None), (f"ws://127.0.0.1:{port}/?token=guess", None),
+                        (_ws(server), "null")):
+        with pytest.raises(InvalidStatus) as refused:
+            connect(url, origin=origin)
+        assert refused.value.response.status_code == 403
+
+
+# a page on another loopback address (another site): a sandboxed iframe (Origin: null) tries the server's
+# WebSocket without the token, with a guessed one, and with the real one (which another site cannot know)
+FOREIGN = """<!doctype html><meta charset="utf-8"><title>another site</title>
+<iframe sandbox="allow-scripts" srcdoc="<script>
+const attempt = (url) => new Promise((done) => {
+    const ws = new WebSocket(url);
+    ws.onopen = () => ws.send(JSON.stringify({op: 'hello'}));
+    ws.onmessage = (event) => done('answered: ' + event.data.slice(0, 60));
+    ws.onerror = () => done('refused');
+});
+(async () => parent.postMessage({none: await attempt('ws://127.0.0.1:PORT/'),
+                                 guessed: await attempt('ws://127.0.0.1:PORT/?token=guess'),
+                                 known: await attempt('ws://127.0.0.1:PORT/?token=TOKEN')}, '*'))();
+</script>"></iframe>
+<script>addEventListener('message', (event) => { window.result = event.data; });</script>
+"""
+
+
+def test_a_page_of_another_site_cannot_drive_the_server(threejs, server, tmp_path):
+    import functools
+    import http.server
+    import threading
+    port = server.address[1]
+    (tmp_path / "index.html").write_text(FOREIGN.replace("PORT", str(port)).replace("TOKEN", server.token))
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(tmp_path))
+    with http.server.ThreadingHTTPServer(("127.0.0.2", 0), handler) as site:
+        threading.Thread(target=site.serve_forever, daemon=True).start()
+        try:
+            done = subprocess.run([threejs["node"], str(threejs["js"] / "page_result.mjs"),
+                                   f"http://127.0.0.2:{site.server_address[1]}/index.html", str(tmp_path / "out.json")],
+                                  capture_output=True, text=True, timeout=120,
+                                  env={**os.environ, "CGASKIN_CHROMIUM": threejs["chromium"]})
+        finally:
+            site.shutdown()
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads((tmp_path / "out.json").read_text())["result"]
+    assert result == {"none": "refused", "guessed": "refused", "known": "refused"}, result
+
+
+def test_listening_on_every_interface_answers_only_to_this_machines_names(fox):
+    require(MISSING, "cgaskin serve's tests")
+    with Server(fox[1], host="0.0.0.0", port=0) as everywhere:     # (requests only from loopback here)
+        port, token = everywhere.address[1], everywhere.token
+        assert _status(port, f"/?token={token}", [("Host", f"127.0.0.1:{port}")])[0] == 200
+        assert _status(port, f"/?token={token}", [("Host", f"{socket.gethostname()}:{port}")])[0] == 200
+        for rebound in ("attacker.example", "192.0.2.7", f"attacker.example:{port}"):    # DNS rebinding
+            assert _status(port, f"/?token={token}", [("Host", rebound)])[0] == 403, rebound
+
+
+def test_a_port_in_use_exits_with_one_line(fox):
+    require(MISSING, "cgaskin serve's tests")
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        done = subprocess.run([sys.executable, "-m", "cgaskin", "serve", str(fox[0]), "--port",
+                               str(taken.getsockname()[1])], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.count("\n") == 1 and "address already in use" in done.stderr and "--port" in done.stderr
 
 
 def test_it_binds_localhost_unless_told(fox, monkeypatch, capsys):

@@ -29,7 +29,8 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
     const mesh = meshes[0], growable = new GrowableMesh(mesh), rimSlots = new RimSlots(rims.edges);
     const box = new THREE.Box3().setFromBufferAttribute(mesh.geometry.attributes.position);
     const diagonal = box.getSize(new THREE.Vector3()).length();
-    const socket = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/`);
+    // (the page's own query holds the token the server printed: the WebSocket must carry it too)
+    const socket = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/${location.search}`);
     const waiting = new Map();                 // id -> resolve of the request's promise
     const stats = {replies: [], sent: 0};
     const counts = {n_vertices: 0, n_faces: 0, n_rims: rims.count, rows: 0};
