@@ -161,6 +161,8 @@ def number(value, name: str) -> float:
     """A finite JSON number (not a boolean) within +-MAX_COORDINATE, as float."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ProtocolError(f"{name} must be a number, got {_short(value)}")
+    if isinstance(value, int) and abs(value) > MAX_COORDINATE:      # (float() overflows past 1e308)
+        raise ProtocolError(f"{name} must be finite and within +-{MAX_COORDINATE:g}, got {_short(value)}")
     x = float(value)
     if not math.isfinite(x) or abs(x) > MAX_COORDINATE:
         raise ProtocolError(f"{name} must be finite and within +-{MAX_COORDINATE:g}, got {_short(value)}")
@@ -202,7 +204,8 @@ def pose_spec(message: dict) -> PoseSpec:
     time = number(message.get("time", 0.0), "time")
     if time < 0:
         raise ProtocolError(f"time must be >= 0 seconds, got {time!r}")
-    dilations = message.get("dilations") or {}
+    dilations = message.get("dilations")
+    dilations = {} if dilations is None else dilations
     if not isinstance(dilations, dict):
         raise ProtocolError(f"dilations must be an object {{joint: factor}}, got {_short(dilations)}")
     if len(dilations) > MAX_DILATIONS:

@@ -193,6 +193,10 @@ def test_hostile_messages_get_error_replies_and_the_server_goes_on(server, fox):
                json.dumps({"op": "tear", "from": [[0.0] * 3] * 100000, "to": 1})[:MAX_MESSAGE + 10],
                json.dumps({"op": "tear", "from": [[[[[[1]]]]]] * 2, "to": 1}), "[" * 5000 + "]" * 5000,
                json.dumps({"op": "cut", "normal": [0, 0, 0], "point": [0, 0, 0]}),
+               '{"op": "cut", "normal": [1, 0, 0], "point": [0, 0, 1' + "0" * 400 + ']}',
+               '{"op": "cut", "normal": [1, 0, 0], "point": [0, 0, 0], "dilations": false}',
+               '{"op": "cut", "normal": [1, 0, 0], "point": [0, 0, 0], "dilations": []}',
+               '{"op": "cut", "normal": [1, 0, 0], "point": [0, 0, 0], "dilations": 0}',
                json.dumps({"op": "undo"}), b"\x00\x01binary"]
     with connect(_ws(server)) as ws:
         for message in hostile:
@@ -200,6 +204,11 @@ def test_hostile_messages_get_error_replies_and_the_server_goes_on(server, fox):
             reply = json.loads(ws.recv(timeout=30))
             assert reply["ok"] is False and reply["error"], message
             assert reply["kind"] != "InternalError", reply
+            text = message if isinstance(message, str) else ""
+            if "0000000000" in text:            # a 400-digit integer: the range's error, not a crash
+                assert reply["kind"] == "ProtocolError" and "within +-1e+12" in reply["error"], reply
+            if '"dilations": ' in text:
+                assert reply["kind"] == "ProtocolError" and "dilations must be an object" in reply["error"], reply
         ws.send(json.dumps({"id": 7, "op": "tear", "from": [[1e6, 0, 0], [1e6, 1, 0]],
                             "to": [[1e6, 0, 1], [1e6, 1, 1]], "clip": "Walk", "time": 0.2}))
         missed = json.loads(ws.recv(timeout=30))
