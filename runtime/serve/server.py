@@ -93,14 +93,6 @@ def _this_machine() -> set:
     return {_address(name) for name in names if name}
 
 
-class _Refused(Exception):
-    """Why a request is refused, and with which HTTP status."""
-
-    def __init__(self, status: http.HTTPStatus, why: str):
-        super().__init__(why)
-        self.status = status
-
-
 class Server:
     """``cgaskin serve`` on ``model`` (a Rig or a model path) at ``host``:``port`` (port 0: any free
     port). ``run()`` serves until interrupted; ``start()`` serves on a thread (tests, notebooks) until
@@ -127,29 +119,29 @@ class Server:
         return f"http://{f'[{host}]' if ':' in host else host}:{port}/?token={self.token}"
 
     # ---- HTTP ---------------------------------------------------------------------------------------
-    def _check(self, request) -> None:
-        """Raise ``_Refused`` unless ``request`` names this server, comes from its page or from no
-        browser, and carries the token."""
+    def _refused(self, request) -> tuple | None:
+        """(HTTP status, why) when ``request`` does not name this server, comes from another page than
+        its own, or lacks the token; None when it may go on."""
         hosts = request.headers.get_all("Host")
         if len(hosts) != 1:
-            raise _Refused(http.HTTPStatus.BAD_REQUEST, f"{len(hosts)} Host headers: a request has one")
+            return http.HTTPStatus.BAD_REQUEST, f"{len(hosts)} Host headers: a request has one"
         try:
             named = urlsplit(f"//{hosts[0]}")
             hostname, port = named.hostname or "", named.port
         except ValueError:
-            raise _Refused(http.HTTPStatus.BAD_REQUEST, f"Host {hosts[0]!r} is no host[:port]") from None
+            return http.HTTPStatus.BAD_REQUEST, f"Host {hosts[0]!r} is no host[:port]"
         if port not in (None, self.address[1]) or not self._serves(hostname):
-            raise _Refused(http.HTTPStatus.FORBIDDEN, f"Host {hosts[0]!r}: not this server's address")
+            return http.HTTPStatus.FORBIDDEN, f"Host {hosts[0]!r}: not this server's address"
         origins = request.headers.get_all("Origin")
         if origins and (len(origins) > 1 or origins[0].lower() != f"http://{hosts[0]}".lower()):
-            raise _Refused(http.HTTPStatus.FORBIDDEN, f"Origin {', '.join(origins)!r}: only this server's own page "
-                                                      "may connect")
+            return http.HTTPStatus.FORBIDDEN, f"Origin {', '.join(origins)!r}: only this server's own page may connect"
         try:
             token = parse_qs(urlsplit(request.path).query).get("token", [""])[-1]
         except ValueError:
             token = ""
         if not hmac.compare_digest(token.encode(), self.token.encode()):
-            raise _Refused(http.HTTPStatus.FORBIDDEN, "open the address that cgaskin serve printed (its token)")
+            return http.HTTPStatus.FORBIDDEN, "open the address that cgaskin serve printed (its token)"
+        return None
 
     def _serves(self, hostname: str) -> bool:
         """Whether a request naming ``hostname`` is for this server (a DNS name rebound to its address is
@@ -163,10 +155,9 @@ class Server:
 
     def process_request(self, connection, request):
         _, Headers, Response = _websockets()
-        try:
-            self._check(request)
-        except _Refused as refused:
-            return connection.respond(refused.status, f"{refused}\n")
+        refused = self._refused(request)
+        if refused is not None:
+            return connection.respond(refused[0], f"{refused[1]}\n")
         if request.headers.get("Upgrade", "").lower() == "websocket":
             return None                                          # (on to the handshake)
         if urlsplit(request.path).path != PAGE_PATH:
