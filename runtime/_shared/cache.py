@@ -3,13 +3,29 @@
 Rigs are frozen and compared by identity (``eq=False``), so they are weak dictionary keys: an entry
 goes with its rig. An entry also remembers the rig's ``vertices`` and ``faces`` objects and is
 rebuilt when either is another object. A rig's arrays are read-only (``frozen.py``), so no edit in
-place can leave an entry stale.
+place can leave an entry stale; numpy lets a caller set such an array writeable again (the buffer
+behind it is), and then an operation refuses the rig (``check_read_only``) rather than use values
+derived from arrays that may have changed.
 """
 from __future__ import annotations
 
 import weakref
 
-__all__ = ["rig_cached", "clear"]
+from ..errors import InvalidInputError
+
+__all__ = ["rig_cached", "clear", "check_read_only"]
+
+#: the arrays of a rig that operations read (each is read-only unless a caller made it writeable)
+_ARRAYS = ("vertices", "faces", "joints", "weights")
+
+
+def check_read_only(rig) -> None:
+    """Raise ``InvalidInputError`` when one of ``rig``'s arrays was made writeable again."""
+    for name in _ARRAYS:
+        if getattr(rig, name).flags.writeable:
+            raise InvalidInputError(f"rig.{name} was made writeable again: a rig's arrays are read-only, as what "
+                                    "is derived from them (topology, BVH) is kept per rig; make a new rig with "
+                                    "rig.with_mesh(vertices, faces, joints, weights) instead")
 
 #: rig -> (its vertices object, its faces object, {name: value})
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -17,6 +33,7 @@ _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def rig_cached(rig, name: str, build):
     """``build(rig)``, computed once per rig and name and kept while the rig lives."""
+    check_read_only(rig)
     entry = _CACHE.get(rig)
     if entry is None or entry[0] is not rig.vertices or entry[1] is not rig.faces:
         entry = (rig.vertices, rig.faces, {})

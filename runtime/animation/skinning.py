@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._shared.cache import check_read_only
 from .._shared.checks import float_array, index_array
 from .._shared.frozen import kernel_array
 from .._shared.jit import F2, F3, I2, WIDE, kernel, precompiled
@@ -136,6 +137,7 @@ def skin(rig: Rig, pose: Pose | Poses | None = None, out=None) -> np.ndarray:
     glTF semantics for every format: Σ_i w_i (G[joint_i] · IBM_i) v; the mesh node's own transform is
     ignored."""
     pose = rig.rest_pose() if pose is None else check_pose(rig, pose, (Pose, Poses))
+    check_read_only(rig)
     if isinstance(pose, Poses):
         return _skin_poses(rig, pose, out)
     # (the writeable buffers behind the rig's read-only arrays: the blend loop's one compiled type)

@@ -335,3 +335,21 @@ def test_a_pickled_rig_comes_back_read_only(fox):
     with pytest.raises(TypeError):
         again.attributes["_X"] = again.vertices
     np.testing.assert_array_equal(cgaskin.skin(again, again.pose(0, 0.3)), cgaskin.skin(fox, fox.pose(0, 0.3)))
+
+
+@pytest.mark.parametrize("name", ["vertices", "faces", "joints", "weights"])
+def test_an_array_made_writeable_again_is_refused_not_used_stale(name):
+    """numpy lets ``rig.vertices.flags.writeable = True`` through (the buffer behind the read-only view is
+    writeable): an edit in place would leave the rig's topology and BVH stale. Every operation refuses
+    such a rig, also after one that cached those values (issue 43 D13)."""
+    rig = cgaskin.capsule_arm()
+    cgaskin.cut(rig, [1, 0, 0], [1.5, 0, 0])               # (its topology and BVH are cached now)
+    getattr(rig, name).flags.writeable = True
+    if name == "vertices":
+        rig.vertices[:, 0] += 10.0                          # moved away: a stale BVH would miss the plane
+    blade = ([1.0, 0.05, 1.0], [1.0, 0.05, 0.0]), ([1.5, 0.05, 1.0], [1.5, 0.05, 0.0])
+    for operation in (lambda: cgaskin.cut(rig, [1, 0, 0], [1.5, 0, 0]), lambda: cgaskin.skin(rig),
+                      lambda: cgaskin.tear(rig, *blade), lambda: cgaskin.drill(rig, [1.0, 0, -1], [1.0, 0, 1], 0.1),
+                      lambda: cgaskin.Surgery(rig).cut([1, 0, 0], [1.5, 0, 0])):
+        with pytest.raises(InvalidInputError, match=f"rig.{name} was made writeable again.*with_mesh"):
+            operation()
