@@ -97,7 +97,7 @@ def main(argv=None):
     parser.add_argument("--count", type=int, default=5, help="instances of each operation per model")
     parser.add_argument("--repeat", type=int, default=3, help="timed batches per cluster (median)")
     args = parser.parse_args(argv)
-    from cgaskin import precompile
+    from cgaskin.app.precompile import default_jobs, precompile
     precompile()
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
@@ -105,15 +105,11 @@ def main(argv=None):
         fresh = fresh_worker(Path(tmp))
     rows[0].append(1.0)
     rows[1].append(rows[1][5] / rows[0][5])
-    print_table(f"cgaskin batch on a LocalCluster (median of the timed batches; start apart; {_cores()} cores, "
+    print_table(f"cgaskin batch on a LocalCluster (median of the timed batches; start apart; {default_jobs()} cores, "
                 f"load average {load:.2f} before, {os.getloadavg()[0]:.2f} after)",
                 ["workers", "items", "start s", "batch s", "ms/item", "items/s", "failed", "x 1 worker"], rows)
     print_table("a fresh worker's first item (a new worker process, an empty numba cache; one tear of Fox)",
                 ["first item s", "kernels loaded", "kernels compiled"], [fresh])
-
-
-def _cores() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 if __name__ == "__main__":

@@ -31,7 +31,8 @@ from numba import njit, types
 from . import shipped
 from .cache_keys import is_keyed, keyed
 
-__all__ = ["kernel", "helper", "cache_generated", "GENERIC", "WIDE", "inlined", "callee", "precompiled", "record", "SIGNATURES", "Signature"]
+__all__ = ["kernel", "helper", "cache_generated", "GENERIC", "WIDE", "inlined", "callee", "precompiled", "record",
+           "SIGNATURES", "Signature"]
 
 _OPTIONS = {"nogil": True, "error_model": "numpy"}       # and cached, by ``keyed`` (not numba's cache=True)
 

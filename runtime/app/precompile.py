@@ -118,16 +118,6 @@ def _in_parallel(shares: list) -> list:
     return failed
 
 
-def compile_in_parallel(indices: list, jobs: int) -> list:
-    """Compile these entries of ``KERNELS`` in ``jobs`` processes, the fused ones last (the callees they
-    inline are then in the cache, compiled in parallel); returns a line for each that failed."""
-    failed = []
-    for stage in ([i for i in indices if not KERNELS[i].fused], [i for i in indices if KERNELS[i].fused]):
-        if stage:
-            failed += _in_parallel(_shares(stage, jobs))
-    return failed
-
-
 def default_jobs() -> int:
     """The cores this process may run on (``os.cpu_count()`` counts the machine's)."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
@@ -153,7 +143,11 @@ def precompile(jobs: int | None = None, verbose: bool = False) -> int:
     if verbose:
         print(f"compiling {len(missing)} numba kernels in {min(jobs, len(missing))} processes (once: they are "
               f"cached for later runs)", flush=True)
-    failed = compile_in_parallel(missing, jobs)
+    # fused kernels last: the callees they inline are then in the cache, compiled in parallel
+    failed = []
+    for stage in ([i for i in missing if not KERNELS[i].fused], [i for i in missing if KERNELS[i].fused]):
+        if stage:
+            failed += _in_parallel(_shares(stage, jobs))
     if verbose:
         print(f"compiled in {time.perf_counter() - start:.1f} s", flush=True)
         for line in failed:

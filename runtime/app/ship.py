@@ -105,9 +105,9 @@ def check_kernels() -> tuple[list, list]:
     _, keys = _keys(wanted)
     here = shipped.setup()
     layers = [path.parent for path in sorted(shipped.ROOT.glob("*/manifest.json"))]
+    built_for = {folder: (_read_manifest(folder) or {}).get("built_for", {}) for folder in layers}
     mine = [folder for folder in layers
-            if {k: v for k, v in (_read_manifest(folder) or {}).get("built_for", {}).items()
-                if k in ("python", "platform")} == {"python": here["python"], "platform": here["platform"]}]
+            if (built_for[folder].get("python"), built_for[folder].get("platform")) == (here["python"], here["platform"])]
     if not mine:
         if layers:
             return [], [f"no shipped kernels for {here['python']} on {here['platform']} (the layers are "

@@ -15,7 +15,6 @@ from __future__ import annotations
 import asyncio
 import hashlib
 import logging
-import os
 import sys
 import time
 from dataclasses import dataclass
@@ -82,10 +81,6 @@ def _warmup_plugin():
     return type("CgaskinWarmup", (Warmup, WorkerPlugin), {"__module__": __name__})()
 
 
-def _cores() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-
-
 def run(spec, out, client=None, workers: int | None = None, scheduler: str | None = None,
         progress: bool = False, flush_seconds: float = 1.0) -> Manifest:
     """Make every item of ``spec`` under the folder ``out`` (``out/items/``, ``out/manifest.parquet``).
@@ -134,9 +129,9 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
             if client is None:
                 if scheduler is None:
                     # compile here, on every core, before the workers start: they then only load the cache
-                    from ..app.precompile import precompile
+                    from ..app.precompile import default_jobs, precompile
                     precompile(verbose=progress)
-                    cluster = LocalCluster(n_workers=workers or _cores(), threads_per_worker=1, processes=True,
+                    cluster = LocalCluster(n_workers=workers or default_jobs(), threads_per_worker=1, processes=True,
                                            silence_logs=logging.ERROR)
                     owned.append(cluster)
                     client = Client(cluster)
