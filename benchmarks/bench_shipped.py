@@ -6,11 +6,12 @@ compiled by numba on this machine: skin, cut, a tear stroke and a drill, in one 
 Fresh interpreters, alternating: *host* with ``CGASKIN_SHIPPED_KERNELS=0`` (numba compiles every kernel
 for this CPU, SIMD extensions and all, in the first round, into a cache the later rounds load) and
 *shipped* (an empty ``NUMBA_CACHE_DIR`` every round: the kernels load from ``cgaskin/_kernels``, each
-for the best CPU level this machine runs). Each reports what compiled and what loaded, the seconds of its first
-operation from the process's start, the median thread CPU time of each operation (on one thread,
-``NUMBA_NUM_THREADS=1``: the machine is shared, and CPU time leaves out time another process took), and a digest of every
-output. The table gives shipped / host speed (> 1: the shipped code is faster); the outputs must be
-equal bit for bit. The rig: the built-in capsule arm with ``--rings`` rings of 256 vertices per bone.
+for the best CPU level this machine runs). Each reports what compiled and what loaded, the seconds of
+its first operation from the process's start, the median thread CPU time of each operation (on one
+thread, ``NUMBA_NUM_THREADS=1``: the machine is shared, and CPU time leaves out time another process
+took), and a digest of every output. The table gives shipped / host speed (> 1: the shipped code is
+faster); the outputs must be equal bit for bit. The rig: the built-in capsule arm with ``--rings``
+rings of 256 vertices per bone.
 """
 from __future__ import annotations
 
@@ -47,11 +48,12 @@ repeat, rings = int(sys.argv[1]), int(sys.argv[2])
 rig = cgaskin.capsule_arm(rings_per_segment=rings, segments_around=256)
 pose = rig.pose("wave", 0.7)
 blade = lambda x: ([x, 0.05, 1.0], [x, 0.05, 0.0])
+mesh = lambda *rigs: [array for r in rigs for array in (r.vertices, r.faces)]      # (the outputs compared)
 operations = {
-    "skin": lambda: (cgaskin.skin(rig, pose),),
-    "cut": lambda: (lambda a, b: (a.vertices, a.faces, b.vertices, b.faces))(*cgaskin.cut(rig, [1, 0.2, 0], [1.5, 0, 0])),
-    "tear stroke": lambda: (lambda t: (t.vertices, t.faces))(cgaskin.tear(rig, blade(1.0), blade(1.3), opening=0.01)),
-    "drill": lambda: (lambda d: (d.vertices, d.faces))(cgaskin.drill(rig, [1.4, 0.0, -1.0], [1.4, 0.0, 1.0], 0.1)),
+    "skin": lambda: [cgaskin.skin(rig, pose)],
+    "cut": lambda: mesh(*cgaskin.cut(rig, [1, 0.2, 0], [1.5, 0, 0])),
+    "tear stroke": lambda: mesh(cgaskin.tear(rig, blade(1.0), blade(1.3), opening=0.01)),
+    "drill": lambda: mesh(cgaskin.drill(rig, [1.4, 0.0, -1.0], [1.4, 0.0, 1.0], 0.1)),
 }
 digests, medians, first = {}, {}, None
 for name, operation in operations.items():
@@ -64,9 +66,9 @@ for name, operation in operations.items():
         operation()
         samples.append(time.thread_time() - began)
     medians[name] = statistics.median(samples)
-print("@@" + json.dumps({"compiles": len(compiles), "compiled": sorted(set(compiles)), "loads": sum(shipped.LOADED.values()), "first": first,
-                        "medians": medians, "digests": digests, "vertices": len(rig.vertices),
-                        "faces": len(rig.faces)}))
+print("@@" + json.dumps({"compiles": len(compiles), "compiled": sorted(set(compiles)),
+                        "loads": sum(shipped.LOADED.values()), "first": first, "medians": medians,
+                        "digests": digests, "vertices": len(rig.vertices), "faces": len(rig.faces)}))
 """
 
 

@@ -105,9 +105,9 @@ def check_kernels() -> tuple[list, list]:
     _, keys = _keys(wanted)
     here = shipped.setup()
     layers = [path.parent for path in sorted(shipped.ROOT.glob("*/manifest.json"))]
-    built_for = {folder: (_read_manifest(folder) or {}).get("built_for", {}) for folder in layers}
-    mine = [folder for folder in layers
-            if (built_for[folder].get("python"), built_for[folder].get("platform")) == (here["python"], here["platform"])]
+    manifests = {folder: _read_manifest(folder) or {"built_for": {}, "kernels": {}} for folder in layers}
+    mine = [folder for folder in layers if all(manifests[folder]["built_for"].get(key) == here[key]
+                                               for key in ("python", "platform"))]
     if not mine:
         if layers:
             return [], [f"no shipped kernels for {here['python']} on {here['platform']} (the layers are "
@@ -115,9 +115,10 @@ def check_kernels() -> tuple[list, list]:
         return sorted(wanted), [f"no shipped kernels in {shipped.ROOT}"]
     stale, notes = [], []
     for folder in mine:
-        manifest = _read_manifest(folder)
+        manifest = manifests[folder]
         stale += [f"{folder.name}: {name}" for name in _stale(manifest, folder, wanted, keys)]
-        stale += [f"{folder.name}: {name} (no longer recorded)" for name in sorted(set(manifest["kernels"]) - set(wanted))]
+        stale += [f"{folder.name}: {name} (no longer recorded)"
+                  for name in sorted(set(manifest["kernels"]) - set(wanted))]
         differs = [f"{k} {manifest['built_for'][k]} (installed: {here[k]})" for k in ("numba", "llvmlite", "numpy")
                    if manifest["built_for"][k] != here[k]]
         if differs:
@@ -173,8 +174,9 @@ def _compile_for(cpu: str, names: list, folder: Path, jobs: int) -> dict:
     shares = [sorted({f"{KERNELS[i].module}.{KERNELS[i].name}" for i in share}) for share in _shares(indices, jobs)]
     with tempfile.TemporaryDirectory(prefix="cgaskin-kernels-") as caches:
         builders = [subprocess.Popen([sys.executable, "-c", _BUILDER, str(folder), *share],
-                                     env={**env, "NUMBA_CACHE_DIR": str(Path(caches, str(k)))}, stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                     env={**env, "NUMBA_CACHE_DIR": str(Path(caches, str(k)))},
+                                     stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     text=True)
                     for k, share in enumerate(shares)]
         reports = [builder.communicate() for builder in builders]
     failed = [error.strip() for builder, (_, error) in zip(builders, reports) if builder.returncode]

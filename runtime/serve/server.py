@@ -21,6 +21,7 @@ caches see one operation at a time).
 from __future__ import annotations
 
 import asyncio
+import functools
 import hmac
 import http
 import ipaddress
@@ -82,15 +83,16 @@ def _address(host: str) -> str:
         return host.lower().rstrip(".")
 
 
-def _this_machine() -> set:
+@functools.lru_cache(maxsize=1)
+def _this_machine() -> frozenset:
     """This machine's names and the addresses they resolve to (what a request to a server listening on
-    every interface names)."""
+    every interface names); looked up once, not at every request."""
     names = {socket.gethostname(), socket.getfqdn()}
     try:
         names |= {info[4][0] for name in list(names) for info in socket.getaddrinfo(name, None)}
     except OSError:
         pass
-    return {_address(name) for name in names if name}
+    return frozenset(_address(name) for name in names if name)
 
 
 class Server:
@@ -134,7 +136,7 @@ class Server:
             return http.HTTPStatus.FORBIDDEN, f"Host {hosts[0]!r}: not this server's address"
         origins = request.headers.get_all("Origin")
         if origins and (len(origins) > 1 or origins[0].lower() != f"http://{hosts[0]}".lower()):
-            return http.HTTPStatus.FORBIDDEN, f"Origin {', '.join(origins)!r}: only this server's own page may connect"
+            return http.HTTPStatus.FORBIDDEN, f"Origin {', '.join(origins)!r}: only this server's own page connects"
         try:
             token = parse_qs(urlsplit(request.path).query).get("token", [""])[-1]
         except ValueError:
