@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..animation.pose import Pose, clip_from_poses
+from .._shared.checks import real_number
 from ..animation.rig import Rig
 from ..errors import InvalidInputError
 from ..rigs import load, save
@@ -100,7 +101,7 @@ def view_html(model, *, clip=None, pose=None, play=None, time: float = 0.0, skin
     if pose is not None and clip is not None:
         raise InvalidInputError(f"give a pose or a clip, not both (clip={clip!r}): the page shows one "
                                 f"first, and its clip menu switches between all")
-    if not np.isfinite(time) or time < 0:
+    if real_number(time, "time") < 0:
         raise InvalidInputError(f"time {time!r}: give seconds >= 0")
     if pose is not None:
         rig, name = _with_pose(rig, pose)

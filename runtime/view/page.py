@@ -21,7 +21,7 @@ import posixpath
 import re
 from importlib import resources
 
-from ..errors import InvalidInputError
+from ..errors import InternalError, InvalidInputError
 from .assets import THREE_FILES, THREE_VERSION, VIEWER_MODULES, asset_text
 
 #: the page's skinning modes: "cgaskin" blends the bones' versors with the generated GLSL ES chunk in
@@ -79,7 +79,7 @@ def module_text(name: str) -> str:
         target = posixpath.normpath(posixpath.join(folder, match.group(3)))
         names = [key for key, value in MODULES.items() if value == target]
         if not names:
-            raise RuntimeError(f"{path} imports {match.group(3)}, which the page does not inline "
+            raise InternalError(f"{path} imports {match.group(3)}, which the page does not inline "
                                f"(three {THREE_VERSION}: add it to cgaskin.view.assets.THREE_FILES)")
         return f"{match.group(1)}{match.group(2)}{names[0]}{match.group(2)}"
 

@@ -87,7 +87,7 @@ def shared(models_dir):
 
 
 @pytest.fixture(scope="module")
-def pages(threejs, fox, arm, shared, tmp_path_factory):
+def pages(threejs, fox, arm, shared, models_dir, tmp_path_factory):
     """Every page written, opened and driven once: {"fox": record, "arm": record, ...}."""
     work = tmp_path_factory.mktemp("view")
     path, rig = fox
@@ -114,13 +114,20 @@ def pages(threejs, fox, arm, shared, tmp_path_factory):
             ["call", "skinning"], ["call", "shaderPositions", "cgaskin"], ["call", "shaderPositions", "three"],
             ["call", "setDilation", HEAD, 1.8], ["call", "shaderPositions", "cgaskin"],
             ["call", "setSkinning", "three"], ["pixels"], ["dom", "#skinning", "cgaskin", "change"], ["pixels"],
-            ["call", "skinning"]]},
+            ["call", "skinning"], ["value", "#clip"]]},
         {"name": "notebook", "url": notebook.as_uri(), "frame": True, "steps": [
             ["call", "clip"], ["call", "isPlaying"], ["call", "positions"], ["call", "rimCount"],
             ["call", "rimPositions"], ["call", "snapshot"],
             ["call", "setClip", "wave"], ["call", "pause"], ["call", "setTime", 0.5], ["call", "positions"],
             ["call", "shaderPositions", "cgaskin"], ["call", "shaderPositions", "three"]]},
     ]
+    if "Arm5.glb" in shared:                              # a long model on a wide canvas, through its clip
+        arm5 = work / "arm5.html"
+        assert main(["view", str(Path(models_dir) / "Arm5.glb"), "--out", str(arm5)]) == 0
+        clips = shared["Arm5.glb"][0].clips
+        times = np.linspace(0, clips[0].duration, 4) if clips else [0.0]
+        jobs.append({"name": "arm5", "url": arm5.as_uri(), "width": 1200, "height": 800, "steps": [
+            step for t in times for step in (["call", "setTime", float(t)], ["pixels"])]})
     for name, (rig, pose) in shared.items():             # cgaskin's shader against three.js's, posed
         page = work / f"{name}.html"
         cgaskin.show(rig, pose=pose).save(page)
@@ -166,6 +173,25 @@ def test_fox_is_in_frame_and_plays_what_cgaskin_skins(pages, fox):
     for t, result in zip(WALK_TIMES, (r[8], r[11])):
         error = np.abs(_positions(result, rig.n_vertices) - cgaskin.skin(rig, rig.pose("Walk", t))).max()
         assert error / diagonal < TOLERANCE, f"Walk at {t} s: the page differs from cgaskin.skin by {error / diagonal:.2e}"
+
+
+def test_the_clip_menu_shows_the_clip_that_plays(pages):
+    assert pages["fox"]["results"][-1] == "Walk"           # (cgaskin view --clip Walk; Survey is the first)
+
+
+def test_a_long_model_on_a_wide_canvas_is_whole_in_the_picture(pages):
+    """Arm5 (its fingertips reach far from its centre) at 1200x800, at four times of its clip: no part of
+    the model on the canvas's edge, and the model not lost in the middle either."""
+    if "arm5" not in pages:
+        pytest.skip("Arm5.glb is not in the shared models folder")
+    record = pages["arm5"]
+    assert record["errors"] == [], record["errors"]
+    for result in record["results"][1::2]:
+        model = np.abs(_image(result) - BACKGROUND).max(axis=2) > 12
+        edge = np.concatenate([model[:3].ravel(), model[-3:].ravel(), model[:, :3].ravel(), model[:, -3:].ravel()])
+        assert not edge.any(), f"{edge.sum()} model pixels on the canvas's edge: the picture crops the model"
+        rows, columns = np.nonzero(model)
+        assert max(np.ptp(rows) / model.shape[0], np.ptp(columns) / model.shape[1]) > 0.6
 
 
 def test_the_scrubber_sets_the_time(pages):
@@ -289,3 +315,17 @@ def test_vendored_threejs_is_the_pinned_npm_version(threejs):
     different = [mine for mine, theirs in THREE_FILES.items()
                  if (assets_folder() / "three" / mine).read_bytes() != (package / theirs).read_bytes()]
     assert different == [], f"vendored three.js differs from npm three {pinned}: run scripts/vendor-three.sh"
+
+
+@pytest.mark.parametrize("time", ["x", None, True, float("nan"), -1.0])
+def test_a_time_that_is_not_seconds_is_refused_by_name(time):
+    with pytest.raises(cgaskin.errors.InvalidInputError, match="time"):
+        cgaskin.view.view_html(cgaskin.capsule_arm(), time=time)
+
+
+def test_a_module_the_page_does_not_inline_is_cgaskins_bug(monkeypatch):
+    """A three.js file importing a file the page does not carry (a vendored update that added one)."""
+    from cgaskin.view import page
+    monkeypatch.setattr(page, "MODULES", {k: v for k, v in page.MODULES.items() if k != "three/three.core.js"})
+    with pytest.raises(cgaskin.errors.InternalError, match="does not inline"):
+        page.module_text("three")

@@ -6,6 +6,7 @@
 //   ["call", method, ...args]      the result of window.cgaskinView[method](...args)
 //   ["get", name]                  the value of window.cgaskinView[name] (clips, bones, vertices)
 //   ["dom", selector, value, event] set an input's value (or checkbox state) and dispatch the event
+//   ["value", selector]            an input's or a menu's value as the page shows it
 //   ["hover", x, y]                move the mouse to canvas pixel (x, y) (top-level pages only)
 //   ["hoverBone", name]            move the mouse onto that bone's origin; the name the page then shows
 //   ["pixels"]                     the canvas as {width, height, rgba: base64}
@@ -77,6 +78,8 @@ try {
                     record.results.push(await target.evaluate((name) => window.cgaskinView[name], args[0]));
                 } else if (kind === 'dom') {
                     record.results.push(await target.evaluate(setInput, ...args));
+                } else if (kind === 'value') {
+                    record.results.push(await target.evaluate((selector) => document.querySelector(selector).value, args[0]));
                 } else if (kind === 'hover') {
                     await page.mouse.move(args[0], args[1]);
                     record.results.push(null);

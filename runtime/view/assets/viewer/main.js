@@ -210,7 +210,7 @@ async function start(container) {
         frame(view, box);
     };
 
-    if (data.clip !== null) playback.setClip(data.clip);
+    if (data.clip !== null) { playback.setClip(data.clip); panel.clip.value = data.clip; }
     playback.playing = Boolean(data.play && playback.clip);
     frameModel();
     if (data.time) playback.setTime(data.time);

@@ -32,16 +32,24 @@ export function resize(view) {
     }
 }
 
-// Point the camera at the box (the skinned meshes' bounds in the pose shown) from the front and a
-// little above, far enough that its bounding sphere fits the narrower field of view.
+// Point the camera at the box (the skinned meshes' bounds in the poses shown) from the front and a
+// little above, as near as keeps the whole box in view at the canvas's aspect.
 export function frame(view, box) {
     const center = box.getCenter(new THREE.Vector3());
     const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
-    const fov = THREE.MathUtils.degToRad(view.camera.fov);
-    const narrow = Math.min(fov, 2 * Math.atan(Math.tan(fov / 2) * view.camera.aspect));
-    // (the sphere around the box is loose for a long model: 0.8 of the distance that fits it)
-    const distance = radius / Math.sin(narrow / 2) * 0.8;
     const direction = new THREE.Vector3(0.55, 0.35, 1).normalize();
+    // the nearest distance at which every corner of the box is inside both angles of view, plus 5 %
+    const back = direction, right = new THREE.Vector3(0, 1, 0).cross(back).normalize();
+    const up = back.clone().cross(right);
+    const tanY = Math.tan(THREE.MathUtils.degToRad(view.camera.fov) / 2), tanX = tanY * view.camera.aspect;
+    let distance = 1e-6;
+    for (let i = 0; i < 8; i++) {
+        const corner = new THREE.Vector3(i & 1 ? box.max.x : box.min.x, i & 2 ? box.max.y : box.min.y,
+                                         i & 4 ? box.max.z : box.min.z).sub(center);
+        const z = corner.dot(back);
+        distance = Math.max(distance, z + Math.abs(corner.dot(right)) / tanX, z + Math.abs(corner.dot(up)) / tanY);
+    }
+    distance *= 1.05;
     view.camera.position.copy(center).addScaledVector(direction, distance);
     view.camera.near = distance / 100;
     view.camera.far = distance * 100;

@@ -76,8 +76,12 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
     };
 
     // ---- the pose shown, and rays -----------------------------------------------------------------
+    // dilations are keyed by three.js's bone names, which it sanitises and makes unique (two joints
+    // may differ only in a '.' or ':'): the server takes the model's joint names, skin bone by skin bone
+    const jointOfBone = new Map(mesh.skeleton.bones.map((bone, i) => [bone.name, hello.bone_joints[i]]));
     const poseFields = () => ({clip: playback.clip ? playback.clip.name : null, time: playback.time,
-                               dilations: Object.fromEntries(dilations)});
+                               dilations: Object.fromEntries([...dilations].map(([bone, factor]) =>
+                                   [jointOfBone.get(bone) ?? bone, factor]))});
     const raycaster = new THREE.Raycaster();
     const hitAt = (x, y) => {            // canvas CSS pixels -> {point, ray direction, a, b, c, barycoord}
         const rect = canvas.getBoundingClientRect();
@@ -257,6 +261,7 @@ export async function startSurgery({container, canvas, view, meshes, playback, r
         setTool,
         counts: () => ({...counts}),
         serveStats: () => ({...stats, meshBytes: hello.mesh_bytes, diagonal}),
+        surgeryPose: () => poseFields(),       // the pose an operation sends now (the model's joint names)
         serveIdle: idle,
         serveRequest: async (op, fields) => { await idle(); return request(op, fields); },
         undo: async () => (await undo()).ok,
