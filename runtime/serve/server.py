@@ -14,9 +14,11 @@ when it listens on loopback; else its address or this machine's names) at its po
 Origin, which it always sends with a WebSocket handshake, must be this page's own (``null`` is not).
 A client without a browser sends no Origin, and the token in the WebSocket's URL.
 
-The surgery runs on one worker thread (``_pool``): the event loop stays free to answer other tabs and
-pings while a drill computes, and sessions never run at the same time (numba kernels and the shared
-caches see one operation at a time).
+Each tab's operations run on a worker thread of their own (``_pool``, one per tab allowed), one at a
+time per tab: the event loop stays free, and one tab's drill never holds up another tab's replies
+(cgaskin's kernels release the GIL; the per-rig caches they share are built by whichever asks first).
+What a tab may ask for is bounded by ``Limits`` (``limits.py``): tabs at once, an operation's
+predicted size, a session's size and its undo memory.
 """
 from __future__ import annotations
 
@@ -34,6 +36,7 @@ from urllib.parse import parse_qs, urlsplit
 from ..errors import InvalidInputError
 from ..view.model import as_rig, clip_name, rig_glb, rim_edges
 from ..view.page import page_html
+from .limits import Limits
 from .tab import Tab
 
 try:
@@ -100,18 +103,22 @@ class Server:
     port). ``run()`` serves until interrupted; ``start()`` serves on a thread (tests, notebooks) until
     ``close()``; ``url`` is the page's address once bound."""
 
-    def __init__(self, model, host: str = "127.0.0.1", port: int = 8765, clip=None):
+    def __init__(self, model, host: str = "127.0.0.1", port: int = 8765, clip=None, limits: Limits = Limits()):
         if not isinstance(port, int) or not 0 <= port <= 65535:
             raise InvalidInputError(f"port {port!r}: give 0 (any free port) to 65535")
         if not isinstance(host, str) or not host:
             raise InvalidInputError(f"host {host!r}: give a host name or address, e.g. 127.0.0.1")
-        self.rig = as_rig(model)
+        if not isinstance(limits, Limits):
+            raise InvalidInputError(f"limits must be a cgaskin.serve.Limits, got {type(limits).__name__}")
+        self.rig, self.limits = as_rig(model), limits.checked()
+        limits.check_model(self.rig.n_vertices)
         self.host, self.port = host, port
         self.page = serve_page(self.rig, clip).encode("utf-8")
         self.address = None               # (host, port) bound
         self.token = secrets.token_urlsafe(24)      # in the URL: every request must carry it
         self.tabs = 0                     # connections served so far
-        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="cgaskin-surgery")
+        self.open_tabs = 0                # connections open now
+        self._pool = ThreadPoolExecutor(max_workers=limits.max_tabs, thread_name_prefix="cgaskin-surgery")
         self._thread = self._loop = self._stop = None
 
     @property
@@ -161,6 +168,9 @@ class Server:
         if refused is not None:
             return connection.respond(refused[0], f"{refused[1]}\n")
         if request.headers.get("Upgrade", "").lower() == "websocket":
+            if self.open_tabs >= self.limits.max_tabs:
+                return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, f"{self.open_tabs} tabs are open, this "
+                                          f"server's limit (close one, or serve with a higher max_tabs)\n")
             return None                                          # (on to the handshake)
         if urlsplit(request.path).path != PAGE_PATH:
             return connection.respond(http.HTTPStatus.NOT_FOUND, "cgaskin serve has one page: /\n")
@@ -170,15 +180,18 @@ class Server:
 
     # ---- WebSocket ----------------------------------------------------------------------------------
     async def connection(self, websocket) -> None:
-        """One tab: its own session; each message answered in order."""
+        """One tab: its own session; each message answered in order, on a worker thread."""
         loop = asyncio.get_running_loop()
         self.tabs += 1
-        tab = await loop.run_in_executor(self._pool, Tab, self.rig)
+        self.open_tabs += 1
         try:
+            tab = await loop.run_in_executor(self._pool, Tab, self.rig, self.limits)
             async for message in websocket:
                 await websocket.send(await loop.run_in_executor(self._pool, tab.handle, message))
         except ConnectionClosed:        # (a tab closed mid-reply, or a frame over MAX_FRAME: websockets closed it)
             pass
+        finally:
+            self.open_tabs -= 1
 
     async def _serve(self, ready=None) -> None:
         serve, _, _ = _websockets()

@@ -9,7 +9,6 @@ leaves the session as it was (``Surgery``'s operations change nothing when they 
 from __future__ import annotations
 
 import base64
-import re
 import sys
 import time
 import traceback
@@ -19,24 +18,17 @@ from ..surgery.session import Surgery
 from ..view.model import rig_glb
 from . import protocol
 from .delta import Mirror, full_delta
+from .limits import LimitError, Limits
 from .protocol import Cut, Drill, Hello, ProtocolError, Save, Tear, Undo
 
 
-def _three_name(name: str) -> str:
-    """A node name as three.js's PropertyBinding.sanitizeNodeName makes it (how the page names bones)."""
-    return re.sub(r"[\[\]\.:/]", "", re.sub(r"\s", "_", name))
-
-
 class Tab:
-    """The session of one page on ``rig`` (a ``cgaskin.Rig``, never modified)."""
+    """The session of one page on ``rig`` (a ``cgaskin.Rig``, never modified), within ``limits``."""
 
-    def __init__(self, rig):
-        self.model = rig
-        self.surgery = Surgery(rig)
+    def __init__(self, rig, limits: Limits = Limits()):
+        self.model, self.limits = rig, limits
+        self.surgery = Surgery(rig, max_undo_bytes=limits.max_undo_bytes)
         self.mirror = Mirror(rig)
-        self._joints = {name: name for name in rig.skeleton.names}
-        for name in rig.skeleton.names:
-            self._joints.setdefault(_three_name(name), name)
         self._mesh_bytes = None
 
     # ---- messages in, replies out ---------------------------------------------------------------------
@@ -62,6 +54,7 @@ class Tab:
             glb = rig_glb(self.surgery.rig)
             name = f"{self.model.name or 'model'}-edited.glb"
             return protocol.reply(request.id, name=name, bytes=len(glb), glb=base64.b64encode(glb).decode("ascii"))
+        self._check_budget(request)
         start = time.perf_counter()
         if isinstance(request, Tear):
             self.surgery.tear(request.scalpel_from, request.scalpel_to, pose=self.pose(request.pose),
@@ -78,19 +71,30 @@ class Tab:
         seconds = time.perf_counter() - start
         delta = self.mirror.update(self.surgery.rig)
         return protocol.reply(request.id, delta=delta, seconds=round(seconds, 6),
-                              operations=self.surgery.n_operations)
+                              operations=self.surgery.n_operations, undo_dropped=self.surgery.undo_dropped)
+
+    def _check_budget(self, request) -> None:
+        """Raise ``LimitError`` when ``request`` may make more than ``limits`` grant (before it runs)."""
+        if isinstance(request, Undo):
+            return
+        have, cap = self.surgery.n_vertices, self.limits.max_vertices
+        if have >= cap:
+            raise LimitError(f"this tab's mesh holds {have} vertices, this server's limit is {cap}: undo, "
+                             "or save the model and serve the saved file")
 
     # ---- helpers ------------------------------------------------------------------------------------
     def pose(self, spec):
-        """The ``Pose`` a ``PoseSpec`` names (None: the stored mesh, when it names no clip and no dilation)."""
+        """The ``Pose`` a ``PoseSpec`` names (None: the stored mesh, when it names no clip and no dilation).
+        Joints are named as the model names them (the page maps three.js's bone names back: three.js
+        sanitises names and may give two joints one)."""
         if spec.clip is None and not spec.dilations:
             return None
         rig = self.model
         pose = rig.rest_pose() if spec.clip is None else rig.pose(spec.clip, spec.time)
         for joint, factor in spec.dilations:
-            if joint not in self._joints:
+            if joint not in rig.skeleton.names:
                 raise ProtocolError(f"dilations: the model has no joint {joint!r}")
-            pose = pose.dilate(self._joints[joint], factor)
+            pose = pose.dilate(joint, factor)
         return pose
 
     def mesh_bytes(self) -> int:
@@ -104,5 +108,7 @@ class Tab:
         return {"model": self.model.name or "model", "n_vertices": rig.n_vertices, "n_faces": rig.n_faces,
                 "clips": [{"name": c.name, "duration": c.duration} for c in rig.clips],
                 "joints": list(rig.skeleton.names), "operations": self.surgery.n_operations,
-                "mesh_bytes": self.mesh_bytes(), "max_message": protocol.MAX_MESSAGE}
+                "bone_joints": [rig.skeleton.names[k] for k in rig.skeleton.bone_nodes],
+                "mesh_bytes": self.mesh_bytes(), "max_message": protocol.MAX_MESSAGE,
+                "limits": self.limits._asdict()}
 

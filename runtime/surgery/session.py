@@ -46,7 +46,7 @@ from .posed_bounds import PosedScratch, no_posing
 from .posed_source import PosedSource, SessionInfluences, bone_affines_of
 from .rows import Rows
 from .session_drill import session_drill
-from .session_undo import SessionState, Undo
+from .session_undo import History, SessionState, Undo
 from .session_write import _grown_box, _write_splice
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource
@@ -71,7 +71,8 @@ class OperationCost(NamedTuple):
 
 class Surgery:
     """An editing session on ``rig``; ``pose`` the pose its operations happen in unless they name one
-    (default: the stored vertices).
+    (default: the stored vertices); ``max_undo_bytes`` bounds the undo log (None: unbounded; past it
+    the oldest operations can no longer be undone, ``undo_dropped`` counts them).
 
     Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``cut(normal, point, pose=None,
     cap=False)``, ``drill(start, end, radius, pose=None, wall=True)``, ``undo()``; ``rig`` the current
@@ -89,8 +90,8 @@ class Surgery:
     posing = no_posing()
     affines = None
 
-    def __init__(self, rig, pose=None):
-        self._history: list = []
+    def __init__(self, rig, pose=None, max_undo_bytes: int | None = None):
+        self._history = History(max_undo_bytes)
         self._last_cost = None
         self._reset(rig)
         self._pose, self._affines = pose, None if pose is None else bone_affines_of(rig, pose)
@@ -226,7 +227,13 @@ class Surgery:
 
     @property
     def n_operations(self) -> int:
+        """The operations that ``undo`` can take back."""
         return len(self._history)
+
+    @property
+    def undo_dropped(self) -> int:
+        """The operations that left the undo log to keep it within ``max_undo_bytes``."""
+        return self._history.dropped
 
     @property
     def n_vertices(self) -> int:
