@@ -12,8 +12,14 @@ import numpy as np
 
 from ..animation.clip import Channel, Clip
 from ..animation.rig import Rig
+from .._shared.memory_budget import require_memory
 from ..animation.skeleton import Skeleton
 from ..errors import InvalidInputError
+
+#: the memory the capsule takes per vertex as it is made (positions, normals, joints, weights, two
+#: faces, and the temporaries of the rings and of the rig's checks), and per joint (its skeleton
+#: rows, its clip's keys)
+_VERTEX_BYTES, _JOINT_BYTES = 480, 2048
 
 __all__ = ["capsule_arm"]
 
@@ -183,6 +189,10 @@ def capsule_arm(n_joints=3, length=3.0, radius=0.25, rings_per_segment=12, segme
             raise InvalidInputError(f"{name} must be an integer >= {least}, got {value!r}")
     n_joints, rings_per_segment, segments_around = int(n_joints), int(rings_per_segment), int(segments_around)
     length, radius = float(length), float(radius)
+    n_vertices = segments_around * (n_joints * rings_per_segment + 2 * max(2, segments_around // 4) - 1) + 2
+    require_memory(n_vertices * _VERTEX_BYTES + n_joints * _JOINT_BYTES,
+                   f"capsule_arm(n_joints={n_joints}, rings_per_segment={rings_per_segment}, segments_around="
+                   f"{segments_around}) ({n_vertices} vertices)", "give fewer joints, rings or segments")
 
     vertices, normals, faces = _capsule_mesh(n_joints, length, radius, rings_per_segment, segments_around)
     spacing = length / n_joints

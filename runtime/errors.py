@@ -21,6 +21,24 @@ class NoSkinError(ModelFormatError):
     """A model file holds no skinned mesh."""
 
 
+class MemoryLimitError(InvalidInputError, MemoryError):
+    """What was asked for would need more memory than the machine has available (or than the limit
+    given, ``--max-memory``): refused before any of it is allocated. The message names the size asked
+    for (``--frames 100000000``, ``times``, ``operations[0].count``), the estimate and the memory there
+    is. A ``MemoryError`` too, so that code catching numpy's catches it."""
+
+
+class MissingFolderError(CgaskinError, FileNotFoundError):
+    """A file cannot be written because the folder it goes into does not exist: the message names the
+    folder (cgaskin makes no folders a caller did not ask for). A ``FileNotFoundError`` (an ``OSError``)
+    too, as Python's own ``open`` raises there."""
+
+
+class FolderInUseError(CgaskinError):
+    """Another ``cgaskin batch`` run holds the batch folder (its lock file): two runs on one folder would
+    delete each other's files in flight. The message names the folder and the other run's process."""
+
+
 class MissesMeshError(CgaskinError, ValueError):
     """A cutting plane, a scalpel or a drill bit does not meet the mesh."""
 
@@ -64,6 +82,17 @@ TearPlacementWarning = PlacementWarning
 class OpenRimWarning(UserWarning):
     """A drill with ``wall=True`` met an open boundary of the mesh: a rim that runs into it is a chain,
     not a loop, and the hole gets no wall there (``DrillResult.open_rims``)."""
+
+
+class ModelWarning(UserWarning):
+    """A model's data was repaired or partly left out where cgaskin read, checked or wrote it: weights
+    renormalised, influences beyond four dropped, attributes glTF does not define ignored, an
+    unreadable clip or a non-triangle primitive skipped (loaders and ``cgaskin.Rig``), or something
+    glTF cannot hold as given written another way (``save``). The message names the file or rig."""
+
+
+class ManifestWarning(RuntimeWarning):
+    """A batch folder's manifest could not be read: every item is made again."""
 
 
 class PlaneMissesMeshWarning(UserWarning):

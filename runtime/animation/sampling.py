@@ -43,6 +43,7 @@ import numpy as np
 
 from .._shared.checks import float_array, real_number
 from .._shared.jit import B1, B2, F1, F2, F3, F4, I1, I2, f8, helper, i8, inlined, kernel
+from .._shared.memory_budget import require_memory
 from ..algebra.transforms import trs_matrix
 from ..algebra.versor import SCALE_RANGE
 from ..errors import InvalidInputError
@@ -350,9 +351,17 @@ def sample_pose(skeleton, clip, time, rotation_blend: str = "slerp") -> tuple:
     return sample_frame(frame_sampler(skeleton, clip, rotation_blend), real_number(time, "time"))
 
 
+#: a pose's bytes per joint: its versor (12 float64), matrix (16) and similarity flag
+POSE_BYTES = 8 * (12 + 16) + 1
+
+
 def sample_poses(skeleton, clip, times, rotation_blend: str = "slerp") -> tuple:
     """``sample_pose`` at each of ``times`` ((T,) finite seconds, any order): versors (T, j, 12),
     matrices (T, j, 4, 4), similar (T, j), in one compiled call."""
+    shape = np.shape(times)
+    if len(shape) == 1:                       # (checked below; first the size: a copy of it is made)
+        require_memory(shape[0] * (8 + POSE_BYTES * skeleton.n_nodes), f"times ({shape[0]} poses of "
+                       f"{skeleton.n_nodes} joints)", "sample fewer times at once")
     times = np.array(float_array(times, "times", ndim=1), order="C")      # the caller's array stays theirs
     _, _, arguments, blend, rest = frame_sampler(skeleton, clip, rotation_blend)
     versors, matrices, similar = (np.repeat(field[None], len(times), axis=0)

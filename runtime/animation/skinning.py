@@ -13,6 +13,7 @@ from .._shared.cache import check_read_only
 from .._shared.checks import float_array, index_array
 from .._shared.frozen import kernel_array
 from .._shared.jit import F2, F3, I2, WIDE, kernel, precompiled
+from .._shared.memory_budget import require_memory
 from ..algebra.versor import _versor_arg
 from ..errors import InvalidInputError
 from ..generated import kernels as K
@@ -152,6 +153,10 @@ def _skin_poses(rig: Rig, poses: Poses, out) -> np.ndarray:
     rest = np.ascontiguousarray(rest)
     shape = (len(poses),) + rest.shape
     if out is None:
+        # the frames' positions (T, n, 3) and their bone maps (T, B, 12): checked before they are made
+        require_memory(len(poses) * (rest.shape[0] * 24 + rig.skeleton.n_bones * 96),
+                       f"skin of {len(poses)} frames of {rest.shape[0]} vertices", "skin fewer frames at a time "
+                       "(a slice of the poses), or give out=")
         out = np.empty(shape)
     elif out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
         raise InvalidInputError(f"out must be a C-contiguous float64 array of shape {shape}")

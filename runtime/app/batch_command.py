@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import InvalidInputError
+from .options import add_memory_option, max_memory
 
 #: failed items listed on the console (the manifest's error column has them all)
 _LISTED_ERRORS = 5
@@ -16,6 +17,7 @@ def _check_batch(args) -> None:
     if args.workers is not None and args.scheduler is not None:
         raise InvalidInputError("--workers sizes the local cluster; with --scheduler the cluster has its own "
                                 "workers: give one of them")
+    max_memory(args)
 
 
 def _batch(args) -> int:
@@ -27,7 +29,8 @@ def _batch(args) -> int:
         import pyarrow  # noqa: F401
     except ImportError as exc:
         raise InvalidInputError(f"cgaskin batch needs {exc.name or exc}: pip install 'cgaskin[batch]'") from None
-    manifest = run(spec, args.out, workers=args.workers, scheduler=args.scheduler, progress=True)
+    manifest = run(spec, args.out, workers=args.workers, scheduler=args.scheduler, progress=True,
+                   max_memory=max_memory(args))
     errors = manifest.errors
     print(f"{len(manifest.rows)} items: {manifest.computed} made, {manifest.kept} kept from an earlier run, "
           f"{len(errors)} failed; manifest: {manifest.path}")
@@ -50,4 +53,5 @@ def register(sub) -> None:
                                                              "(default: one per core)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run on this Dask scheduler (tcp://host:8786) instead of a local cluster")
+    add_memory_option(p)
     p.set_defaults(run=_batch, check_options=_check_batch)

@@ -10,8 +10,18 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CgaskinError, InvalidInputError
-from .options import add_pose_options, check_output, check_pose_options, clip_of, clip_time, edited, \
-    finite, finite_point, pose_of
+from .._shared.memory_budget import require_memory
+from .options import add_memory_option, add_pose_options, check_output, check_pose_options, clip_of, clip_time, \
+    edited, finite, finite_point, max_memory, pose_of
+
+#: the longest line of a --strokes file (six numbers and a comment); a longer one is no blade position
+#: (``/dev/zero`` is one endless line)
+STROKES_LINE = 4096
+#: the memory one blade position of a tear costs, measured: its parsed row (~450 B) and its stroke in
+#: the session (~5 kB on the capsule arm: the rows it appends, its undo record), with room to spare
+STROKE_BYTES = 8 << 10
+#: lines of a --strokes file read between two checks of the memory they will need
+_STROKES_CHECKED = 4096
 
 
 def progress(iterable, total: int, label: str):
@@ -185,22 +195,7 @@ def _blades(args) -> list:
     rows = [("--from", args.from_)] if args.from_ else []
     rows += [(f"--stroke #{k}", row) for k, row in enumerate(args.stroke or [], 1)]
     if args.strokes:
-        try:
-            text = Path(args.strokes).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise InvalidInputError(f"--strokes {args.strokes}: cannot read it ({exc.strerror})") from None
-        for number, line in enumerate(text.splitlines(), 1):
-            line = line.split("#")[0].replace(",", " ").split()
-            if not line:
-                continue
-            try:
-                values = [float(v) for v in line]
-            except ValueError:
-                values = []
-            if len(values) != 6:
-                raise InvalidInputError(f"--strokes {args.strokes}, line {number}: give 6 numbers (handle "
-                                        f"AX AY AZ, tip BX BY BZ), got {' '.join(line)!r}")
-            rows.append((f"--strokes {args.strokes} line {number}", values))
+        rows += _stroke_lines(args.strokes, max_memory(args))
     rows += [("--to", args.to)] if args.to else []
     if len(rows) < 2:
         raise InvalidInputError("a tear needs the blade at two times at least: --from and --to, or "
@@ -216,11 +211,46 @@ def _blades(args) -> list:
     return blades
 
 
+def _stroke_lines(name: str, limit) -> list:
+    """The blade positions of the --strokes file ``name``: (label, six numbers) per line that holds
+    any, read a line at a time (a device or a pipe may never end: its lines are bounded, and what
+    they will cost is checked as they come)."""
+    rows = []
+    try:
+        with open(name, encoding="utf-8") as f:
+            for number, line in enumerate(iter(lambda: f.readline(STROKES_LINE + 1), ""), 1):
+                if len(line) > STROKES_LINE:
+                    raise InvalidInputError(f"--strokes {name}, line {number}: longer than {STROKES_LINE} "
+                                            f"characters; give 6 numbers per line (handle AX AY AZ, tip BX BY BZ)")
+                if number % _STROKES_CHECKED == 0:
+                    require_memory(len(rows) * STROKE_BYTES, f"--strokes {name} ({len(rows)} blade positions "
+                                   f"by line {number})", "tear with fewer strokes", limit)
+                words = line.split("#")[0].replace(",", " ").split()
+                if not words:
+                    continue
+                try:
+                    values = [float(v) for v in words]
+                except ValueError:
+                    values = []
+                if len(values) != 6:
+                    raise InvalidInputError(f"--strokes {name}, line {number}: give 6 numbers (handle AX AY AZ, "
+                                            f"tip BX BY BZ), got {' '.join(words)[:80]!r}")
+                rows.append((f"--strokes {name} line {number}", values))
+    except OSError as exc:
+        raise InvalidInputError(f"--strokes {name}: cannot read it ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InvalidInputError(f"--strokes {name}: not UTF-8 text; give 6 numbers per line") from None
+    require_memory(len(rows) * STROKE_BYTES, f"--strokes {name} ({len(rows)} blade positions)",
+                   "tear with fewer strokes", limit)
+    return rows
+
+
 def _check_tear(args) -> None:
     check_pose_options(args)
     finite(args.opening, f"--opening {args.opening}", "units of length")
     if args.opening < 0:
         raise InvalidInputError(f"--opening {args.opening:g}: give a distance >= 0 (0 leaves the slit closed)")
+    max_memory(args)
     check_output(args.out)
 
 
@@ -260,6 +290,7 @@ def _check_skin(args) -> None:
         if args.frames == 1:
             raise InvalidInputError(f"--end {args.end:g} is the last time of the frames --frames N bakes: "
                                     f"give --frames N (N > 1) with it, or leave --end out")
+    max_memory(args)
     check_output(args.out, frames=args.frames)
 
 
@@ -273,33 +304,47 @@ def _write_mesh(vertices, faces, path: Path, normals) -> None:
         raise InvalidInputError(f"writing {path}: the skinned mesh cannot be stored: {exc}") from None
 
 
+def _frames_bytes(rig, frames: int, edits: bool) -> int:
+    """The memory ``cgaskin skin --frames`` holds at once for ``frames`` frames: their times, poses
+    (versors, matrices, flags: 233 B a joint) and bone maps (96 B a bone), and every frame's skinned
+    positions (one call) or, with edits, every frame's edited pose."""
+    joints, bones = rig.skeleton.n_nodes, rig.skeleton.n_bones
+    pose = 8 + 233 * joints
+    return frames * (pose + 96 * bones + (pose + 512 if edits else 24 * rig.n_vertices))
+
+
 def _skin(args) -> int:
     from ..animation.skinning import skin, skin_normals
     from ..rigs import load
     rig = load(args.model)
-    times = [clip_time(args)]
-    if args.frames > 1:
-        clip = clip_of(rig, args)
-        end = args.end if args.end is not None else rig.clips[rig.clip_index(clip)].duration
-        times = list(np.linspace(clip_time(args), end, args.frames))
     out = Path(args.out)
-    paths = [out] if len(times) == 1 else [out.with_name(f"{out.stem}_{i:04d}{out.suffix}") for i in range(len(times))]
-    if len(times) > 1:
-        # every frame's pose in one compiled call, then (without edits) every frame's skin in another
-        poses = rig.poses(clip_of(rig, args), times)
-        posed = [edited(rig, poses[i], args) for i in range(len(times))] if args.edits else None
-        vertices = skin(rig, poses) if posed is None else None
-        with closing(progress(enumerate(paths), len(paths), "skinning")) as frames:
-            for i, path in frames:
-                pose = poses[i] if posed is None else posed[i]
-                normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
-                _write_mesh(skin(rig, pose) if vertices is None else vertices[i], rig.faces, path, normals)
-    else:
+    if args.frames == 1:
         pose = pose_of(rig, args)
         normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
-        _write_mesh(skin(rig, pose), rig.faces, paths[0], normals)
-    print(f"wrote {len(paths)} file(s): {paths[0]}{' ...' if len(paths) > 1 else ''}")
+        _write_mesh(skin(rig, pose), rig.faces, out, normals)
+        print(f"wrote 1 file(s): {out}")
+        return 0
+    # every frame's pose in one compiled call, then (without edits) every frame's skin in another: what
+    # that holds is checked before any of it is made
+    require_memory(_frames_bytes(rig, args.frames, bool(args.edits)), f"--frames {args.frames} of {rig.name!r}",
+                   "bake fewer frames at a time (--time and --end choose the part of the clip)", max_memory(args))
+    clip = clip_of(rig, args)
+    end = args.end if args.end is not None else rig.clips[rig.clip_index(clip)].duration
+    poses = rig.poses(clip, np.linspace(clip_time(args), end, args.frames))
+    posed = [edited(rig, poses[i], args) for i in range(args.frames)] if args.edits else None
+    vertices = skin(rig, poses) if posed is None else None
+    with closing(progress(range(args.frames), args.frames, "skinning")) as frames:
+        for i in frames:
+            pose = poses[i] if posed is None else posed[i]
+            normals = skin_normals(rig, pose) if "NORMAL" in rig.attributes else None
+            _write_mesh(skin(rig, pose) if vertices is None else vertices[i], rig.faces, _frame_path(out, i), normals)
+    print(f"wrote {args.frames} file(s): {_frame_path(out, 0)} ...")
     return 0
+
+
+def _frame_path(out: Path, i: int) -> Path:
+    """Frame ``i``'s file of ``--out``: o_0000.glb, o_0001.glb, ..."""
+    return out.with_name(f"{out.stem}_{i:04d}{out.suffix}")
 
 
 def register(sub) -> None:
@@ -313,6 +358,7 @@ def register(sub) -> None:
     add_pose_options(p, "the rest pose of the nodes")
     p.add_argument("--frames", type=int, default=1, help="bake this many frames from --time to --end")
     p.add_argument("--end", type=float, default=None, help="last time when baking (default: clip end)")
+    add_memory_option(p)
     p.add_argument("--out", required=True)
     p.set_defaults(run=_skin, check_options=_check_skin)
 
@@ -351,6 +397,7 @@ def register(sub) -> None:
                    help="a text file of blade positions, one per line (6 numbers; '#' comments)")
     p.add_argument("--to", type=float, nargs=6, metavar=blade, help="the scalpel at the end of the stroke")
     p.add_argument("--opening", type=float, default=0.0, help="push the two sides apart by this distance")
+    add_memory_option(p)
     add_pose_options(p, "the mesh as stored")
     p.add_argument("--out", required=True)
     p.set_defaults(run=_tear, check_options=_check_tear)

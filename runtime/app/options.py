@@ -17,6 +17,8 @@ from ..errors import CgaskinError, InvalidInputError
 
 #: what ``save`` and ``save_mesh`` write (glTF 2.0)
 OUTPUT_SUFFIXES = (".glb", ".gltf")
+#: --max-memory's units (powers of 1024, as ``free -h`` and ``ulimit`` count)
+_UNITS = {"": 1, "B": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
 
 
 class _Edit(argparse.Action):
@@ -63,6 +65,34 @@ def check_pose_options(args) -> None:
     if args.rest and args.clip is not None:
         raise InvalidInputError(f"--rest and --clip {args.clip} conflict: --rest is the rest pose, --clip the "
                                 f"clip's pose at --time; give one of them (edits apply after either)")
+
+
+def add_memory_option(p) -> None:
+    """--max-memory SIZE, for a subcommand whose work grows with a size the user gives (frames,
+    strokes, items); ``max_memory(args)`` reads it."""
+    p.add_argument("--max-memory", metavar="SIZE", default=None,
+                   help="refuse, before any work, what is estimated to need more memory than SIZE (bytes, or "
+                        "with a unit K, M, G, T: powers of 1024, e.g. 2G); the memory available is always a limit")
+
+
+def max_memory(args) -> int | None:
+    """--max-memory in bytes (None when not given); InvalidInputError naming it when it is no size."""
+    text = args.max_memory
+    if text is None:
+        return None
+    value, unit = text.strip(), ""
+    if value[-3:].upper() in ("KIB", "MIB", "GIB", "TIB"):
+        value, unit = value[:-3], value[-3].upper()
+    elif value[-1:].upper() in _UNITS:
+        value, unit = value[:-1], value[-1].upper()
+    try:
+        number = float(value)
+    except ValueError:
+        number = math.nan
+    if not (math.isfinite(number) and number * _UNITS[unit] >= 1):
+        raise InvalidInputError(f"--max-memory {text}: give a size of at least one byte: a number of bytes, or "
+                                f"with a unit K, M, G or T (e.g. --max-memory 2G)")
+    return int(number * _UNITS[unit])
 
 
 def clip_time(args) -> float:

@@ -15,9 +15,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.memory_budget import require_memory
 from .spec import Spec
 
-__all__ = ["Item", "expand", "file_sha256", "ID_LENGTH"]
+__all__ = ["Item", "expand", "file_sha256", "item_count", "require_item_memory", "ID_LENGTH", "ITEM_BYTES"]
 
 #: hex digits of an item id (64 bits: a collision among a million items has odds ~3e-8)
 ID_LENGTH = 16
@@ -78,6 +79,26 @@ def _digest(definition: dict) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+#: an expanded item's memory (its record, strings and digest: ~350 B measured, with room)
+ITEM_BYTES = 1 << 10
+
+
+def item_count(spec: Spec) -> int:
+    """How many items ``spec`` expands to at most (before duplicates drop out), without expanding it."""
+    times = sum(len(pose.times) for pose in spec.poses)
+    return len(spec.models) * times * sum(op.count for op in spec.operations)
+
+
+def require_item_memory(spec: Spec, item_bytes: int, limit: int | None = None) -> None:
+    """MemoryLimitError, before any item is made, when ``spec``'s items at ``item_bytes`` each need more
+    memory than is available (or than ``limit``)."""
+    times = sum(len(pose.times) for pose in spec.poses)
+    count = item_count(spec)
+    require_memory(count * item_bytes, f"{spec.source}: {count} items ({len(spec.models)} model(s) x {times} "
+                   f"pose(s) x {count // max(len(spec.models) * times, 1)} operation instances)",
+                   "lower the operations' count (or the times, or the models), or split the spec", limit)
+
+
 def expand(spec: Spec, hashes: dict | None = None) -> list:
     """The spec's items in spec order (models, poses, times, operations, instances); an item that
     an earlier one duplicates (the same file listed twice, two equal entries) appears once.
@@ -86,7 +107,10 @@ def expand(spec: Spec, hashes: dict | None = None) -> list:
 
     A model file that cannot be read is hashed as "unreadable:<reason>": its items still get ids
     and become error rows (a bad model is a row with its error, not a failed batch).
+
+    Raises MemoryLimitError, before expanding, for more items than the memory available holds.
     """
+    require_item_memory(spec, ITEM_BYTES)
     hashes = {} if hashes is None else hashes
     items, seen = [], set()
     for model in spec.models:

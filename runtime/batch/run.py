@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InvalidInputError
-from .items import expand
+from .items import expand, require_item_memory
 from .manifest import MANIFEST, read_manifest, reusable_rows, write_manifest
 from .operate import TMP_SUFFIX, Row, item_row
 from .spec import Spec, load_spec
@@ -81,8 +81,13 @@ def _warmup_plugin():
     return type("CgaskinWarmup", (Warmup, WorkerPlugin), {"__module__": __name__})()
 
 
+#: the memory a run holds per item in this process: the item, its row, the manifest's columns and the
+#: Dask future and scheduler task that make it (a few kB each), with room
+RUN_ITEM_BYTES = 16 << 10
+
+
 def run(spec, out, client=None, workers: int | None = None, scheduler: str | None = None,
-        progress: bool = False, flush_seconds: float = 1.0) -> Manifest:
+        progress: bool = False, flush_seconds: float = 1.0, max_memory: int | None = None) -> Manifest:
     """Make every item of ``spec`` under the folder ``out`` (``out/items/``, ``out/manifest.parquet``).
 
     spec : a path to the TOML spec, or a ``Spec`` (``load_spec``)
@@ -94,9 +99,12 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
         cluster; its workers need cgaskin installed and the model files and ``out`` at the same paths
     progress : draw a progress bar (and print the dashboard address) on stderr
     flush_seconds : how often the manifest is rewritten while items finish
+    max_memory : bytes; more items than this run can hold in it (about ``RUN_ITEM_BYTES`` each) are
+        refused (the memory available is a limit in any case)
 
     Returns the ``Manifest``. Items that fail are rows with an ``error``; nothing raises for them.
-    Raises InvalidInputError for a bad spec or conflicting arguments, before any cluster starts.
+    Raises InvalidInputError for a bad spec or conflicting arguments, and MemoryLimitError for more
+    items than the memory holds, before any cluster starts.
     """
     if sum(x is not None for x in (client, scheduler)) > 1:
         raise InvalidInputError("give a client or a scheduler address, not both")
@@ -106,6 +114,7 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise InvalidInputError(f"workers must be a whole number >= 1, got {workers!r}")
     spec = spec if isinstance(spec, Spec) else load_spec(spec)
+    require_item_memory(spec, RUN_ITEM_BYTES, max_memory)
     out = Path(out).resolve()
     (out / "items").mkdir(parents=True, exist_ok=True)
     # what a killed run was writing (one batch per folder at a time: these are no one else's)
