@@ -1,10 +1,11 @@
 """A spec expanded into items: one per (model, pose entry, time, operation entry, instance).
 
-An item's id is a content hash of what defines its output: the model file's sha256 (not its path),
-the pose entry's clip, time and edits, the operation's kind and parameters (defaults filled in), the
-instance index and the global seed. So the same spec gives the same ids on every machine, a changed
-spec changes only the ids of what it changed, and an item's random draws (``Item.rng``) come from
-its id, never from the order in which workers pick items up.
+An item's id is a content hash of what defines its output: the model file's sha256 (not its path;
+the path for a file that cannot be read), the pose entry's clip, time and edits, the operation's kind
+and parameters (defaults filled in), the instance index, the global seed and cgaskin's version. So
+the same spec gives the same ids on every machine, a changed spec changes only the ids of what it
+changed, and an item's random draws (``Item.rng``) come from its id, never from the order in which
+workers pick items up.
 """
 from __future__ import annotations
 
@@ -18,12 +19,16 @@ import numpy as np
 from .._shared.memory_budget import require_memory
 from .spec import Spec
 
-__all__ = ["Item", "expand", "file_sha256", "item_count", "require_item_memory", "ID_LENGTH", "ITEM_BYTES"]
+__all__ = ["Item", "expand", "file_sha256", "item_count", "require_item_memory", "ID_LENGTH", "ITEM_BYTES",
+           "UNREADABLE"]
 
 #: hex digits of an item id (64 bits: a collision among a million items has odds ~3e-8)
 ID_LENGTH = 16
-#: bumped when the meaning of an item's parameters changes (so that old outputs are not kept)
+#: bumped when the meaning of an item's parameters changes (so that old outputs are not kept); an id
+#: also holds cgaskin's version: a resume after an upgrade (other algorithms) makes every item again
 _VERSION = 1
+#: the start of the "sha256" of a model file that cannot be read (then followed by why)
+UNREADABLE = "unreadable:"
 
 
 class Item(NamedTuple):
@@ -105,11 +110,12 @@ def expand(spec: Spec, hashes: dict | None = None) -> list:
 
     hashes : optional dict path -> sha256 (the model files', to skip hashing them again)
 
-    A model file that cannot be read is hashed as "unreadable:<reason>": its items still get ids
-    and become error rows (a bad model is a row with its error, not a failed batch).
+    A model file that cannot be read is hashed as "unreadable:<reason>" (its ids from its path): its
+    items still get ids and become error rows (a bad model is a row with its error, not a failed batch).
 
     Raises MemoryLimitError, before expanding, for more items than the memory available holds.
     """
+    from .. import __version__                      # (read at each call: the package's, as installed)
     require_item_memory(spec, ITEM_BYTES)
     hashes = {} if hashes is None else hashes
     items, seen = [], set()
@@ -118,14 +124,16 @@ def expand(spec: Spec, hashes: dict | None = None) -> list:
             try:
                 hashes[model.path] = file_sha256(model.path)
             except OSError as exc:
-                hashes[model.path] = f"unreadable:{exc.strerror}"
+                hashes[model.path] = f"{UNREADABLE}{exc.strerror}"
         sha = hashes[model.path]
+        # a file that cannot be read has no content to name it: its path does (two are two models)
+        content = {"unreadable": model.path} if sha.startswith(UNREADABLE) else sha
         for pose in spec.poses:
             edits = [asdict(e) for e in pose.edits]
             for time in pose.times:
                 for op in spec.operations:
                     for instance in range(op.count):
-                        digest = _digest({"v": _VERSION, "seed": spec.seed, "model": sha,
+                        digest = _digest({"v": _VERSION, "cgaskin": __version__, "seed": spec.seed, "model": content,
                                           "pose": {"clip": pose.clip, "time": time, "edits": edits},
                                           "operation": {"kind": op.kind, **dict(op.params)},
                                           "instance": instance})

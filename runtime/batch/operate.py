@@ -34,7 +34,7 @@ import numpy as np
 from ..animation.skeleton import Skeleton
 from ..algebra.transforms import matrix_to_trs
 from ..errors import InvalidInputError, MissesMeshError, TearPathError
-from .items import Item, file_sha256
+from .items import UNREADABLE, Item, file_sha256
 
 __all__ = ["Row", "item_row", "output_names", "ATTEMPTS", "TMP_SUFFIX"]
 
@@ -111,8 +111,8 @@ def _rig(path: str, sha: str) -> tuple:
     if key in _RIGS:
         _RIGS.move_to_end(key)
         return _RIGS[key]
-    if sha.startswith("unreadable:"):
-        raise InvalidInputError(f"{path}: cannot read the model ({sha.split(':', 1)[1]})")
+    if sha.startswith(UNREADABLE):
+        raise InvalidInputError(f"{path}: cannot read the model ({sha[len(UNREADABLE):]})")
     from ..rigs import load
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

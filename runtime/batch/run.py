@@ -22,6 +22,7 @@ from pathlib import Path
 
 from ..errors import InvalidInputError
 from .items import expand, require_item_memory
+from .lock import folder_lock
 from .manifest import MANIFEST, read_manifest, reusable_rows, write_manifest
 from .operate import TMP_SUFFIX, Row, item_row
 from .spec import Spec, load_spec
@@ -103,8 +104,9 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
         refused (the memory available is a limit in any case)
 
     Returns the ``Manifest``. Items that fail are rows with an ``error``; nothing raises for them.
-    Raises InvalidInputError for a bad spec or conflicting arguments, and MemoryLimitError for more
-    items than the memory holds, before any cluster starts.
+    Raises InvalidInputError for a bad spec or conflicting arguments, MemoryLimitError for more
+    items than the memory holds, and FolderInUseError while another run holds ``out`` (one run per
+    folder: ``lock.py``), before any cluster starts.
     """
     if sum(x is not None for x in (client, scheduler)) > 1:
         raise InvalidInputError("give a client or a scheduler address, not both")
@@ -117,9 +119,15 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
     require_item_memory(spec, RUN_ITEM_BYTES, max_memory)
     out = Path(out).resolve()
     (out / "items").mkdir(parents=True, exist_ok=True)
-    # what a killed run was writing (one batch per folder at a time: these are no one else's)
-    for stale in [*(out / "items").glob("*" + TMP_SUFFIX), *out.glob(MANIFEST + ".*.tmp")]:
-        stale.unlink(missing_ok=True)
+    with folder_lock(out):                     # (FolderInUseError while another run holds the folder)
+        # what a killed run was writing: no other run writes here while the lock is held
+        for stale in [*(out / "items").glob("*" + TMP_SUFFIX), *out.glob(MANIFEST + ".*.tmp")]:
+            stale.unlink(missing_ok=True)
+        return _run_locked(spec, out, client, workers, scheduler, progress, flush_seconds)
+
+
+def _run_locked(spec: Spec, out: Path, client, workers, scheduler, progress: bool, flush_seconds: float) -> Manifest:
+    """``run`` in the folder ``out``, which it holds."""
     items = expand(spec)
     manifest_path = out / MANIFEST
     done = reusable_rows(read_manifest(manifest_path), items, out)

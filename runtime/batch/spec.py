@@ -24,7 +24,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, ModelFormatError
+from ..rigs._model_file import check_model_file
 
 try:                                    # Python 3.11+: the standard library reads TOML
     import tomllib
@@ -173,8 +174,10 @@ def _models(tables, folder: Path, fail) -> tuple:
             if not found:
                 fail(f"{key}.path", f"{pattern!r} matches no file (relative to {folder})")
         else:
-            if not full.is_file():
-                fail(f"{key}.path", f"{pattern!r}: no such file (relative to {folder})")
+            try:                                 # missing, a folder, a device: said as the loaders say it
+                check_model_file(full, empty_ok=True)
+            except ModelFormatError as exc:
+                fail(f"{key}.path", str(exc))
             found = [str(full)]
         for p in found:
             resolved = Path(p).resolve()

@@ -228,3 +228,53 @@ def test_killed_and_resumed(tmp_path, models_dir, cluster):
     assert not list(out.glob("items/*tmp*"))
     listed = {name for r in after for name in r.files}
     assert {f"items/{p.name}" for p in out.glob("items/*.glb")} == listed
+
+
+# -- issue 43 D14: one run per folder; every unreadable model its rows ---------------------------------
+
+HOLD = '''import sys, time
+from cgaskin.batch.lock import folder_lock
+with folder_lock(sys.argv[1]):
+    print("held", flush=True)
+    time.sleep(float(sys.argv[2]))
+'''
+
+
+def _holder(folder: Path, seconds: float) -> subprocess.Popen:
+    """Another process holding ``folder``'s batch lock for ``seconds`` (started once it holds it)."""
+    proc = subprocess.Popen([sys.executable, "-c", HOLD, str(folder), str(seconds)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "held", proc.communicate()[1]
+    return proc
+
+
+def test_a_second_run_on_a_folder_in_use_is_refused_and_deletes_nothing(tmp_path, models_dir, client):
+    spec = _write(tmp_path, '[[models]]\npath = "{arm}"\n', arm=models_dir / "3Cylinder4bones.glb")
+    out = tmp_path / "out"
+    (out / "items").mkdir(parents=True)
+    theirs = out / "items" / f"0123456789abcdef.{os.getpid() + 1}.tmp.glb"     # another run's file in flight
+    theirs.write_bytes(b"glTF")
+    holder = _holder(out, 60)
+    try:
+        with pytest.raises(cgaskin.errors.FolderInUseError, match=f"process {holder.pid}"):
+            run(spec, out, client=client)
+        assert theirs.exists() and not (out / "manifest.parquet").exists()
+    finally:
+        holder.kill()
+        holder.communicate()
+    # its holder killed (the kernel drops a dead process's lock): the folder is free; the run sweeps
+    # what the killed run left, and frees the folder when it ends
+    manifest = run(spec, out, client=client)
+    assert manifest.computed == 1 and manifest.errors == [] and not theirs.exists()
+    _holder(out, 0).communicate()
+
+
+def test_each_unreadable_model_gets_its_error_rows(tmp_path, client):
+    for name in ("a.glb", "b.glb"):
+        cgaskin.save(cgaskin.capsule_arm(), tmp_path / name)
+    spec = load_spec(_write(tmp_path, '[[models]]\npath = "a.glb"\n[[models]]\npath = "b.glb"\n'))
+    for name in ("a.glb", "b.glb"):
+        (tmp_path / name).unlink()
+    manifest = run(spec, tmp_path / "out", client=client)
+    assert [r.model for r in manifest.rows] == ["a.glb", "b.glb"]
+    assert all(r.error and "cannot read the model" in r.error for r in manifest.rows)

@@ -124,3 +124,38 @@ def test_the_readme_spec_is_valid(tmp_path, models_dir):
     assert [e.kind for e in spec.poses[0].edits] == ["dilate", "rotate"]
     assert dict(spec.operations[0].params)["radius"] == (0.02, 0.04)
     assert len(expand(spec)) == 1 * 3 * 3
+
+
+# -- issue 43 D14: the data a batch keeps ------------------------------------------------------------
+
+def test_a_folder_as_a_model_path_is_named_a_folder(tmp_path, fox):
+    (tmp_path / "models").mkdir()
+    with pytest.raises(InvalidInputError) as err:
+        load_spec(_spec(tmp_path, BASE.replace(fox, "models").replace("{fox}", "models")))
+    assert "models[0].path" in str(err.value) and "is a directory" in str(err.value)
+    assert "no such file" not in str(err.value)
+
+
+def test_each_unreadable_model_keeps_its_items(tmp_path):
+    """Two models that cannot be read (gone after the spec was read) once hashed alike: the second's
+    items were dropped as duplicates of the first's, without a row."""
+    import cgaskin
+    for name in ("a.glb", "b.glb"):
+        cgaskin.save(cgaskin.capsule_arm(), tmp_path / name)
+    spec = load_spec(_spec(tmp_path, '[[models]]\npath = "a.glb"\n[[models]]\npath = "b.glb"\n'
+                                     '[[operations]]\nkind = "cut"\ncount = 2\n'))
+    for name in ("a.glb", "b.glb"):
+        (tmp_path / name).unlink()
+    items = expand(spec)
+    assert [i.model for i in items] == ["a.glb", "a.glb", "b.glb", "b.glb"]
+    assert len({i.id for i in items}) == 4 and all(i.model_sha256.startswith("unreadable:") for i in items)
+
+
+def test_the_item_ids_change_with_cgaskin_s_version(tmp_path, fox, monkeypatch):
+    """A resume after an upgrade (another algorithm) makes every item again, never keeps old outputs."""
+    import cgaskin
+    spec = load_spec(_spec(tmp_path, BASE.replace("{fox}", fox)))
+    before = [i.id for i in expand(spec)]
+    monkeypatch.setattr(cgaskin, "__version__", cgaskin.__version__ + ".post1")
+    after = [i.id for i in expand(spec)]
+    assert len(after) == len(before) and not set(after) & set(before)
