@@ -17,6 +17,7 @@ import numpy as np
 
 from .._shared.warn import warn
 from ..animation.validate import MAX_INFLUENCES, warn_dropped_influences
+from ..errors import ModelWarning
 from ._assimp_dump import assxml_dump
 
 __all__ = ["removed_weights", "warn_about_dropped_influences"]
@@ -51,4 +52,4 @@ def warn_about_dropped_influences(exe: str, src: Path, tmp: Path, timeout: float
     else:
         warn(f"{src.name}: assimp removed {removed} bone weights of vertices with more than "
              f"{MAX_INFLUENCES} influences; kept the {MAX_INFLUENCES} largest weights of each and "
-             f"renormalised")
+             f"renormalised", ModelWarning)

@@ -17,6 +17,7 @@ import numpy as np
 import pygltflib
 
 from .._shared.warn import warn
+from ..errors import ModelWarning
 
 __all__ = ["DEFAULT_TICKS_PER_SECOND", "repair_key_times"]
 
@@ -91,5 +92,5 @@ def repair_key_times(glb: Path, assxml: str, source: str) -> bool:
     gltf.save_binary(str(glb))
     warn(f"{source}: animation{'s' if len(repaired) > 1 else ''} {', '.join(map(repr, repaired))} "
          f"give{'' if len(repaired) > 1 else 's'} 0 ticks per second (or none): played at "
-         f"{DEFAULT_TICKS_PER_SECOND:g} ticks per second, as assimp's viewer plays them")
+         f"{DEFAULT_TICKS_PER_SECOND:g} ticks per second, as assimp's viewer plays them", ModelWarning)
     return True

@@ -21,7 +21,7 @@ import numpy as np
 import pygltflib
 
 from .._shared.warn import warn
-from ..errors import ModelFormatError
+from ..errors import ModelFormatError, ModelWarning
 from ._gltf_constants import (COMPONENT_DTYPES, COMPONENT_NAMES, INTEGER_INDEX_TYPES,
                               MAX_BUFFERLESS_COMPONENTS, NORMALIZED_DIVISORS, TYPE_SHAPES)
 
@@ -48,7 +48,7 @@ class _GltfFile:
 
     def warn(self, message: str, prefix: bool = True) -> None:
         """Warn, attributing the warning to the first caller outside cgaskin."""
-        warn(f"{self.path.name}: {message}" if prefix else message)
+        warn(f"{self.path.name}: {message}" if prefix else message, ModelWarning)
 
     # -- typed access to the JSON (pygltflib does not check types) --
     def items(self, name: str) -> list:

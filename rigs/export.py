@@ -55,7 +55,7 @@ from .._shared.warn import warn
 from ..animation.clip import CHANNEL_PATHS, INTERPOLATIONS
 from ..animation.rig import Rig
 from ..animation.validate import EXACT_SUM_TOLERANCE, check_mesh
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, MissingFolderError, ModelWarning
 from ._gltf_attributes import gltf_attribute_names
 from ._gltf_constants import (ATTRIBUTE_NAMES, ATTRIBUTE_WIDTHS, EXTRAS_KEY, JOINT_OF, INPUT_RESIDUALS, INVERSE_BIND_RESIDUALS,
                               OUTPUT_RESIDUALS, POSITION_RESIDUALS, WEIGHT_RESIDUALS)
@@ -168,11 +168,14 @@ def save_gltf(rig: Rig, path) -> Path:
     ------
     InvalidInputError
         Unsupported extension, inconsistent arrays, more than 65536 bones, values beyond float32.
+    MissingFolderError
+        The folder of ``path`` does not exist (a ``FileNotFoundError`` too).
     """
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".glb", ".gltf"):
         raise InvalidInputError(f"cannot write {path.name}: save_gltf writes .glb or .gltf")
+    _check_folder(path)
     _check_skeleton(rig)
     sk = rig.skeleton
     n_bones = sk.n_bones
@@ -254,6 +257,16 @@ def _write_attributes(rig_attributes: dict, n: int, out: _BinaryBuilder, attribu
         attributes[name] = out.add(values, FLOAT, values.shape[1], target=ARRAY_BUFFER)
 
 
+def _check_folder(path: Path) -> None:
+    """``MissingFolderError`` naming the folder of ``path`` when it is no folder (checked before the
+    file is made: Python's own error names the file, not the folder that is missing)."""
+    folder = path.parent
+    if not folder.is_dir():
+        what = "no such folder" if not folder.exists() else "not a folder"
+        raise MissingFolderError(f"cannot write {path.name}: {folder}: {what}; make it first "
+                                 f"(mkdir -p {folder}) or write the file elsewhere")
+
+
 def _write(gltf: pygltflib.GLTF2, blob: bytearray, path: Path) -> Path:
     """Write ``gltf`` with its one buffer ``blob``: GLB chunk or embedded base64 by extension."""
     if path.suffix.lower() == ".glb":
@@ -270,10 +283,12 @@ def save_mesh(vertices, faces, path, normals=None, name: str = "mesh") -> Path:
     """Write a static triangle mesh (e.g. a skinned pose) as .glb or .gltf, without skin.
 
     vertices : (n, 3) float ; faces : (m, 3) int ; normals : optional (n, 3) float
+    MissingFolderError (a FileNotFoundError) when the folder of ``path`` does not exist.
     """
     path = Path(path)
     if path.suffix.lower() not in (".glb", ".gltf"):
         raise InvalidInputError(f"cannot write {path.name}: save_mesh writes .glb or .gltf")
+    _check_folder(path)
     vertices = _float32(vertices, "vertices")
     faces = np.asarray(faces)
     if vertices.ndim != 2 or vertices.shape[1] != 3:
@@ -312,7 +327,7 @@ def _skeleton_nodes(rig: Rig, animated: set) -> list:
         if np.array_equal(matrix, trs_to_matrix(t, q, s)) or i in animated:
             if i in animated and not np.allclose(matrix, trs_to_matrix(t, q, s), rtol=0, atol=1e-9):
                 warn(f"{rig.name}: node {sk.names[i]!r} is animated, so glTF requires TRS, "
-                     f"but its rest matrix is not a TRS (shear?); wrote the TRS", UserWarning)
+                     f"but its rest matrix is not a TRS (shear?); wrote the TRS", ModelWarning)
             if not np.array_equal(t, [0, 0, 0]):
                 node.translation = [float(x) for x in t]
             if not np.array_equal(q, [0, 0, 0, 1]):
@@ -388,7 +403,7 @@ def _animations(rig: Rig, out: _BinaryBuilder):
             animated.add(int(ch.node))
         if not channels:
             warn(f"{rig.name}: clip {clip.name!r} has no channels; glTF animations need at "
-                 f"least one, so it is not written", UserWarning)
+                 f"least one, so it is not written", ModelWarning)
             continue
         animations.append(pygltflib.Animation(name=clip.name, samplers=samplers, channels=channels))
     return animations, animated

@@ -9,8 +9,8 @@ from .generated import kernels as _kernels, skinning as _skinning
 
 _cache_generated(_kernels, _skinning)         # before anything compiles: they load the shipped kernels
 
-from .errors import (CgaskinError, InvalidInputError, MissesMeshError, ModelFormatError, NoSkinError,
-                     OpenRimWarning, PlacementWarning)
+from .errors import (CgaskinError, InvalidInputError, MemoryLimitError, MissesMeshError, MissingFolderError,
+                     ModelFormatError, ModelWarning, NoSkinError, OpenRimWarning, PlacementWarning)
 from .algebra import versor
 from .animation.pose import Pose, clip_from_poses
 from .animation.poses import Poses

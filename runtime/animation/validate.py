@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.warn import warn
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, ModelWarning
 from ..tolerances import tol
 
 MAX_INFLUENCES = 4
@@ -90,7 +90,7 @@ def warn_dropped_influences(source: str, n_vertices: int, most: int) -> None:
     """The one warning for vertices with more than 4 influences cut to their 4 largest (glTF
     files here, assimp's conversions in ``cgaskin.rigs.assimp``)."""
     warn(f"{_prefix(source)}{n_vertices} vertices have more than {MAX_INFLUENCES} bone influences (up "
-         f"to {most}); kept the {MAX_INFLUENCES} largest weights of each and renormalised")
+         f"to {most}); kept the {MAX_INFLUENCES} largest weights of each and renormalised", ModelWarning)
 
 
 def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, source: str = ""):
@@ -260,5 +260,5 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
         if warned.any():
             worst = int(np.flatnonzero(~over)[np.argmax(np.where(warned, deviation[~over], -1.0))])
             warn(f"{pre}{int(warned.sum())} vertices have weights that do not sum to 1 (max deviation "
-                 f"{deviation[worst]:.3g} at vertex {worst}); renormalised them")
+                 f"{deviation[worst]:.3g} at vertex {worst}); renormalised them", ModelWarning)
     return vertices, faces, joints, weights

@@ -174,6 +174,8 @@ def _check_drill(args) -> None:
     finite_point(args.start, "--start")
     finite_point(args.end, "--end")
     finite(args.radius, f"--radius {args.radius}", "model units")
+    if args.radius <= 0:
+        raise InvalidInputError(f"--radius {args.radius:g}: give the bit's radius, a length > 0 in model units")
     check_output(args.out)
 
 

@@ -9,9 +9,10 @@ item succeeded). ``pyarrow.parquet.read_table(path).to_pandas().explode(["files"
 from __future__ import annotations
 
 import os
-import warnings
 from pathlib import Path
 
+from .._shared.warn import warn
+from ..errors import ManifestWarning
 from .items import file_sha256
 from .operate import Row, output_names
 
@@ -61,8 +62,7 @@ def read_manifest(path) -> list:
         table = pq.read_table(path)
         data = {name: table.column(name).to_pylist() for name in SCHEMA_COLUMNS}
     except Exception as exc:                  # (pyarrow's errors have no common base but Exception)
-        warnings.warn(f"{path}: cannot read the manifest ({exc}); every item is made again", RuntimeWarning,
-                      stacklevel=2)
+        warn(f"{path}: cannot read the manifest ({exc}); every item is made again", ManifestWarning)
         return []
     rows = []
     for i in range(table.num_rows):

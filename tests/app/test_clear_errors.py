@@ -64,3 +64,66 @@ def test_skin_help_names_its_default_pose(capsys):
     with pytest.raises(SystemExit):
         main(["cut", "--help"])
     assert "default: the mesh as stored" in capsys.readouterr().out
+
+
+# -- issue 43 D16: every error and warning a cgaskin class that says what to do ------------------------
+
+def test_loader_and_rig_warnings_are_cgaskin_s_model_warning(models_dir, tmp_path):
+    assert cgaskin.ModelWarning is cgaskin.errors.ModelWarning and issubclass(cgaskin.ModelWarning, UserWarning)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        cgaskin.load(models_dir / "Arm5.glb")                       # weights that do not sum to 1
+        arm = cgaskin.capsule_arm()
+        cgaskin.Rig(vertices=arm.vertices, faces=arm.faces, joints=arm.joints, weights=arm.weights * 1.01,
+                    skeleton=arm.skeleton, name="heavy")
+    assert len(record) == 2 and all(w.category is cgaskin.ModelWarning for w in record), \
+        [(w.category, str(w.message)) for w in record]
+    silent = cgaskin.Clip("silent", ())                             # glTF animations need a channel
+    with pytest.warns(cgaskin.ModelWarning, match="no channels"):
+        cgaskin.save(arm.with_clips(silent), tmp_path / "silent.glb")
+
+
+def test_an_unreadable_manifest_is_a_cgaskin_warning(tmp_path):
+    from cgaskin.batch import read_manifest
+    (tmp_path / "manifest.parquet").write_bytes(b"PAR1 not parquet")
+    with pytest.warns(cgaskin.errors.ManifestWarning, match="every item is made again"):
+        assert read_manifest(tmp_path / "manifest.parquet") == []
+
+
+def test_saving_into_a_missing_folder_names_the_folder(tmp_path, capsys):
+    from cgaskin.errors import MissingFolderError
+    from cgaskin.rigs.export import save_mesh
+    arm = cgaskin.capsule_arm()
+    missing = tmp_path / "frames"
+    for write in (lambda: cgaskin.save(arm, missing / "a.glb"),
+                  lambda: save_mesh(arm.vertices, arm.faces, missing / "a.gltf")):
+        with pytest.raises(MissingFolderError, match=f"{missing}: no such folder") as err:
+            write()
+        assert isinstance(err.value, FileNotFoundError) and "make it first" in str(err.value)
+    path = tmp_path / "arm.glb"
+    cgaskin.save(arm, path)
+    assert main(["skin", str(path), "--out", str(missing / "o.glb")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and f"{missing}: no such folder" in lines[0]
+    assert not missing.exists()
+
+
+@pytest.mark.parametrize("radius", ["0", "-0.5"])
+def test_drill_names_its_radius(tmp_path, capsys, radius):
+    path = tmp_path / "arm.glb"
+    cgaskin.save(cgaskin.capsule_arm(), path)
+    code = main(["drill", str(path), "--start", "0.5", "0", "-1", "--end", "0.5", "0", "1", "--radius", radius,
+                 "--out", str(tmp_path / "d.glb")])
+    err = capsys.readouterr().err
+    assert code == 2 and f"--radius {radius}" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "d.glb").exists()
+
+
+def test_the_readme_names_the_tear_attribute_as_files_hold_it():
+    from pathlib import Path
+    from cgaskin.surgery.tear import TEAR_LABEL
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    torn = cgaskin.tear(cgaskin.capsule_arm(), ([0.6, 0.05, 1.0], [0.6, 0.05, 0.0]),
+                        ([1.2, 0.05, 1.0], [1.2, 0.05, 0.0]))
+    assert TEAR_LABEL in torn.attributes and f"`{TEAR_LABEL}`" in readme
+    assert "TEAR_LABEL" not in readme.replace(f"cgaskin.surgery.tear.TEAR_LABEL", "")
