@@ -42,7 +42,7 @@ class Item(NamedTuple):
     model_sha256 : str, the file's sha256 when the batch started
     clip : str | int | None, None for the rest pose
     time : float | None
-    edits : tuple of EditSpec
+    edits : tuple of EditEntry
     operation : str, cut | tear | drill | none
     params : tuple of (name, value), the operation entry's parameters
     instance : int, 0 .. count - 1

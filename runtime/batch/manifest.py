@@ -8,9 +8,9 @@ item succeeded). ``pyarrow.parquet.read_table(path).to_pandas().explode(["files"
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
+from .._shared.atomic import replaced
 from .._shared.warn import warn
 from ..errors import ManifestWarning
 from .items import file_sha256
@@ -34,21 +34,16 @@ def _schema():
 
 
 def write_manifest(rows, path) -> None:
-    """Write ``rows`` (Row records) to ``path`` through a temporary file and ``os.replace``, so a
-    reader (or a run killed while writing) sees the old manifest or the new one, never a part."""
+    """Write ``rows`` (Row records) to ``path`` whole (``atomic.replaced``), so a reader (or a run
+    killed while writing) sees the old manifest or the new one, never a part."""
     import pyarrow as pa
     import pyarrow.parquet as pq
     path = Path(path)
     columns = {name: [list(getattr(r, name)) if isinstance(getattr(r, name), tuple) else getattr(r, name)
                       for r in rows] for name in SCHEMA_COLUMNS}
     table = pa.table(columns, schema=_schema())
-    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-    try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    with replaced(path) as temporary:
+        pq.write_table(table, temporary)
 
 
 def read_manifest(path) -> list:

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 import warnings
 from collections import OrderedDict
@@ -31,6 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.atomic import TEMPORARY, replaced
 from ..animation.skeleton import Skeleton
 from ..algebra.transforms import matrix_to_trs
 from ..errors import InvalidInputError, MissesMeshError, TearPathError
@@ -40,9 +40,9 @@ __all__ = ["Row", "item_row", "output_names", "ATTEMPTS", "TMP_SUFFIX"]
 
 #: draws per item before a miss becomes the item's error
 ATTEMPTS = 5
-#: temporary files end so (``<name>.<pid>.tmp.glb``: ``save`` wants a .glb suffix); a run removes any
-#: a killed run left
-TMP_SUFFIX = ".tmp.glb"
+#: item files being written end so (``<name>.<pid>.tmp.glb``: ``atomic.replaced`` keeps the suffix that
+#: ``save`` wants); a run removes any a killed run left
+TMP_SUFFIX = TEMPORARY + ".glb"
 #: rigs kept per worker process, least recently used dropped first
 _CACHED_RIGS = 8
 _RIGS: OrderedDict = OrderedDict()
@@ -89,7 +89,7 @@ def item_row(item: Item, out: str) -> Row:
             params["warnings"] = notes
         files, counts, hashes = [], [], []
         for name, result in zip(output_names(item), rigs):
-            hashes.append(_save_atomic(result, Path(out) / name))
+            hashes.append(_save_whole(result, Path(out) / name))
             files.append(name)
             counts.append((result.n_vertices, result.n_faces))
         return Row(item.id, item.model, item.pose_label, item.operation, _json(params), tuple(files),
@@ -273,16 +273,10 @@ def posed_skeleton(pose) -> Skeleton:
                     np.array([t[2] for t in trs]), np.array(pose.matrices), sk.bone_nodes, sk.inverse_bind)
 
 
-def _save_atomic(rig, path: Path) -> str:
-    """Save ``rig`` at ``path`` through a temporary file beside it (``os.replace``: a reader, or a
-    run killed half-way, sees the whole file or none); returns the file's sha256."""
+def _save_whole(rig, path: Path) -> str:
+    """Save ``rig`` at ``path`` whole (``atomic.replaced``: a reader, or a run killed half-way, sees the
+    whole file or none); returns the file's sha256."""
     from ..rigs import save
-    tmp = path.with_name(f"{path.name[:-len('.glb')]}.{os.getpid()}{TMP_SUFFIX}")
-    try:
-        save(rig, tmp)
-        sha = file_sha256(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return sha
+    with replaced(path) as temporary:
+        save(rig, temporary)
+        return file_sha256(temporary)

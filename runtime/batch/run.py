@@ -20,6 +20,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from .._shared.atomic import TEMPORARY
 from ..errors import InvalidInputError
 from .items import expand, require_item_memory
 from .lock import folder_lock
@@ -121,7 +122,8 @@ def run(spec, out, client=None, workers: int | None = None, scheduler: str | Non
     (out / "items").mkdir(parents=True, exist_ok=True)
     with folder_lock(out):                     # (FolderInUseError while another run holds the folder)
         # what a killed run was writing: no other run writes here while the lock is held
-        for stale in [*(out / "items").glob("*" + TMP_SUFFIX), *out.glob(MANIFEST + ".*.tmp")]:
+        manifest_temporary = f"{Path(MANIFEST).stem}.*{TEMPORARY}{Path(MANIFEST).suffix}"
+        for stale in [*(out / "items").glob("*" + TMP_SUFFIX), *out.glob(manifest_temporary)]:
             stale.unlink(missing_ok=True)
         return _run_locked(spec, out, client, workers, scheduler, progress, flush_seconds)
 

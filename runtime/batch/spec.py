@@ -32,7 +32,7 @@ try:                                    # Python 3.11+: the standard library rea
 except ImportError:                     # pragma: no cover (3.10: the [batch] extra installs tomli)
     import tomli as tomllib
 
-__all__ = ["Spec", "ModelSpec", "PoseSpec", "EditSpec", "OperationSpec", "load_spec", "parse_spec",
+__all__ = ["Spec", "ModelEntry", "PoseEntry", "EditEntry", "OperationEntry", "load_spec", "parse_spec",
            "OPERATIONS", "EDITS"]
 
 #: per operation kind: its parameters and their defaults. Lengths are fractions of the posed mesh's
@@ -52,7 +52,7 @@ _TOP = {"seed", "models", "poses", "operations"}
 
 
 @dataclass(frozen=True)
-class ModelSpec:
+class ModelEntry:
     """One model file: ``path`` absolute, ``name`` as the spec's folder sees it (the manifest's
     ``model``), ``key`` the spec key that gave it (``models[0].path``)."""
 
@@ -62,7 +62,7 @@ class ModelSpec:
 
 
 @dataclass(frozen=True)
-class EditSpec:
+class EditEntry:
     """A random pose edit: ``kind`` in EDITS, ``joint`` a node name or index, ``range`` (low, high)
     the interval its value is drawn from, ``axis`` (3,) for rotate (None: random)."""
 
@@ -73,9 +73,10 @@ class EditSpec:
 
 
 @dataclass(frozen=True)
-class PoseSpec:
-    """A pose entry: ``clip`` (name or index; None for the rest pose) at each of ``times``
-    (``(None,)`` for the rest pose), then ``edits`` in order."""
+class PoseEntry:
+    """A [[poses]] table: ``clip`` (name or index; None for the rest pose) at each of ``times``
+    (``(None,)`` for the rest pose), then ``edits`` in order, drawn per item: many poses, not one
+    (the spec's tables are ``*Entry`` records; ``serve.protocol.PoseSpec`` is one pose a page showed)."""
 
     clip: str | int | None
     times: tuple
@@ -83,7 +84,7 @@ class PoseSpec:
 
 
 @dataclass(frozen=True)
-class OperationSpec:
+class OperationEntry:
     """An operation entry: ``kind``, ``count`` random instances, ``params`` ((name, value), ...)
     sorted by name with every default filled in; a range is a (low, high) tuple."""
 
@@ -188,7 +189,7 @@ def _models(tables, folder: Path, fail) -> tuple:
                 name = str(Path(p).relative_to(folder))
             except ValueError:                   # given explicitly outside the folder
                 name = p
-            out.append(ModelSpec(str(resolved), name, f"{key}.path"))
+            out.append(ModelEntry(str(resolved), name, f"{key}.path"))
     return tuple(out)
 
 
@@ -215,7 +216,7 @@ def _range(value, key, fail, positive=False, at_least=None) -> tuple:
     return value, value
 
 
-def _pose(table, key, fail) -> PoseSpec:
+def _pose(table, key, fail) -> PoseEntry:
     _known(table, key, {"clip", "times", "rest", "edits"}, fail)
     rest = table.get("rest", False)
     if not isinstance(rest, bool):
@@ -249,10 +250,10 @@ def _pose(table, key, fail) -> PoseSpec:
             fail(f"{key}.edits.{kind}", f"give a table or an array of tables, got {entries!r}")
         for k, entry in enumerate(entries):
             parsed.append(_edit(kind, entry, f"{key}.edits.{kind}" + (f"[{k}]" if len(entries) > 1 else ""), fail))
-    return PoseSpec(None if rest else clip, times, tuple(parsed))
+    return PoseEntry(None if rest else clip, times, tuple(parsed))
 
 
-def _edit(kind, entry, key, fail) -> EditSpec:
+def _edit(kind, entry, key, fail) -> EditEntry:
     _known(entry, key, {"joint", "range", "axis"} if kind == "rotate" else {"joint", "range"}, fail)
     joint = entry.get("joint")
     if isinstance(joint, bool) or not isinstance(joint, (str, int)) or joint == "":
@@ -267,10 +268,10 @@ def _edit(kind, entry, key, fail) -> EditSpec:
         axis = tuple(_number(a, f"{key}.axis", fail) for a in axis)
         if not any(axis):
             fail(f"{key}.axis", "the axis is zero: give a direction")
-    return EditSpec(kind, joint, value, axis)
+    return EditEntry(kind, joint, value, axis)
 
 
-def _operation(table, key, fail) -> OperationSpec:
+def _operation(table, key, fail) -> OperationEntry:
     kind = table.get("kind")
     if kind not in OPERATIONS:
         fail(f"{key}.kind", f"give one of {', '.join(OPERATIONS)}, got {kind!r}")
@@ -288,4 +289,4 @@ def _operation(table, key, fail) -> OperationSpec:
         else:
             value = _range(value, f"{key}.{name}", fail, positive=name != "opening", at_least=0.0)
         params[name] = value
-    return OperationSpec(kind, count, tuple(sorted(params.items())))
+    return OperationEntry(kind, count, tuple(sorted(params.items())))

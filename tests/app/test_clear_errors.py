@@ -126,4 +126,4 @@ def test_the_readme_names_the_tear_attribute_as_files_hold_it():
     torn = cgaskin.tear(cgaskin.capsule_arm(), ([0.6, 0.05, 1.0], [0.6, 0.05, 0.0]),
                         ([1.2, 0.05, 1.0], [1.2, 0.05, 0.0]))
     assert TEAR_LABEL in torn.attributes and f"`{TEAR_LABEL}`" in readme
-    assert "TEAR_LABEL" not in readme.replace(f"cgaskin.surgery.tear.TEAR_LABEL", "")
+    assert "TEAR_LABEL" not in readme.replace("cgaskin.surgery.tear.TEAR_LABEL", "")
