@@ -4,6 +4,7 @@ The runtime calls only the kernels in ``cgaskin.generated`` (emitted by ``cgaski
 """
 import sys as _sys
 
+from ._shared import version as _version
 from ._shared.jit import cache_generated as _cache_generated
 from .generated import kernels as _kernels, skinning as _skinning
 
@@ -27,7 +28,7 @@ from .app.precompile import precompile
 
 _sys.modules[__name__ + ".versor"] = versor      # `import cgaskin.versor` as before the move
 
-__version__ = "0.1.0"
+__version__ = _version.VERSION
 
 
 def load(path, **options):

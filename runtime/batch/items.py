@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared import version
 from .._shared.memory_budget import require_memory
 from .spec import Spec
 
@@ -115,7 +116,6 @@ def expand(spec: Spec, hashes: dict | None = None) -> list:
 
     Raises MemoryLimitError, before expanding, for more items than the memory available holds.
     """
-    from .. import __version__                      # (read at each call: the package's, as installed)
     require_item_memory(spec, ITEM_BYTES)
     hashes = {} if hashes is None else hashes
     items, seen = [], set()
@@ -133,8 +133,8 @@ def expand(spec: Spec, hashes: dict | None = None) -> list:
             for time in pose.times:
                 for op in spec.operations:
                     for instance in range(op.count):
-                        digest = _digest({"v": _VERSION, "cgaskin": __version__, "seed": spec.seed, "model": content,
-                                          "pose": {"clip": pose.clip, "time": time, "edits": edits},
+                        digest = _digest({"v": _VERSION, "cgaskin": version.VERSION, "seed": spec.seed,
+                                          "model": content, "pose": {"clip": pose.clip, "time": time, "edits": edits},
                                           "operation": {"kind": op.kind, **dict(op.params)},
                                           "instance": instance})
                         if digest in seen:

@@ -154,8 +154,10 @@ def test_each_unreadable_model_keeps_its_items(tmp_path):
 def test_the_item_ids_change_with_cgaskin_s_version(tmp_path, fox, monkeypatch):
     """A resume after an upgrade (another algorithm) makes every item again, never keeps old outputs."""
     import cgaskin
+    from cgaskin._shared import version
+    assert cgaskin.__version__ == version.VERSION
     spec = load_spec(_spec(tmp_path, BASE.replace("{fox}", fox)))
     before = [i.id for i in expand(spec)]
-    monkeypatch.setattr(cgaskin, "__version__", cgaskin.__version__ + ".post1")
+    monkeypatch.setattr(version, "VERSION", version.VERSION + ".post1")
     after = [i.id for i in expand(spec)]
     assert len(after) == len(before) and not set(after) & set(before)
