@@ -93,13 +93,18 @@ class _DocstringProblems(_logging.Filter):
     def filter(self, record):
         location = getattr(record, "location", None)
         text = str(location[0] if isinstance(location, tuple) else location or "")
+        line = record.__dict__.get("line") or (location[1] if isinstance(location, tuple) else None)
         if "docstring of " in text:
-            name = text.split("docstring of ", 1)[1].split(":", 1)[0]
+            name, _, rest = text.split("docstring of ", 1)[1].partition(":")
+            line = line or rest.split(":", 1)[0]
         elif "<autosummary>" in text:             # a docstring's first line, in a summary table
             name = f"(the summary line of an object listed at {Path(text.split(':<autosummary>')[0]).name})"
         else:
             return True
-        RST_PROBLEMS.setdefault(name, []).append(("RST", record.getMessage()))
+        row = ("RST", (f"docstring line {line}: " if line else "") + record.getMessage())
+        found = RST_PROBLEMS.setdefault(name, [])
+        if row not in found:
+            found.append(row)
         return enabled()
 
 
