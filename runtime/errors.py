@@ -57,6 +57,11 @@ class ProtocolError(InvalidInputError):
         self.id = id
 
 
+class LimitError(InvalidInputError):
+    """An operation that a ``cgaskin serve``'s ``Limits`` do not grant (too large, or the session at its
+    size); the session is unchanged."""
+
+
 class InternalError(CgaskinError, RuntimeError):
     """A bug in cgaskin, not bad input: please report it with the inputs (the model and the call)."""
 

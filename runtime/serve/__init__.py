@@ -4,7 +4,8 @@ the surgery (one ``Surgery`` per tab) and sends back only the rows and faces tha
 Imported on first use only (the CLI imports it when ``serve`` runs): ``import cgaskin`` loads neither
 it nor ``websockets``.
 """
-from .limits import LimitError, Limits
+from ..errors import LimitError
+from .limits import Limits
 from .server import Server, serve_page
 from .tab import Tab
 

@@ -48,7 +48,3 @@ class Limits(NamedTuple):
         if n_vertices >= self.max_vertices:
             raise InvalidInputError(f"the model has {n_vertices} vertices, at least Limits.max_vertices "
                                     f"({self.max_vertices}): serve it with a higher max_vertices")
-
-
-class LimitError(InvalidInputError):
-    """An operation a server's ``Limits`` do not grant; the session is unchanged."""

@@ -13,12 +13,12 @@ import sys
 import time
 import traceback
 
-from ..errors import CgaskinError
+from ..errors import CgaskinError, LimitError
 from ..surgery.session import Surgery
 from ..view.model import rig_glb
 from . import protocol
 from .delta import Mirror, full_delta
-from .limits import LimitError, Limits
+from .limits import Limits
 from .protocol import Cut, Drill, Hello, ProtocolError, Save, Tear, Undo
 
 
