@@ -100,5 +100,10 @@ class ManifestWarning(RuntimeWarning):
     """A batch folder's manifest could not be read: every item is made again."""
 
 
+class KernelCacheWarning(RuntimeWarning):
+    """numba's on-disk cache of cgaskin's kernels cannot be used (unreadable, or this numba lacks what
+    cgaskin keys it with): the kernels compile again; nothing else changes."""
+
+
 class PlaneMissesMeshWarning(UserWarning):
     """The cutting plane does not cross the mesh: one half is empty."""

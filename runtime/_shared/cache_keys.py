@@ -33,6 +33,8 @@ import sys
 import warnings
 from pathlib import Path
 
+from ..errors import KernelCacheWarning
+
 
 #: ``from .x import a, b`` (names in parentheses may span lines) and ``import x.y``, at any depth: a
 #: regular expression (parsing every module's syntax tree cost a tenth of a second per process); one
@@ -161,7 +163,7 @@ def _disk_class():
         import numba
         warnings.warn(f"cgaskin: numba {numba.__version__} lacks {what}, which cgaskin keys its kernels' on-disk "
                       "cache with; its kernels compile without that cache (every process compiles them again)",
-                      RuntimeWarning, stacklevel=4)
+                      KernelCacheWarning, stacklevel=4)
         return None
     from numba.core import caching
 
@@ -268,7 +270,7 @@ def _forget(cache, why: Exception) -> None:
     """Remove ``cache``'s index (its functions compile again and save a new one), with a warning."""
     path = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
     warnings.warn(f"cgaskin: the on-disk cache of {cache._name} could not be read ({type(why).__name__}: {why}); "
-                  "compiling it again", RuntimeWarning, stacklevel=2)
+                  "compiling it again", KernelCacheWarning, stacklevel=2)
     if path is not None:
         Path(path).unlink(missing_ok=True)
 

@@ -14,6 +14,7 @@ import pytest
 from numba.core import caching
 
 from cgaskin._shared import cache_keys
+from cgaskin.errors import KernelCacheWarning
 from cgaskin.surgery.tear import walk
 
 NO_JIT = pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT") == "1", reason="no numba cache without the JIT")
@@ -97,7 +98,7 @@ def test_without_the_internals_kernels_compile_uncached_with_a_warning(monkeypat
     cache_keys._disk_class.cache_clear()
     try:
         assert "_impl_class" in cache_keys.missing()
-        with pytest.warns(RuntimeWarning, match="compile without that cache"):
+        with pytest.warns(KernelCacheWarning, match="compile without that cache"):
             dispatcher = cache_keys.keyed(numba.njit(lambda x: x + 1))
         if isinstance(dispatcher, numba.core.dispatcher.Dispatcher):
             assert not isinstance(dispatcher._cache, caching.Cache)
@@ -195,5 +196,5 @@ def test_a_cache_written_with_a_type_since_removed_is_compiled_again(tmp_path):
     assert run(PROBE_RECORD)[:3] == (4.0, 0, 1)          # compiled for Pair, saved
     (package / "records.py").unlink()
     value, hits, misses, stderr = run(PROBE_TUPLE)
-    assert (value, hits, misses) == (4.0, 0, 1) and "could not be read" in stderr
+    assert (value, hits, misses) == (4.0, 0, 1) and "KernelCacheWarning: cgaskin: the on-disk cache" in stderr
     assert run(PROBE_TUPLE)[:3] == (4.0, 1, 0)           # the new index loads
