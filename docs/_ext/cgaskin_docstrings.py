@@ -41,11 +41,17 @@ def enabled() -> bool:
 def failures(name: str, what: str) -> list[tuple[str, str]]:
     """(code, message) of each check of ``CHECKS[what]`` that the docstring of ``name`` (an import
     path such as ``cgaskin.Rig.pose``) fails."""
-    from numpydoc.validate import validate
+    from numpydoc.validate import Validator, validate
     checks = CHECKS.get(what)
     if not checks:
         return []
-    return [(code, message) for code, message in validate(name)["errors"] if code in checks]
+    try:
+        errors = validate(name)["errors"]
+    except StopIteration:
+        # numpydoc looks for the ``def`` line of the object's source: ``property(lambda ...)`` has none
+        obj = Validator._load_obj(name)
+        errors = [] if getattr(obj, "__doc__", None) else [("GL08", "The object does not have a docstring")]
+    return [(code, message) for code, message in errors if code in checks]
 
 
 class _Collected:
