@@ -7,11 +7,12 @@ basis carrying the language's types (Point, Plane, Versor, ...) and constants; i
 ``verify_catalogue`` (``codegen.verify``) needs sympy and clifford.
 """
 from .algebras import Algebra, InvalidAlgebraError
+from .errors import CodegenError
 from .language import ConformalAlgebra, KernelSpec, cga, kernel
 from .language_pga import ProjectiveAlgebra, pga
 
 __all__ = ["Algebra", "InvalidAlgebraError", "cga", "pga", "ConformalAlgebra", "ProjectiveAlgebra", "KernelSpec", "kernel",
-           "build_catalogue", "verify_catalogue"]
+           "build_catalogue", "verify_catalogue", "CodegenError"]
 
 
 def __getattr__(name):

@@ -36,7 +36,17 @@ KINDS = ("gp", "outer", "lcontract")      # geometric, outer, left contraction (
 
 
 class InvalidAlgebraError(InvalidInputError):
-    """``Algebra(...)`` got a signature, basis or names it cannot build (the message names which)."""
+    """``Algebra(...)`` got a signature, basis or names it cannot build (the message names which).
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import Algebra, InvalidAlgebraError
+    >>> try:
+    ...     Algebra(signature=(7, 0, 0))
+    ... except InvalidAlgebraError as error:
+    ...     print(error)
+    Algebra: signature=(7, 0, 0) has dimension p + q + r = 7; supported: 1 to 6
+    """
 
 
 def grade(mask: int) -> int:
@@ -44,7 +54,18 @@ def grade(mask: int) -> int:
 
 
 def reorder_sign(a: int, b: int) -> int:
-    """Sign of moving the vectors of blade b past those of blade a into index order."""
+    """Sign of moving the vectors of blade b past those of blade a into index order.
+
+    Parameters
+    ----------
+    a, b : int
+        Blade masks (bit k: basis vector k).
+
+    Returns
+    -------
+    int
+        +1 or -1: the sign of the product of the two blades' vectors sorted into index order.
+    """
     swaps = 0
     a >>= 1
     while a:
@@ -54,13 +75,35 @@ def reorder_sign(a: int, b: int) -> int:
 
 
 def reverse_sign(mask: int) -> int:
-    """Sign of the reverse of a basis blade: (−1)^(g(g−1)/2)."""
+    """Sign of the reverse of a basis blade: (−1)^(g(g−1)/2).
+
+    Parameters
+    ----------
+    mask : int
+        The blade's mask, of grade g.
+
+    Returns
+    -------
+    int
+        +1 or -1.
+    """
     g = grade(mask)
     return -1 if (g * (g - 1) // 2) & 1 else 1
 
 
 def involution_sign(mask: int) -> int:
-    """Sign of the grade involution of a basis blade: (−1)^g."""
+    """Sign of the grade involution of a basis blade: (−1)^g.
+
+    Parameters
+    ----------
+    mask : int
+        The blade's mask, of grade g.
+
+    Returns
+    -------
+    int
+        +1 or -1.
+    """
     return -1 if grade(mask) & 1 else 1
 
 
@@ -114,12 +157,39 @@ def _names(given, default, what):
 class Algebra:
     """G(p, q, r) with exact product tables, in an orthonormal or a null basis.
 
+    Parameters
+    ----------
+    signature : tuple of 3 int
+        (p, q, r): how many basis vectors square to +1, −1 and 0; 1 <= p + q + r <= 6.
+    basis : {"orthonormal", "null"}
+        "null" replaces the last +1 and −1 vectors by the null pair e∞, e0 (needs p, q >= 1).
+    names : sequence of str, optional
+        One identifier-safe character per vector (default: numbers, and "i", "o" for e∞, e0).
+    display : sequence of str, optional
+        One character per vector for readable names (default: ``names``, "∞" and "0" for e∞, e0).
+
+    Raises
+    ------
+    InvalidAlgebraError
+        A signature, basis or names it cannot build.
+
+    Notes
+    -----
     Holds: ``signature`` (p, q, r), ``basis``, ``dimension`` n, ``n_blades`` 2^n, ``pseudoscalar``
     (mask), ``vector_names`` / ``display_names`` (one character per vector), ``orthonormal_metric``
     (the squares of the orthonormal vectors the tables multiply in), ``metric`` (n × n exact inner
     products of the basis vectors: diagonal, or with e∞·eo = −1 in a null basis), ``to_orthonormal`` /
     ``from_orthonormal`` (the change of basis, {vector: coefficient} per vector), and computes on
     first use ``product_table(kind)`` for kind in ``KINDS``.
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import Algebra
+    >>> sta = Algebra(signature=(1, 3, 0))                  # spacetime algebra
+    >>> sta.n_blades, sta.blade_display(sta.pseudoscalar)
+    (16, 'e1234')
+    >>> print(Algebra((4, 1, 0), "null"))                   # CGA, the algebra of every kernel
+    G(4,1,0), null basis e1 e2 e3 e∞ e0
     """
 
     def __init__(self, signature=(4, 1, 0), basis="orthonormal", names=None, display=None):
@@ -179,15 +249,50 @@ class Algebra:
         return tuple(sorted(range(self.n_blades), key=lambda m: (grade(m), self.vectors_of(m))))
 
     def blade_name(self, mask: int) -> str:
-        """Identifier-safe name: 's' for the scalar, else e.g. 'e12i' for e1∧e2∧e∞."""
+        """Identifier-safe name of a blade: 's' for the scalar, else e.g. 'e12i' for e1∧e2∧e∞.
+
+        Parameters
+        ----------
+        mask : int
+            The blade's mask.
+
+        Returns
+        -------
+        str
+        """
         return "s" if mask == 0 else "e" + "".join(self.vector_names[k] for k in self.vectors_of(mask))
 
     def blade_display(self, mask: int) -> str:
-        """Readable name for docstrings: '1', 'e12∞', 'e∞0'."""
+        """Readable name of a blade, for docstrings and messages: '1', 'e12∞', 'e∞0'.
+
+        Parameters
+        ----------
+        mask : int
+            The blade's mask.
+
+        Returns
+        -------
+        str
+        """
         return "1" if mask == 0 else "e" + "".join(self.display_names[k] for k in self.vectors_of(mask))
 
     def mask_of(self, name: str) -> int:
-        """Inverse of ``blade_name`` (also accepts the display names)."""
+        """The mask of a blade named as ``blade_name`` or ``blade_display`` names it.
+
+        Parameters
+        ----------
+        name : str
+            's' or '1' for the scalar, else 'e' + the names of its vectors ('e12i', 'e∞0').
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        InvalidAlgebraError
+            A name that is not 'e' + distinct vector names.
+        """
         if name in ("s", "1"):
             return 0
         if not isinstance(name, str) or not name.startswith("e") or len(name) < 2:
@@ -214,7 +319,18 @@ class Algebra:
         return (a ^ b, sign) if sign else None
 
     def product_table(self, kind: str) -> dict[tuple[int, int], tuple[tuple[int, Fraction], ...]]:
-        """{(mask_a, mask_b): ((mask, coefficient), ...)} for kind in ``KINDS``; computed once."""
+        """The exact product of every pair of basis blades, computed on first use.
+
+        Parameters
+        ----------
+        kind : {"gp", "outer", "lcontract"}
+            Geometric product, outer product or left contraction.
+
+        Returns
+        -------
+        dict
+            ``{(mask_a, mask_b): ((mask, Fraction), ...)}``: the blades of a b and their coefficients.
+        """
         if kind not in KINDS:
             raise InvalidAlgebraError(f"{self!r}.product_table: kind={kind!r} is not one of {KINDS}")
         if kind not in self._tables:

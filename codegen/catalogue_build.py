@@ -86,12 +86,54 @@ def _files(cat: pipeline.Catalogue, text: str, path: Path, targets, check: bool)
 
 
 def build_catalogue(source, out, check: bool = False, log=print, report: bool = False, targets=None) -> int:
-    """Write the files of a catalogue (or, with check=True, compare them): the numba module, and for
-    each other target in ``targets`` its files beside it (``<stem>.h``, ``<stem>.glsl``, ...).
-    ``targets`` None: numba and every target whose stamped files are there already; a check compares
-    every stamped file present too (a hand-edited ``.h`` or ``.wgsl`` is stale whatever ``targets``
-    says). Returns the number of stale kernels and files (a stale numba module counts its stale
-    kernels, at least 1; 0 when up to date). ``report``: log the op-count table too."""
+    """Compile a catalogue of ``@kernel`` functions into a numba module and other targets' files.
+
+    What ``cgaskin build --catalogue FILE --out DIR`` runs (needs sympy, the ``build`` extra).
+
+    Parameters
+    ----------
+    source : str or os.PathLike or module
+        The catalogue: a .py file, a module, or a dotted module name.
+    out : str or os.PathLike
+        The folder of the generated files (or the .py file of the numba module).
+    check : bool, optional
+        Compare the files with what the catalogue emits now instead of writing them.
+    log : callable, optional
+        Called with each line to report (default: ``print``).
+    report : bool, optional
+        Log each kernel's operation counts too.
+    targets : sequence of str, optional
+        Of "numba", "c", "glsl", "wgsl", "cuda", "js": each target's files go beside the numba
+        module (``<stem>.h``, ``<stem>.glsl``, ...). None: numba and every target whose generated
+        files are there already; a check compares every generated file present too (a hand-edited
+        ``.h`` is stale whatever ``targets`` says).
+
+    Returns
+    -------
+    int
+        The number of stale kernels and files (a stale numba module counts its stale kernels, at
+        least 1); 0 when up to date.
+
+    Raises
+    ------
+    CodegenError
+        A kernel the language cannot compile (the message names it and why).
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import build_catalogue
+    >>> with open("mykernels.py", "w") as file:
+    ...     _ = file.write('''
+    ... from cgaskin.codegen import cga, kernel
+    ...
+    ... @kernel
+    ... def reflect(plane: cga.Plane, x: cga.Point) -> cga.Point:
+    ...     return -plane * x * plane
+    ... ''')
+    >>> build_catalogue("mykernels.py", "out", targets=("numba", "c"))   # doctest: +SKIP
+    wrote out/mykernels.py, out/mykernels.h, out/mykernels_f32.h (1 kernels, 0.2 s)
+    0
+    """
     start = time.perf_counter()
     cat = user_catalogue(source)
     text, chunks = pipeline.numba_module(cat)

@@ -186,7 +186,20 @@ class KernelAlgebra(algebras.Algebra):
 
 
 class ConformalAlgebra(KernelAlgebra):
-    """G(4,1) in the null basis (equal to ``codegen.algebras.cga``) with the kernel language's types."""
+    """G(4,1) in the null basis (equal to ``codegen.algebras.cga``) with the kernel language's types.
+
+    ``cgaskin.codegen.cga`` is its one instance: the types kernels annotate their inputs with
+    (Scalar, Vector, Point, Plane, Sphere, Line, Rotor, Motor, Versor, ``Multivector[...]``), the
+    constants e1, e2, e3, einf, eo and the scalar functions (``sqrt``, ``cos``, ..., ``where``).
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import cga
+    >>> print(cga.Motor.describe())
+    Motor (1, e12, e13, e23, e1∞, e2∞, e3∞, e123∞)
+    >>> cga.Point.size, str(cga)
+    (3, 'G(4,1,0), null basis e1 e2 e3 e∞ e0')
+    """
 
     Scalar = ScalarType("Scalar", ("s",))
     Vector = Type("Vector", ("e1", "e2", "e3"))
@@ -209,7 +222,24 @@ cga = ConformalAlgebra()
 class KernelSpec:
     """A kernel recorded by ``@kernel``: the function, its name, docstring and uniform inputs.
 
-    Calling it calls the function (so kernels can use each other while traced)."""
+    Calling it calls the function (so kernels can use each other while traced).
+
+    Parameters
+    ----------
+    fn : callable
+        The kernel: a function of typed multivectors (``cga.Point``, ...) returning one.
+    uniform : str or sequence of str, optional
+        The inputs its batch form takes once (one value for every row).
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import cga, kernel
+    >>> @kernel(uniform=("V",))
+    ... def move(V: cga.Versor, x: cga.Point) -> cga.Point:
+    ...     return V * x * ~V
+    >>> move.name, move.uniform
+    ('move', ('V',))
+    """
 
     def __init__(self, fn, uniform=()):
         self.fn = fn
@@ -222,7 +252,20 @@ class KernelSpec:
         return self.fn(*args, **kwargs)
 
     def signature(self):
-        """([(argument name, Type)], return Type), from the annotations (strings are resolved)."""
+        """The kernel's argument types and return type, from its annotations (strings are resolved).
+
+        Returns
+        -------
+        params : list of (str, Type)
+            Each argument's name and type, in order.
+        result : Type
+            The return type.
+
+        Raises
+        ------
+        CodegenError
+            An argument or the return without a ``cga``/``pga`` type, or ``uniform`` naming no argument.
+        """
         try:
             hints = typing.get_type_hints(self.fn)
         except Exception as exc:  # noqa: BLE001 - any failure to resolve is the catalogue's to fix
@@ -248,8 +291,30 @@ class KernelSpec:
 
 
 def kernel(fn=None, *, uniform=()):
-    """Record ``fn`` as a CGA kernel. ``uniform``: names of the inputs the batch form takes once
-    (a single value for every row) instead of one per row."""
+    """Record a function as a kernel of the language: what ``cgaskin build --catalogue`` compiles.
+
+    Parameters
+    ----------
+    fn : callable, optional
+        The kernel, its inputs and return annotated with types of ``cga`` (or ``pga``); omitted
+        when ``@kernel(uniform=...)`` is used with arguments.
+    uniform : str or sequence of str, optional
+        The inputs the batch form takes once (a single value for every row) instead of one per row.
+
+    Returns
+    -------
+    KernelSpec or callable
+        The recorded kernel (with ``fn``), else a decorator that records one.
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import cga, kernel
+    >>> @kernel
+    ... def reflect(plane: cga.Plane, x: cga.Point) -> cga.Point:
+    ...     return -plane * x * plane
+    >>> reflect.signature()
+    ([('plane', cga.Plane), ('x', cga.Point)], cga.Point)
+    """
     if fn is None:
         return lambda f: KernelSpec(f, uniform)
     return KernelSpec(fn, uniform)

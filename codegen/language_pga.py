@@ -35,7 +35,20 @@ _MOTOR = ("s", "e01", "e02", "e03", "e12", "e13", "e23", "e0123")
 
 
 class ProjectiveAlgebra(KernelAlgebra):
-    """G(3,0,1) (equal to ``codegen.algebras.pga``) with the kernel language's types."""
+    """G(3,0,1) (equal to ``codegen.algebras.pga``) with the kernel language's types.
+
+    ``cgaskin.codegen.pga`` is its one instance: Scalar, Plane, Point, Line, Rotor, Translator, Motor,
+    ``Multivector[...]`` and the constants e0 ... e3.
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import kernel, pga
+    >>> @kernel(uniform=("M",))
+    ... def move(M: pga.Motor, x: pga.Point) -> pga.Point:
+    ...     return M * x * ~M
+    >>> print(pga.Motor.describe())
+    Motor (1, e01, e02, e03, e12, e13, e23, e0123)
+    """
 
     Scalar = ScalarType("Scalar", ("s",), **_PGA)
     Plane = Type("Plane", ("e1", "e2", "e3", "e0"), **_PGA)

@@ -323,10 +323,44 @@ def _import(path: Path, cache_dir: str):
 
 def verify_catalogue(source, out=None, examples: int = 50, rebuild: bool = True, seed: int = 0,
                      log=None) -> Report:
-    """Build ``source`` (into ``out``, or a temporary folder), then run every kernel three ways on
-    ``examples`` drawn inputs per range (module docstring). Returns the Report; raises
-    VerificationError (naming each failing kernel and its worst input; ``.report`` holds the Report) on
-    any disagreement or exception. ``rebuild=False`` verifies the module already in ``out`` as it is."""
+    """Check every kernel of a catalogue against clifford and its own symbolic expansion.
+
+    Builds ``source``, then runs every kernel three ways (generated code, clifford, the expansion)
+    on drawn inputs per range (module docstring). Needs sympy and clifford.
+
+    Parameters
+    ----------
+    source : str or os.PathLike or module
+        The catalogue, as ``build_catalogue`` takes it.
+    out : str or os.PathLike, optional
+        The folder to build into (default: a temporary one).
+    examples : int, optional
+        Inputs drawn per kernel and range, >= 1.
+    rebuild : bool, optional
+        False: verify the module already in ``out`` as it is.
+    seed : int, optional
+        Seed of the drawn inputs.
+    log : callable, optional
+        Called with the build's lines (default: silent).
+
+    Returns
+    -------
+    Report
+        Each kernel's worst relative errors; ``.ok`` is True.
+
+    Raises
+    ------
+    VerificationError
+        A disagreement or an exception: the message names each failing kernel and its worst input,
+        ``.report`` holds the Report.
+
+    Examples
+    --------
+    >>> from cgaskin.codegen import verify_catalogue
+    >>> report = verify_catalogue("mykernels.py", examples=5)      # doctest: +SKIP
+    >>> report.ok, [kernel.name for kernel in report.kernels]       # doctest: +SKIP
+    (True, ['reflect'])
+    """
     from .ir import CodegenError
     if examples < 1:
         raise CodegenError(f"examples={examples}: need at least 1")

@@ -4,6 +4,12 @@ Every error a user can trigger with bad input is one of these, so that callers c
 ``CgaskinError`` and numba never surfaces a traceback of its own.
 """
 
+__all__ = ["CgaskinError", "FolderInUseError", "InternalError", "InvalidInputError", "KernelBuildError",
+           "KernelCacheWarning", "LimitError", "ManifestWarning", "MemoryLimitError", "MissesMeshError",
+           "MissingFolderError", "ModelFormatError", "ModelWarning", "NoSkinError", "OpenRimWarning",
+           "PlacementWarning", "PlaneMissesMeshWarning", "ProtocolError", "StaleGeneratedError", "TearPathError",
+           "TearPlacementWarning"]
+
 
 class CgaskinError(Exception):
     """Base class of every error cgaskin raises on purpose.
