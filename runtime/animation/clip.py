@@ -37,14 +37,28 @@ ARC_SIGN, ARC_ANGLE, ARC_INV_SIN, ARC_COS, ROTATION_KEY = 4, 5, 6, 7, 8
 
 @dataclass(frozen=True, eq=False)
 class Channel:
-    """One animated property of one node.
+    """One animated property of one node: its keys and how they interpolate (glTF's semantics).
 
-    node : int, index into ``Skeleton.names``
-    path : "translation" | "rotation" | "scale"
-    interpolation : "STEP" | "LINEAR" | "CUBICSPLINE"
-    times : (k,) float64, strictly increasing seconds
-    values : (k, c) float64 for STEP/LINEAR, (k, 3, c) for CUBICSPLINE (in-tangent, value,
-        out-tangent), with c = 3 for translation/scale and 4 (x, y, z, w) for rotation
+    Parameters
+    ----------
+    node : int
+        Index into ``Skeleton.names``.
+    path : {"translation", "rotation", "scale"}
+        The property animated.
+    interpolation : {"STEP", "LINEAR", "CUBICSPLINE"}
+        How values between keys are made.
+    times : (k,) float64
+        Key times in seconds, strictly increasing.
+    values : (k, c) or (k, 3, c) float64
+        Key values, c = 3 for translation and scale, 4 (x, y, z, w) for rotation; CUBICSPLINE keys
+        are (in-tangent, value, out-tangent). ``times`` and ``values`` are kept as read-only copies.
+
+    Examples
+    --------
+    >>> channel = cgaskin.capsule_arm().clips[0].channels[1]            # the elbow of "wave"
+    >>> channel.node, channel.path, channel.interpolation, channel.values.shape
+    (1, 'rotation', 'LINEAR', (5, 4))
+    >>> step = cgaskin.Channel(0, "translation", "STEP", [0.0, 1.0], [[0, 0, 0], [0, 1, 0]])
     """
 
     node: int
@@ -87,7 +101,23 @@ class Clip:
     """A named animation: a set of channels. ``duration`` is the last key time.
 
     Channels are values: their arrays are read-only copies (``packed`` flattens them once and keeps
-    the result for the clip's lifetime)."""
+    the result for the clip's lifetime).
+
+    Parameters
+    ----------
+    name : str
+        The clip's name (what ``Rig.pose`` and ``cgaskin view`` select it by).
+    channels : sequence of Channel
+        Its animated properties; kept as a tuple.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> lift = cgaskin.Clip("lift", [cgaskin.Channel(0, "translation", "LINEAR", [0.0, 2.0],
+    ...                                              [[0, 0, 0], [0, 1, 0]])])
+    >>> lift.duration, arm.with_clips(lift).clip_index("lift")
+    (2.0, 1)
+    """
 
     name: str
     channels: tuple[Channel, ...]

@@ -3,8 +3,7 @@
 A node whose local transform is a similarity (rotation, translation, positive uniform scale) holds a
 versor T R D; composition along the hierarchy is the geometric product (generated kernel). A node
 whose transform is not a similarity (non-uniform scale, a matrix with shear) keeps its exact matrix,
-and so do its descendants' globals: nothing is approximated (design.md §4). Bone transforms are
-G[node] @ inverse_bind, hoisted to 3x4 affine maps for the blend loop.
+and so do its descendants' globals: nothing is approximated (design.md §4).
 """
 from __future__ import annotations
 
@@ -29,11 +28,24 @@ FRAMES = ("parent", "local")
 
 @dataclass(frozen=True, eq=False)
 class Pose:
-    """Local transforms of every node of ``skeleton``.
+    """The local transform of every node of a skeleton for one frame; edits return new poses.
 
-    versors : (j, 12) float64, the local versor of each similarity node (identity elsewhere)
-    matrices : (j, 4, 4) float64, the exact local matrix of each node
-    similar : (j,) bool, whether the node's local transform is a similarity held by ``versors``
+    Parameters
+    ----------
+    skeleton : Skeleton
+        The nodes the pose moves.
+    versors : (j, 12) float64
+        The local versor of each similarity node (identity elsewhere).
+    matrices : (j, 4, 4) float64
+        The exact local matrix of each node.
+    similar : (j,) bool
+        Whether the node's local transform is a similarity held by ``versors``.
+
+    Examples
+    --------
+    >>> bent = cgaskin.capsule_arm().rest_pose().rotate("elbow", [0, 0, 1], np.pi / 2)
+    >>> bent.global_matrices()[2, :3, 3]                    # the wrist, turned up about the elbow
+    array([1., 1., 0.])
     """
 
     skeleton: Skeleton
@@ -44,8 +56,21 @@ class Pose:
     # -- construction -------------------------------------------------------------------------
     @classmethod
     def from_trs(cls, skeleton: Skeleton, translations, rotations, scales, exact_matrices=None):
-        """A pose from per-node TRS (j, 3), (j, 4), (j, 3); ``exact_matrices`` (a list with a (4, 4)
-        or None per node) overrides nodes whose TRS is only an approximation (shear)."""
+        """A pose from per-node translation, rotation and scale.
+
+        Parameters
+        ----------
+        skeleton : Skeleton
+            The nodes.
+        translations, rotations, scales : (j, 3), (j, 4), (j, 3) float64
+            Local TRS of each node, rotations as quaternions (x, y, z, w).
+        exact_matrices : list of (4, 4) float64 or None, optional
+            Per node, a matrix that overrides a TRS that is only an approximation (shear).
+
+        Returns
+        -------
+        Pose
+        """
         t = np.asarray(translations, dtype=np.float64)
         q = np.asarray(rotations, dtype=np.float64)
         s = np.asarray(scales, dtype=np.float64)
@@ -65,16 +90,35 @@ class Pose:
 
     @classmethod
     def rest(cls, skeleton: Skeleton) -> "Pose":
-        """The rest (node) pose stored in the file."""
+        """The rest (node) pose stored in the file.
+
+        Parameters
+        ----------
+        skeleton : Skeleton
+            The nodes, with their rest transforms.
+
+        Returns
+        -------
+        Pose
+        """
         exact = shear_nodes(skeleton)
         return cls.from_trs(skeleton, skeleton.rest_translations, skeleton.rest_rotations,
                             skeleton.rest_scales, exact)
 
     @classmethod
     def bind(cls, skeleton: Skeleton) -> "Pose":
-        """The pose in which every bone's global transform is inverse(inverse_bind): skinning it
-        returns the stored vertices. Held as exact matrices (bind matrices need not be similarities);
-        nodes that are not bones keep their rest transform relative to their parent."""
+        """The pose whose skinning returns the stored vertices: each bone's global transform is
+        inverse(inverse_bind), as exact matrices (need not be similarities); other nodes keep their rest.
+
+        Parameters
+        ----------
+        skeleton : Skeleton
+            The nodes and bones.
+
+        Returns
+        -------
+        Pose
+        """
         n = skeleton.n_nodes
         globals_ = np.empty((n, 4, 4))
         bind_of = {}
@@ -92,10 +136,23 @@ class Pose:
 
     @classmethod
     def from_clip(cls, skeleton: Skeleton, clip: Clip, time: float, rotation_blend: str = "slerp") -> "Pose":
-        """The pose of ``clip`` at ``time`` seconds, glTF sampler semantics, in one compiled call
-        (``sampling.py``): a time before the first key clamps to the first key, after the last key to
-        the last; unanimated properties keep their rest values. InvalidInputError for a time that is
-        not a finite real number (NaN, inf, a string) and an unknown ``rotation_blend``."""
+        """The pose of a clip at a time, glTF sampler semantics, in one compiled call (``sampling.py``).
+
+        Parameters
+        ----------
+        skeleton : Skeleton
+            The nodes.
+        clip : Clip
+            The animation; properties it does not animate keep their rest values.
+        time : float
+            Finite seconds; before the first key clamps to the first key, after the last to the last.
+        rotation_blend : {"slerp", "linear"}, optional
+            Rotations by slerp on the shorter arc, or by the normalised linear blend.
+
+        Returns
+        -------
+        Pose
+        """
         return cls._of_fields(skeleton, *sample_pose(skeleton, clip, time, rotation_blend))
 
     @classmethod
@@ -143,8 +200,23 @@ class Pose:
         return versors, matrices
 
     def rotate(self, joint, axis, angle, frame: str = "parent") -> "Pose":
-        """Rotate ``joint`` (name or index) by ``angle`` radians about ``axis`` through the joint's
-        origin; the axis is given in the parent's frame (``frame="parent"``) or the joint's own."""
+        """The pose with a joint rotated about an axis through its origin.
+
+        Parameters
+        ----------
+        joint : str or int
+            The node's name or index.
+        axis : (3,) array_like
+            Rotation axis, any nonzero length.
+        angle : float
+            Radians, right-handed about ``axis``.
+        frame : {"parent", "local"}, optional
+            The frame ``axis`` is given in: the parent's or the joint's own.
+
+        Returns
+        -------
+        Pose
+        """
         if frame not in FRAMES:
             raise InvalidInputError(f"frame must be one of {FRAMES}, got {frame!r}")
         rot = versor.rotor(axis, angle)
@@ -157,19 +229,47 @@ class Pose:
         return self._edit(joint, what, left=left)
 
     def translate(self, joint, vector) -> "Pose":
-        """Move ``joint`` by ``vector`` in its parent's frame. InvalidInputError when the joint's
-        transform would overflow float64."""
+        """The pose with a joint moved in its parent's frame.
+
+        Parameters
+        ----------
+        joint : str or int
+            The node's name or index.
+        vector : (3,) array_like
+            The translation.
+
+        Returns
+        -------
+        Pose
+        """
         vector = float_array(vector, "vector", 3)
         return self._edit(joint, f"translate({joint!r}, {vector.tolist()})", left=versor.translator(vector))
 
     def dilate(self, joint, scale) -> "Pose":
-        """Scale ``joint``'s subtree by ``scale`` about the joint's origin; ``scale`` in
-        ``versor.SCALE_RANGE`` ([1e-12, 1e12]), else InvalidInputError."""
+        """The pose with a joint's subtree scaled uniformly about the joint's origin.
+
+        Parameters
+        ----------
+        joint : str or int
+            The node's name or index.
+        scale : float
+            The factor, in ``versor.SCALE_RANGE`` ([1e-12, 1e12]), else InvalidInputError.
+
+        Returns
+        -------
+        Pose
+        """
         return self._edit(joint, f"dilate({joint!r}, {scale!r})", right=versor.dilator(scale))
 
     # -- evaluation ----------------------------------------------------------------------------
     def bone_affines(self) -> np.ndarray:
-        """(B, 12) row-major 3x4 maps G[bone_nodes[b]] @ inverse_bind[b] for the blend loop."""
+        """Each bone's skinning map G[bone_nodes[b]] @ inverse_bind[b], for the blend loop.
+
+        Returns
+        -------
+        (b, 12) float64
+            Row-major 3x4 maps.
+        """
         sk = self.skeleton
         out = np.empty((sk.n_bones, 12))
         # (the writeable buffers behind the skeleton's read-only arrays: the kernel's one compiled type)
@@ -178,7 +278,12 @@ class Pose:
         return out
 
     def global_matrices(self) -> np.ndarray:
-        """(j, 4, 4) global transform of every node."""
+        """The global transform of every node.
+
+        Returns
+        -------
+        (j, 4, 4) float64
+        """
         sk = self.skeleton
         out = np.empty((sk.n_nodes, 12))
         ident = np.zeros((sk.n_nodes, 12))
@@ -192,22 +297,32 @@ class Pose:
 
 
 def clip_from_poses(name: str, times, poses, interpolation: str = "LINEAR") -> Clip:
-    """A clip whose keyframes are ``poses`` at ``times``: poses made on the fly (edits of the rest
-    pose or of a clip's pose) become an animation that ``Rig.pose`` samples and ``save`` exports
-    (add it with ``rig.with_clips(clip)``).
+    """A clip whose keyframes are poses: poses made on the fly become an animation (``save``
+    exports it).
 
+    Parameters
+    ----------
     name : str
-    times : (k,) float, strictly increasing seconds
-    poses : sequence of k ``Pose`` of one skeleton
-    interpolation : "LINEAR" (rotations by rotor slerp, translations and scales linearly) or "STEP"
+        The clip's name.
+    times : (k,) float
+        Key times, strictly increasing seconds.
+    poses : sequence of k Pose
+        The keys, of one skeleton.
+    interpolation : {"LINEAR", "STEP"}, optional
+        LINEAR: rotations by slerp, translations and scales linearly.
 
-    Every node whose local transform differs from its rest transform in some key gets translation,
-    rotation and scale channels; the other nodes keep their rest transforms. Sampled at a key time,
-    the clip gives that key's pose.
+    Returns
+    -------
+    Clip
+        TRS channels for each node that leaves its rest transform in some key (InvalidInputError for
+        mismatched ``times``/``poses``, poses of other skeletons, a transform with shear).
 
-    Raises InvalidInputError for an empty or mismatched ``times``/``poses``, times that are not
-    finite and increasing, poses of different skeletons, and a pose whose node transform has shear
-    (a glTF channel holds translation, rotation and scale only).
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm(); rest = arm.rest_pose()
+    >>> bend = cgaskin.clip_from_poses("bend", [0.0, 1.0], [rest, rest.rotate("elbow", [0, 0, 1], 1.0)])
+    >>> arm.with_clips(bend).pose("bend", 0.5).global_matrices()[2, :3, 3].round(3)
+    array([1.878, 0.479, 0.   ])
     """
     if not isinstance(name, str) or not name:
         raise InvalidInputError(f"name must be a non-empty string, got {name!r}")

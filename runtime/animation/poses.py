@@ -17,13 +17,32 @@ from .skeleton import Skeleton
 
 @dataclass(frozen=True, eq=False)
 class Poses:
-    """T poses of ``skeleton``: the fields of ``Pose`` with a leading frame axis.
-
-    times : (T,) float64 seconds of each frame in its clip
-    versors : (T, j, 12) float64 ; matrices : (T, j, 4, 4) float64 ; similar : (T, j) bool
+    """T poses of one skeleton: the fields of ``Pose`` with a leading frame axis.
 
     ``len(poses)`` is T, ``poses[i]`` the ``Pose`` of frame i (a copy: edit it like any pose),
     ``poses[a:b]`` a ``Poses`` of those frames; iterating gives the frames' poses in order.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        The nodes the poses move.
+    times : (T,) float64
+        Seconds of each frame in its clip.
+    versors : (T, j, 12) float64
+        Each frame's local versors (``Pose.versors``).
+    matrices : (T, j, 4, 4) float64
+        Each frame's exact local matrices.
+    similar : (T, j) bool
+        Whether each node of each frame is a similarity held by ``versors``.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> poses = arm.poses("wave", [0.0, 0.5, 1.0])
+    >>> len(poses), poses.versors.shape, type(poses[1]).__name__
+    (3, (3, 3, 12), 'Pose')
+    >>> cgaskin.skin(arm, poses).shape                      # every frame at once
+    (3, 690, 3)
     """
 
     skeleton: Skeleton
@@ -34,9 +53,24 @@ class Poses:
 
     @classmethod
     def from_clip(cls, skeleton: Skeleton, clip: Clip, times, rotation_blend: str = "slerp") -> "Poses":
-        """The poses of ``clip`` at ``times`` ((T,) finite seconds, in any order; each clamps to the keys
-        as glTF says), sampled in one compiled call; frame i equals ``Pose.from_clip(..., times[i])``
-        exactly. InvalidInputError for ``times`` that are not a 1-D array of finite numbers."""
+        """The poses of a clip at many times, sampled in one compiled call.
+
+        Parameters
+        ----------
+        skeleton : Skeleton
+            The nodes.
+        clip : Clip
+            The animation.
+        times : (T,) array_like of float
+            Finite seconds, in any order; each clamps to the keys as glTF says.
+        rotation_blend : {"slerp", "linear"}, optional
+            As ``Pose.from_clip``.
+
+        Returns
+        -------
+        Poses
+            Frame i equals ``Pose.from_clip(skeleton, clip, times[i], rotation_blend)`` exactly.
+        """
         return cls(skeleton, *sample_poses(skeleton, clip, times, rotation_blend))
 
     def __len__(self) -> int:
@@ -57,8 +91,13 @@ class Poses:
                     self.similar[index].copy())
 
     def bone_affines(self) -> np.ndarray:
-        """(T, B, 12) row-major 3x4 maps G[bone_nodes[b]] @ inverse_bind[b] of every frame, in one
-        compiled call (frame i equals ``self[i].bone_affines()`` exactly)."""
+        """Every frame's bone maps G[bone_nodes[b]] @ inverse_bind[b], in one compiled call.
+
+        Returns
+        -------
+        (T, b, 12) float64
+            Row-major 3x4 maps; frame i equals ``self[i].bone_affines()`` exactly.
+        """
         sk = self.skeleton
         out = np.empty((len(self), sk.n_bones, 12))
         # slices of a frame range need not be contiguous arrays of their own: the kernel takes C arrays

@@ -46,21 +46,44 @@ __all__ = ["Rig", "Skeleton", "Clip", "Channel", "INTERPOLATIONS", "CHANNEL_PATH
 class Rig:
     """A skinned triangle mesh, immutable: every array is a read-only copy of what it was made from.
 
-    vertices : (n, 3) float64 bind-pose positions, finite
-    faces : (m, 3) int64 vertex indices in [0, n), counter-clockwise
-    joints : (n, 4) int64 bone indices in [0, skeleton.n_bones) (unused slots hold 0 with weight 0)
-    weights : (n, 4) float64, finite, >= 0, each row sums to 1 (at least one weight > 0 per vertex)
-    skeleton : Skeleton
-    clips : list[Clip]
-    attributes : read-only dict name -> (n, ...) real per-vertex data carried through cut/tear/export
-        (glTF names: "NORMAL", "TEXCOORD_0"), finite, dtype kept
-    name : str
-
     Made from any arrays that ``check_mesh`` accepts (other real dtypes, 1 to 3 or more than 4
     influences, rows not summing to 1): they are normalised as it does, with the same warnings.
-    ``InvalidInputError`` names the first bad row and its value: a non-finite vertex, a face outside
-    the vertices, a negative or non-finite weight, a vertex without any weight, a weighted joint
-    outside the skeleton's bones, an attribute with the wrong row count or non-finite values.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Bind-pose positions, finite.
+    faces : (m, 3) int64
+        Vertex indices in [0, n), counter-clockwise.
+    joints : (n, 4) int64
+        Bone indices in [0, skeleton.n_bones) (unused slots hold 0 with weight 0).
+    weights : (n, 4) float64
+        Finite, >= 0, each row summing to 1 (at least one weight > 0 per vertex).
+    skeleton : Skeleton
+        The nodes and bones the joints index.
+    clips : list of Clip, optional
+        The animations.
+    attributes : dict, optional
+        Name -> (n, ...) real per-vertex data carried through cut, tear and export (glTF names:
+        "NORMAL", "TEXCOORD_0"), finite, dtype kept; held as a read-only dict.
+    name : str, optional
+        The model's name (messages and saved files name it).
+
+    Raises
+    ------
+    InvalidInputError
+        Names the first bad row and its value: a non-finite vertex, a face outside the vertices, a
+        negative or non-finite weight, a vertex without any weight, a weighted joint outside the
+        skeleton's bones, an attribute with the wrong row count or non-finite values.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> rig = cgaskin.Rig(arm.vertices, arm.faces, arm.joints, arm.weights, arm.skeleton, name="arm")
+    >>> rig.n_vertices, rig.n_faces, rig.clips
+    (690, 1376, [])
+    >>> rig.vertices.flags.writeable
+    False
     """
 
     vertices: np.ndarray
@@ -91,7 +114,22 @@ class Rig:
         return len(self.faces)
 
     def clip_index(self, clip) -> int:
-        """Index of a clip given by name or index; a clear error lists the valid names."""
+        """The index of a clip given by name or index.
+
+        Parameters
+        ----------
+        clip : str or int
+            A clip name, or an index into ``clips``.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown clip (the message lists the rig's clips).
+        """
         if type(clip) is int and 0 <= clip < len(self.clips):       # the common case, per frame
             return clip
         if type(clip) is str:                # by name, per frame: a dict, checked (``clips`` is a list)
@@ -115,20 +153,53 @@ class Rig:
         return indices
 
     def rest_pose(self):
-        """The rest (node) pose of the skeleton, as a ``Pose``."""
+        """The rest (node) pose of the skeleton.
+
+        Returns
+        -------
+        Pose
+        """
         return Pose.rest(self.skeleton)
 
     def bind_pose(self):
-        """The pose whose skinning returns ``vertices`` unchanged: every bone's global transform is
-        the inverse of its inverse bind matrix (differs from the rest pose in some files)."""
+        """The pose whose skinning returns ``vertices`` unchanged.
+
+        Every bone's global transform is the inverse of its inverse bind matrix (differs from the
+        rest pose in some files).
+
+        Returns
+        -------
+        Pose
+        """
         return Pose.bind(self.skeleton)
 
     def pose(self, clip=0, time: float = 0.0, rotation_blend: str = "slerp") -> Pose:
-        """The pose of a clip (name or index) at ``time`` seconds, glTF sampler semantics, in one
-        compiled call: rotations by slerp on the shorter arc (``"slerp"``, as glTF) or the normalised
-        linear blend (``"linear"``); a time before the first key or after the last clamps to that key
-        (no error). InvalidInputError for an unknown clip (the message lists the rig's clips) and a
-        time that is not a finite real number."""
+        """The pose of a clip at a time, with glTF's sampler semantics, in one compiled call.
+
+        Parameters
+        ----------
+        clip : str or int, optional
+            The clip's name or index.
+        time : float, optional
+            Seconds; a time before the first key or after the last clamps to that key (no error).
+        rotation_blend : {"slerp", "linear"}, optional
+            Rotations by slerp on the shorter arc (as glTF), or by the normalised linear blend.
+
+        Returns
+        -------
+        Pose
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown clip (the message lists the rig's clips), a time that is not a finite number.
+
+        Examples
+        --------
+        >>> pose = cgaskin.capsule_arm().pose("wave", 0.5)
+        >>> pose.versors.shape                                  # one versor per node
+        (3, 12)
+        """
         key = (clip, rotation_blend) if type(clip) in _CLIP_KEYS and type(rotation_blend) is str else None
         kept = self._samplers.get(key)
         # (``clips`` is a list: the clip kept for this name or index must still be the rig's)
@@ -147,13 +218,42 @@ class Rig:
         return {}
 
     def poses(self, clip=0, times=(0.0,), rotation_blend: str = "slerp") -> Poses:
-        """The poses of a clip at each of ``times`` ((T,) finite seconds, any order, clamped like
-        ``pose``) in one compiled call: a ``Poses`` of T frames, frame i equal to
-        ``self.pose(clip, times[i])``; ``cgaskin.skin(rig, poses)`` skins them all ((T, n, 3))."""
+        """The poses of a clip at many times, in one compiled call.
+
+        Parameters
+        ----------
+        clip : str or int, optional
+            The clip's name or index.
+        times : (T,) array_like of float, optional
+            Finite seconds, any order, clamped like ``pose``.
+        rotation_blend : {"slerp", "linear"}, optional
+            As ``pose``.
+
+        Returns
+        -------
+        Poses
+            T frames, frame i equal to ``self.pose(clip, times[i])``.
+
+        Examples
+        --------
+        >>> arm = cgaskin.capsule_arm()
+        >>> cgaskin.skin(arm, arm.poses("wave", np.linspace(0.0, 2.0, 5))).shape
+        (5, 690, 3)
+        """
         return Poses.from_clip(self.skeleton, self.clips[self.clip_index(clip)], times, rotation_blend)
 
     def with_clips(self, *clips: Clip) -> "Rig":
-        """A new rig with ``clips`` added after its own (names must stay unique)."""
+        """A new rig with more clips, added after its own.
+
+        Parameters
+        ----------
+        *clips : Clip
+            The clips to add; names must stay unique, channels must animate the skeleton's nodes.
+
+        Returns
+        -------
+        Rig
+        """
         names = [c.name for c in self.clips]
         for clip in clips:
             if not isinstance(clip, Clip):
@@ -193,8 +293,26 @@ class Rig:
         return Rig._of_checked(vertices, faces, joints, weights, self.skeleton, self.clips, attributes, self.name)
 
     def with_mesh(self, vertices, faces, joints, weights, attributes=None) -> "Rig":
-        """A new rig with the same skeleton and clips and another mesh (checked and copied as the
-        constructor does: ``InvalidInputError`` names the first bad row)."""
+        """A new rig with the same skeleton and clips and another mesh, checked and copied as the
+        constructor does (``InvalidInputError`` names the first bad row).
+
+        Parameters
+        ----------
+        vertices : (n, 3) float64
+            Bind-pose positions.
+        faces : (m, 3) int64
+            Vertex indices, counter-clockwise.
+        joints : (n, 4) int64
+            Bone indices.
+        weights : (n, 4) float64
+            Bone weights, each row summing to 1.
+        attributes : dict, optional
+            Per-vertex data (default: none).
+
+        Returns
+        -------
+        Rig
+        """
         return replace(self, vertices=vertices, faces=faces, joints=joints, weights=weights,
                        attributes={} if attributes is None else attributes)
 

@@ -15,16 +15,36 @@ from ..tolerances import tol
 
 @dataclass(frozen=True, eq=False)
 class Skeleton:
-    """Node hierarchy and bones.
+    """The node hierarchy with its rest transforms, and which nodes are the skin's bones.
 
-    names : list[str], (j,) node names, unique
-    parents : (j,) int64, parent node index or -1 for roots; parents[i] < i
+    Every array is kept as a read-only copy.
+
+    Parameters
+    ----------
+    names : list of str
+        The j node names, unique.
+    parents : (j,) int64
+        Parent node index, -1 for roots; parents[i] < i.
     rest_translations : (j, 3) float64
-    rest_rotations : (j, 4) float64 unit quaternions (x, y, z, w)
+        Local rest translation of each node.
+    rest_rotations : (j, 4) float64
+        Local rest rotation of each node, unit quaternions (x, y, z, w).
     rest_scales : (j, 3) float64
-    rest_matrices : (j, 4, 4) float64 exact local matrices (T @ R @ S for TRS nodes)
-    bone_nodes : (b,) int64 node index of each bone
-    inverse_bind : (b, 4, 4) float64 inverse bind matrix of each bone
+        Local rest scale of each node.
+    rest_matrices : (j, 4, 4) float64
+        Exact local rest matrices (T @ R @ S for TRS nodes).
+    bone_nodes : (b,) int64
+        Node index of each bone (what ``Rig.joints`` index).
+    inverse_bind : (b, 4, 4) float64
+        Inverse bind matrix of each bone.
+
+    Examples
+    --------
+    >>> skeleton = cgaskin.capsule_arm().skeleton
+    >>> skeleton.names, skeleton.parents.tolist(), skeleton.n_bones
+    (['shoulder', 'elbow', 'wrist'], [-1, 0, 1], 3)
+    >>> skeleton.rest_translations[1]
+    array([1., 0., 0.])
     """
 
     names: list
@@ -64,7 +84,22 @@ class Skeleton:
         return np.ascontiguousarray(ibm[:, :3, :].reshape(-1, 12))
 
     def node_index(self, joint) -> int:
-        """Index of a node given by name or index; a clear error lists the valid names."""
+        """The index of a node given by name or index.
+
+        Parameters
+        ----------
+        joint : str or int
+            A node name, or an index in ``range(n_nodes)``.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown name (the message lists the valid ones) or an index out of range.
+        """
         index = item_index(joint, self.n_nodes, "joint", f"the skeleton has {self.n_nodes} nodes")
         if index is not None:
             return index

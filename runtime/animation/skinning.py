@@ -68,11 +68,36 @@ def _diagnose(rest, joints, weights, affines, bad_joints, bad_weights, bad_value
 def skin_affine(rest, joints, weights, affines, parallel=None, out=None) -> np.ndarray:
     """Blend per-bone affine maps: out[i] = Σ_k weights[i,k] (A[joints[i,k]] applied to rest[i]).
 
-    rest : (n, 3) float64 ; joints : (n, k) int ; weights : (n, k) float32/64 ;
-    affines : (B, 3, 4) or (B, 12) float64 ; parallel : None (by size), True or False ;
-    out : optional (n, 3) float64 C-contiguous array to write into (reuse it across frames).
-    Returns (n, 3) float64 (``out`` when given). For transforms that are not similarities (bind matrices with
-    non-uniform scale); similarity poses should use ``skin_vertices``.
+    For transforms that are not similarities (bind matrices with non-uniform scale); similarity
+    poses can use ``skin_vertices``.
+
+    Parameters
+    ----------
+    rest : (n, 3) float64
+        Rest positions.
+    joints : (n, k) int
+        Bone index of each influence.
+    weights : (n, k) float32 or float64
+        Influence weights, >= 0.
+    affines : (b, 3, 4) or (b, 12) float64
+        Each bone's affine map (row-major 3x4).
+    parallel : bool, optional
+        Blend on every core; None (default) decides by the vertex count.
+    out : (n, 3) float64, optional
+        A C-contiguous array to write into (reuse it across frames).
+
+    Returns
+    -------
+    (n, 3) float64
+        The skinned positions (``out`` when given).
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> affines = np.tile(np.eye(4)[:3], (3, 1, 1))
+    >>> affines[:, 0, 0] = 2.0                              # every bone stretches x by 2
+    >>> cgaskin.skin_affine(arm.vertices, arm.joints, arm.weights, affines)[-1]
+    array([6.5, 0. , 0. ])
     """
     affines = np.asarray(affines)
     if affines.dtype != np.float64:
@@ -105,11 +130,34 @@ def bone_affines(versors) -> np.ndarray:
 
 
 def skin_vertices(rest, joints, weights, versors, parallel=None, out=None) -> np.ndarray:
-    """Skin rest positions with one versor per bone.
+    """Skin rest positions with one versor per bone: Σ_k w_k down(V_k up(x) Ṽ_k).
 
-    rest : (n, 3) float64 ; joints : (n, k) int bone indices ; weights : (n, k) float ;
-    versors : (B, 12) float64 ; returns (n, 3) float64 (written into ``out`` if given).
-    The caller's other arrays are not modified.
+    Parameters
+    ----------
+    rest : (n, 3) float64
+        Rest positions.
+    joints : (n, k) int
+        Bone index of each influence.
+    weights : (n, k) float
+        Influence weights, >= 0.
+    versors : (b, 12) float64
+        Each bone's versor (its global transform times its inverse bind).
+    parallel : bool, optional
+        Blend on every core; None (default) decides by the vertex count.
+    out : (n, 3) float64, optional
+        A C-contiguous array to write into; the caller's other arrays are not modified.
+
+    Returns
+    -------
+    (n, 3) float64
+        The skinned positions (``out`` when given).
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> up = cgaskin.versor.translator(np.tile([0.0, 1.0, 0.0], (3, 1)))      # every bone up by 1
+    >>> cgaskin.skin_vertices(arm.vertices, arm.joints, arm.weights, up)[-1]
+    array([3.25, 1.  , 0.  ])
     """
     return skin_affine(rest, joints, weights, bone_affines(versors), parallel=parallel, out=out)
 
@@ -130,13 +178,32 @@ def check_pose(rig: Rig, pose, kinds=(Pose,)):
 
 
 def skin(rig: Rig, pose: Pose | Poses | None = None, out=None) -> np.ndarray:
-    """Skinned positions (n, 3) float64 of ``rig`` in ``pose`` (default: the rest pose), or (T, n, 3)
-    for the T frames of a ``Poses`` (``rig.poses(clip, times)``: its bone maps and the blend of every
-    frame in one compiled call each). ``out``: an optional C-contiguous float64 array of that shape
-    to write into (reuse it across frames).
+    """The positions of a rig's vertices in a pose (linear blend skinning).
 
     glTF semantics for every format: Σ_i w_i (G[joint_i] · IBM_i) v; the mesh node's own transform is
-    ignored."""
+    ignored.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model.
+    pose : Pose or Poses, optional
+        A pose of its skeleton (default: the rest pose), or T frames (``rig.poses(clip, times)``:
+        their bone maps and the blend of every frame in one compiled call each).
+    out : (n, 3) or (T, n, 3) float64, optional
+        A C-contiguous array to write into (reuse it across frames).
+
+    Returns
+    -------
+    (n, 3) or (T, n, 3) float64
+        The skinned positions (``out`` when given).
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> cgaskin.skin(arm, arm.pose("wave", 1.0))[-1].round(3)          # the tip, raised
+    array([1.  , 2.25, 0.  ])
+    """
     pose = rig.rest_pose() if pose is None else check_pose(rig, pose, (Pose, Poses))
     check_read_only(rig)
     if isinstance(pose, Poses):
@@ -183,9 +250,31 @@ def _skin_frames(rest, joints, weights, affines, out):
 
 
 def skin_normals(rig: Rig, pose: Pose | None = None, normals=None) -> np.ndarray:
-    """Skinned unit normals (n, 3): the blended linear part M's inverse transpose applied (as
-    |det M| M^-T, the cofactor matrix times sign(det M): scale, non-uniform scale and mirroring are
-    corrected), then normalised."""
+    """The unit normals of a rig's vertices in a pose.
+
+    The blended linear part M's inverse transpose is applied (as ``|det M| M^-T``, the cofactor
+    matrix times sign(det M): scale, non-uniform scale and mirroring are corrected), then the
+    result is normalised.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model.
+    pose : Pose, optional
+        A pose of its skeleton (default: the rest pose).
+    normals : (n, 3) float64, optional
+        Rest normals (default: the rig's "NORMAL" attribute).
+
+    Returns
+    -------
+    (n, 3) float64
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> cgaskin.skin_normals(arm, arm.pose("wave", 1.0))[-1].round(3)   # the tip points up
+    array([0., 1., 0.])
+    """
     pose = rig.rest_pose() if pose is None else check_pose(rig, pose)
     normals = rig.attributes.get("NORMAL") if normals is None else normals
     if normals is None:

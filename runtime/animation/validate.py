@@ -132,6 +132,14 @@ def check_mesh(vertices, faces, joints, weights, *, n_bones: int | None = None, 
     InvalidInputError
         Wrong shapes or dtypes, non-finite positions, faces out of range, NaN/inf or negative
         weights, a vertex without any weight, a joint index outside ``[0, n_bones)``.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> vertices, faces, joints, weights = cgaskin.check_mesh(
+    ...     arm.vertices, arm.faces, arm.joints[:, :2], arm.weights[:, :2], n_bones=3)
+    >>> joints.shape, weights.dtype                        # padded to four influences
+    ((690, 4), dtype('float64'))
     """
     pre = _prefix(source)
     vertices = _as_array(vertices, "vertices", source)
