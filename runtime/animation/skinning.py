@@ -14,7 +14,7 @@ from .._shared.checks import float_array, index_array
 from .._shared.frozen import kernel_array
 from .._shared.jit import F2, F3, I2, WIDE, kernel, precompiled
 from .._shared.memory_budget import require_memory
-from ..algebra.versor import _versor_arg
+from ..algebra.versor_products import _versor_arg
 from ..errors import InvalidInputError
 from ..generated import kernels as K
 from ..generated.skinning import skin_blend, skin_blend_parallel
