@@ -1,23 +1,20 @@
 """A bounding-volume hierarchy over triangles, for segment queries (the scalpel of ``cgaskin.tear``).
 
-The paper tested the scalpel against every face, which was 99 % of its tear time. Here the faces go
-into a binary BVH once per set of positions (rest positions, or the skinned positions of one pose),
-and each query visits only the boxes that the segment crosses.
+So that a scalpel need not test every face, the faces go into a binary BVH once per set of positions
+(rest positions, or the skinned positions of one pose), and each query visits only the boxes that
+the segment crosses.
 
 Build: top-down, each node split at the middle of its centroids' extent along the longest axis
 (object median when that leaves one side empty), leaves of at most ``LEAF_SIZE`` triangles, in one
 numba loop with an explicit stack (``bvh_build.py``). The tree holds face ids in leaf order, not
 triangles: a query reads a triangle's corners as positions[faces[face]] (a per-slot copy of the
-corners, 72 bytes a face, was the largest array of an editing session's BVH).
+corners would be the largest array of an editing session's BVH).
 
-Segment–triangle test: the watertight test of Woop, Benthin and Wald (JCGT 2(1), 2013), two-sided
-(either face orientation counts). A segment through an edge or a vertex shared by several triangles
-hits at least one of them, so a scalpel cannot slip between two faces.
+Segment–triangle test: the watertight test of Woop, Benthin and Wald, two-sided, through which a
+scalpel cannot slip between two faces (``bvh_segment.py``).
 
-A ``TriangleBVH`` keeps the positions and faces it was built from (its own copies; ``of_checked``
-and ``of_tree`` keep the caller's arrays); build another one when the positions change (a
-functional tear keeps one per rig and pose: ``tear/rig_source.py``; an editing session updates a
-``DynamicBVH`` in place).
+A ``TriangleBVH`` keeps copies of its positions and faces; build another when the positions change
+(a tear keeps one per rig and pose: ``tear/rig_source.py``; a session updates a ``DynamicBVH``).
 """
 from __future__ import annotations
 
@@ -26,10 +23,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.checks import float_array, index_array
-from .._shared.jit import F1, F2, I2, f8, helper, kernel, record
+from .._shared.jit import F1, F2, I2, f8, kernel, record
 from ..errors import InvalidInputError
 from ..tolerances import tol
 from .bvh_build import N1, _build, _one_leaf
+# the queries' tests (``_near_box`` is here for the other queries: tear/locate.py, posed_bounds.py)
+from .bvh_segment import _near_box, _push_children, _segment_box, _shear, _watertight  # noqa: F401
 
 __all__ = ["TriangleBVH", "BVHArrays", "LEAF_SIZE"]
 
@@ -79,97 +78,6 @@ def _tree(positions, faces, one_leaf_up_to):
 
 
 # ---- queries ------------------------------------------------------------------------------------
-@helper
-def _segment_box(lo, hi, a, d, t_max):
-    """Whether a + t d, t in [0, t_max], meets the box [lo, hi]; returns (hit, t_entry)."""
-    t0, t1 = 0.0, t_max
-    for k in range(3):
-        if d[k] == 0.0:
-            if a[k] < lo[k] or a[k] > hi[k]:
-                return False, 0.0
-            continue
-        inv = 1.0 / d[k]
-        u = (lo[k] - a[k]) * inv
-        v = (hi[k] - a[k]) * inv
-        if u > v:
-            u, v = v, u
-        t0 = max(t0, u)
-        t1 = min(t1, v)
-        if t0 > t1:
-            return False, 0.0
-    return True, t0
-
-
-@helper
-def _near_box(lo, hi, a, d, t_max, reach):
-    """Whether a + t d, t in [0, t_max], comes within ``reach`` of the box [lo, hi] in every axis."""
-    t0, t1 = 0.0, t_max
-    for k in range(3):
-        low, high = lo[k] - reach, hi[k] + reach
-        if d[k] == 0.0:
-            if a[k] < low or a[k] > high:
-                return False
-            continue
-        u, v = (low - a[k]) / d[k], (high - a[k]) / d[k]
-        t0, t1 = max(t0, min(u, v)), min(t1, max(u, v))
-        if t0 > t1:
-            return False
-    return True
-
-
-@helper
-def _push_children(stack, top, left, right):
-    """Push a node's children on a traversal stack (the left one on top: visited first), growing it
-    when full; returns (stack, top)."""
-    if top + 3 > stack.shape[0]:
-        stack = np.concatenate((stack, np.empty_like(stack)))
-    stack[top + 1], stack[top + 2] = right, left
-    return stack, top + 2
-
-
-@helper
-def _watertight(positions, faces, f, a, kx, ky, kz, sx, sy, sz):
-    """Woop–Benthin–Wald test of the segment a + t d (sheared frame kx, ky, kz, sx, sy, sz) against
-    the triangle positions[faces[f]]; two-sided. Returns t (may lie outside [0, 1]) or NaN for a miss."""
-    p, q, r = faces[f, 0], faces[f, 1], faces[f, 2]
-    ax = positions[p, kx] - a[kx]
-    ay = positions[p, ky] - a[ky]
-    az = positions[p, kz] - a[kz]
-    bx = positions[q, kx] - a[kx]
-    by = positions[q, ky] - a[ky]
-    bz = positions[q, kz] - a[kz]
-    cx = positions[r, kx] - a[kx]
-    cy = positions[r, ky] - a[ky]
-    cz = positions[r, kz] - a[kz]
-    ax, ay = ax - sx * az, ay - sy * az
-    bx, by = bx - sx * bz, by - sy * bz
-    cx, cy = cx - sx * cz, cy - sy * cz
-    u = cx * by - cy * bx
-    v = ax * cy - ay * cx
-    w = bx * ay - by * ax
-    if (u < 0.0 or v < 0.0 or w < 0.0) and (u > 0.0 or v > 0.0 or w > 0.0):
-        return np.nan
-    det = u + v + w
-    if det == 0.0:
-        return np.nan    # the segment lies in the triangle's plane: no transversal crossing
-    return (u * sz * az + v * sz * bz + w * sz * cz) / det
-
-
-@helper
-def _shear(d):
-    """The watertight test's per-segment constants: the dominant axis kz and the shear."""
-    kz = 0
-    if abs(d[1]) > abs(d[kz]):
-        kz = 1
-    if abs(d[2]) > abs(d[kz]):
-        kz = 2
-    kx = (kz + 1) % 3
-    ky = (kx + 1) % 3
-    if d[kz] < 0.0:
-        kx, ky = ky, kx     # keep the winding, so that the sign test stays consistent
-    return kx, ky, kz, d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]
-
-
 @kernel((BVH_ARRAYS, F1, F1), cost=1.4)
 def _first_hit(bvh, a, b):
     """Smallest t in [0, 1] where segment a -> b meets a triangle of ``bvh`` (BVHArrays as a tuple);
@@ -295,7 +203,10 @@ def _faces_near_plane(arrays, lo, hi, normal, offset, delta):
 
 # ---- public object --------------------------------------------------------------------------------
 class TriangleBVH:
-    """A BVH over the triangles ``faces`` of the mesh at ``positions``.
+    """A BVH over the triangles ``faces`` of the mesh at ``positions``: which faces a segment crosses.
+
+    Queries take segments a -> b (both (3,) points) and treat the faces as two-sided; they read the
+    BVH's copies (``triangle(face)``), never the caller's arrays.
 
     Parameters
     ----------
@@ -305,12 +216,12 @@ class TriangleBVH:
         Triangles, m >= 1; degenerate (zero-area) triangles are allowed and never hit. The BVH keeps
         an int64 copy.
 
-    Attributes
-    ----------
-    n_faces, n_nodes : int
-
-    Queries take segments a -> b (both (3,) points) and treat the faces as two-sided; they read the
-    BVH's copies (``triangle(face)``), never the caller's arrays.
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> bvh = cgaskin.TriangleBVH(cgaskin.skin(arm, arm.pose("wave", 0.0)), arm.faces)
+    >>> bvh.n_faces, bvh.first_hit([1.55, 1, 0.01], [1.55, -1, 0.01])      # down into the arm
+    (1376, (704, 0.3759945618368982))
     """
 
     def __init__(self, positions, faces):
@@ -330,18 +241,39 @@ class TriangleBVH:
 
     @classmethod
     def of_tree(cls, tree, positions, faces) -> "TriangleBVH":
-        """The BVH of the tree fields ``tree`` (``_tree``'s, for example) over checked ``positions`` and
-        ``faces`` (as ``of_checked``: kept, not copied)."""
+        """The BVH of tree fields already built, over checked arrays (kept, not copied).
+
+        Parameters
+        ----------
+        tree : tuple of 7 arrays
+            lo, hi, left, right, start, count, order of ``BVHArrays`` (``_tree``'s, for example).
+        positions, faces : (n, 3) float64, (m, 3) int64
+            As ``of_checked`` takes them.
+
+        Returns
+        -------
+        TriangleBVH
+        """
         bvh = cls.__new__(cls)
         bvh._arrays = BVHArrays(*tree, positions, faces)
         return bvh
 
     @classmethod
     def of_checked(cls, positions, faces) -> "TriangleBVH":
-        """The BVH of input already checked: (n, 3) C-contiguous finite float64 positions, (m >= 1, 3)
-        C-contiguous int64 faces that index them (a tear stroke builds one per patch, where the checks
-        would cost more than the build). It keeps these arrays, not copies: the caller must not change
-        them while the BVH is in use."""
+        """The BVH of input already checked (a tear's patch: checks would cost more than the build);
+        it keeps the arrays, not copies: the caller must not change them while the BVH is in use.
+
+        Parameters
+        ----------
+        positions : (n, 3) float64
+            C-contiguous finite positions.
+        faces : (m, 3) int64
+            C-contiguous triangles that index them, m >= 1.
+
+        Returns
+        -------
+        TriangleBVH
+        """
         bvh = cls.__new__(cls)
         bvh._build(positions, faces)
         return bvh
@@ -355,7 +287,17 @@ class TriangleBVH:
         return len(self._arrays.faces)
 
     def triangle(self, face: int) -> np.ndarray:
-        """(3, 3) corners of ``face`` as the BVH holds them (rows: the face's corners in order)."""
+        """The corners of a face as the BVH holds them, one per row in order.
+
+        Parameters
+        ----------
+        face : int
+            The face's index.
+
+        Returns
+        -------
+        (3, 3) float64
+        """
         return self._arrays.positions[self._arrays.faces[face]]
 
     @staticmethod
@@ -369,16 +311,34 @@ class TriangleBVH:
     def first_hit(self, a, b) -> tuple[int, float]:
         """The first crossing of segment a -> b with the surface, going from a towards b.
 
-        Returns (face, t): the face index and the segment parameter t in [0, 1] of the crossing
-        point a + t (b - a) (of the faces crossed at the same t, the lowest index); (-1, nan) when the
-        segment meets no triangle.
+        Parameters
+        ----------
+        a, b : (3,) float
+            The segment's ends (distinct).
+
+        Returns
+        -------
+        (face, t) : (int, float)
+            The face crossed (the lowest index of those crossed at the same t) and the parameter t
+            in [0, 1] of the point a + t (b - a); (-1, nan) when the segment meets no face.
         """
         a, b = self._segment(a, b)
         face, t = _first_hit(tuple(self._arrays), a, b)
         return int(face), float(t)
 
     def all_hits(self, a, b) -> tuple[np.ndarray, np.ndarray]:
-        """Every crossing of segment a -> b: (faces (k,) int64, t (k,) float64), sorted by t."""
+        """Every crossing of segment a -> b with the surface, sorted by t.
+
+        Parameters
+        ----------
+        a, b : (3,) float
+            The segment's ends (distinct).
+
+        Returns
+        -------
+        (faces, t) : ((k,) int64, (k,) float64)
+            The faces crossed and the parameters t of the points a + t (b - a), ascending.
+        """
         a, b = self._segment(a, b)
         faces, ts = _all_hits(tuple(self._arrays), a, b)
         order = np.argsort(ts, kind="stable")

@@ -100,8 +100,35 @@ def _copy(rig, name) -> Rig:
 
 
 def cut_details(rig: Rig, normal, point, pose=None, cap: bool = False) -> CutResult:
-    """``cut`` with the bookkeeping (``CutResult``): which input vertex each output vertex comes from,
-    the new vertices' edges and parameters, the plane and tolerances. Same arguments as ``cut``."""
+    """``cut`` with the bookkeeping: which input vertex each output vertex comes from, the new
+    vertices' edges and parameters, the plane and tolerances.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model to cut.
+    normal : (3,) float
+        The plane's normal, any non-zero length.
+    point : (3,) float
+        A point of the plane.
+    pose : Pose, optional
+        Cut the mesh as posed in this pose (as ``cut``).
+    cap : bool, optional
+        Close each half with planar caps.
+
+    Returns
+    -------
+    CutResult
+        The halves and the bookkeeping.
+
+    Examples
+    --------
+    >>> result = cgaskin.cut_details(cgaskin.capsule_arm(), [1, 0, 0], [1.55, 0, 0])
+    >>> result.positive.n_vertices, result.negative.n_vertices, len(result.edge_t)
+    (369, 385, 32)
+    >>> int((result.sources[0] == -1).sum())              # NEW_VERTEX: made on a crossed edge
+    32
+    """
     return _cut(rig, normal, point, pose, cap, with_sources=True)
 
 
@@ -199,15 +226,18 @@ def cut(rig: Rig, normal, point, pose=None, cap: bool = False):
     Parameters
     ----------
     rig : Rig
-    normal : (3,) float, any non-zero length; it picks which half comes first
-    point : (3,) float, a point of the plane
-    pose : Pose or None
+        The model to cut (never modified).
+    normal : (3,) float
+        The plane's normal, any non-zero length; it picks which half comes first.
+    point : (3,) float
+        A point of the plane.
+    pose : Pose, optional
         Cut the mesh as posed (skinned) in this pose; the new vertices are placed in rest space so that
         skinning the halves in ``pose`` puts them exactly on the plane. None cuts the stored
         bind-pose vertices ``rig.vertices``. What a viewer shows at rest is ``skin(rig)``; where that
         differs from the stored mesh (bind matrices that are not the rest pose's, e.g. a mesh node
         with an offset), pass ``pose=rig.rest_pose()`` to cut what it shows.
-    cap : bool
+    cap : bool, optional
         Close each half with planar caps over the loops the cut opened.
 
     Returns
@@ -223,6 +253,14 @@ def cut(rig: Rig, normal, point, pose=None, cap: bool = False):
     InvalidInputError
         Zero or non-finite normal or point, wrong shapes, a rig without faces or with inconsistent
         arrays, a pose of another skeleton.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> hand, shoulder = cgaskin.cut(arm, [1, 0, 0], [1.55, 0, 0], cap=True)     # at the elbow
+    >>> hand.n_vertices, shoulder.n_vertices, [clip.name for clip in hand.clips]
+    (401, 417, ['wave'])
+    >>> posed = cgaskin.cut(arm, [1, 0, 0], [1.55, 0, 0], pose=arm.pose("wave", 0.5))
     """
     result = _cut(rig, normal, point, pose, cap, with_sources=False)
     return result.positive, result.negative

@@ -14,20 +14,35 @@ NEW_VERTEX, CAP_VERTEX = -1, -2
 
 @dataclass(frozen=True, eq=False)
 class CutResult:
-    """A cut with the bookkeeping that relates the halves to the input.
+    """A cut with the bookkeeping that relates the halves to the input (``cut_details``).
 
-    positive, negative : Rig, the parts with d > 0 and d < 0 (on-plane vertices in both)
-    sources : (Rig vertex -> input vertex) per half: ``(n_pos,)`` and ``(n_neg,)`` int64 arrays holding
-        the input vertex of each output vertex, ``NEW_VERTEX`` (-1) for a vertex created on a crossed edge
-        and ``CAP_VERTEX`` (-2) for a cap vertex
-    edge_vertices : (k, 2) int64, the input vertices (a, b) of the edge of each new vertex
-    edge_t : (k,) float64, its parameter: cut-space position (1 − t) x_a + t x_b
-    new_positions : (k, 3) float64, the new vertices in the space that was cut (rest, or posed)
-    first_new : (2,) int, index of the first new vertex in each half (new vertex j is row
-        ``first_new[h] + j`` of half h)
-    plane : (4,) float64, the dual plane n̂ + d e∞ that was cut with
-    tolerance : float, the on-plane tolerance used (absolute, in cut-space units)
-    residual : float, the largest |skinned new vertex − its posed target| (0 for a rest cut)
+    Parameters
+    ----------
+    positive, negative : Rig
+        The parts with signed distance d > 0 and d < 0 (on-plane vertices in both).
+    sources : tuple of 2 (n_half,) int64
+        Per half, the input vertex of each output vertex: ``NEW_VERTEX`` (-1) for a vertex made on
+        a crossed edge, ``CAP_VERTEX`` (-2) for a cap vertex.
+    edge_vertices : (k, 2) int64
+        The input vertices (a, b) of the edge of each new vertex.
+    edge_t : (k,) float64
+        Its parameter: the cut-space position is (1 − t) x_a + t x_b.
+    new_positions : (k, 3) float64
+        The new vertices in the space that was cut (rest, or posed).
+    first_new : tuple of 2 int
+        Index of the first new vertex in each half (new vertex j is row ``first_new[h] + j``).
+    plane : (4,) float64
+        The dual plane n̂ + d e∞ that was cut with.
+    tolerance : float
+        The on-plane tolerance used (absolute, in cut-space units).
+    residual : float
+        The largest ``|skinned new vertex − its posed target|`` (0 for a rest cut).
+
+    Examples
+    --------
+    >>> result = cgaskin.cut_details(cgaskin.capsule_arm(), [1, 0, 0], [1.55, 0, 0])
+    >>> result.first_new, result.plane
+    ((337, 353), array([1.  , 0.  , 0.  , 1.55]))
     """
 
     positive: Rig
