@@ -1,32 +1,32 @@
 """Memory: give freed memory back to the operating system, and keep working arrays for reuse.
 
 glibc keeps freed blocks below its mmap threshold in the process heap; after a large build (a
-session's BVH on a million faces frees its temporaries, ~130 MB) the process then looks that much
-bigger than what it holds, until it exits. ``malloc_trim(0)`` returns those pages. Elsewhere (macOS,
+session's BVH on a million faces frees its temporaries) the process then looks that much bigger
+than what it holds, until it exits. ``malloc_trim(0)`` returns those pages. Elsewhere (macOS,
 Windows, musl) there is nothing to call and this does nothing.
 
 The other way round, a fresh array costs the operating system a page fault and a zeroed page for
-each page the work writes: with 4 kB pages about 2 µs each, ~45 ms for 100 MB (more than a
-million-face cut computes). numpy asks for 2 MB pages for arrays of 4 MB and more (transparent huge
-pages on ``madvise`` kernels; numba's own allocator does not): a few times cheaper, though each array's
-ends up to its first and from its last 2 MB boundary still take 4 kB pages. Working arrays that an
-operation repeats on the same data can be kept (``Reusable``) and cost no fault at all. Large output
+each page the work writes: with 4 kB pages, more time than a million-face cut computes. numpy asks
+for 2 MB pages for arrays of 4 MB and more (transparent huge pages on ``madvise`` kernels; numba's
+own allocator does not): a few times cheaper, though each array's ends up to its first and from its
+last 2 MB boundary still take 4 kB pages. Working arrays that an operation repeats on the same data
+can be kept (``Reusable``) and cost no fault at all. Large output
 arrays, which the caller keeps, come from ``recycled_empty``: their memory, once the caller drops them,
 is kept for the next operation's outputs (within ``KEPT_BYTES``) instead of going back to the operating
 system, so a repeated operation (a cut per sample of a dataset) finds its pages mapped.
 
 Python's own memory has a cost of its kind: an operation written with Python containers (a drill
-makes ~50k lists and tuples a hole) triggers the cyclic garbage collector, whose full collections
-walk every tracked object of the process (numba's own: ~130k after a few compiled calls, ~50 ms a
-walk). ``collection_paused`` holds the collector off for such an operation: its containers hold no
-cycles, reference counting frees them, and the collector runs again when it ends.
+makes tens of thousands of lists and tuples a hole) triggers the cyclic garbage collector, whose full
+collections walk every tracked object of the process (numba's own, over a hundred thousand after a
+few compiled calls). ``collection_paused`` holds the collector off for such an operation: its
+containers hold no cycles, reference counting frees them, and the collector runs again when it ends.
 
 Huge pages are the wrong choice for an array written *sparsely* (scratch indexed by node or vertex,
 where a stroke writes a few thousand scattered rows): each write there makes a whole 2 MB page resident,
-zeroed first (``np.empty`` of 64 MB, written every 512 kB: 62 MB resident; numpy's ``np.zeros`` takes
-calloc's pages and does not ask for huge ones). ``sparse_zeros`` gives such arrays 4 kB pages: a
-session on a 1.52M-face capsule whose posed-stroke scratch is made so peaks at 1.85-1.91x its mesh's
-bytes over 300 strokes in new poses, 2.13x before (``python -m benchmarks._playing_surgery large 300``).
+zeroed first (``np.empty`` of 64 MB written every 512 kB is nearly all resident; numpy's ``np.zeros``
+takes calloc's pages and does not ask for huge ones). ``sparse_zeros`` gives such arrays 4 kB pages,
+so that a session's posed-stroke scratch holds only the pages its strokes write
+(``python -m benchmarks._playing_surgery large 300`` measures a session's peak).
 """
 from __future__ import annotations
 

@@ -22,13 +22,11 @@ A frame starts as copies of the rest pose's fields (the nodes no channel animate
 kernel writes the animated nodes. Slerp reads the angle between two keys, kept beside the first of them
 (``clip.ROTATION_KEY`` rows), so a frame pays one sincos per rotation channel.
 
-Measured on Fox (25 nodes, 21 channels; 2-core machine): about 1.8 µs per frame inside the kernel
-(the channels' key search and blends, then the animated nodes' products), about 4.5 µs for
-``rig.pose`` end to end (numba's dispatch of 11 arguments about 0.7 µs, the three fields copied from
-the rest 0.7 µs, the Pose 0.3 µs); ``benchmarks/bench_animation.py`` prints the table. The frame, its
-channels and its nodes are each typed into the kernels (``inlined``), not called: a compiled call
-that takes arrays pays their reference counts (atomic operations), which was a fifth of a frame as a
-call per channel and per node, and 0.3 µs as one call for the frame.
+A frame costs microseconds, so what surrounds the kernel counts as much as the kernel (numba's
+dispatch of its arguments, the fields copied from the rest, the Pose; ``benchmarks/bench_animation.py``
+measures each). The frame, its channels and its nodes are each typed into the kernels (``inlined``),
+not called: a compiled call that takes arrays pays their reference counts (atomic operations), a
+large share of a frame as a call per channel and per node.
 
 The rest of the skeleton (TRS rows, and the rest pose's fields that unanimated nodes keep) is
 prepared once per skeleton, by the same kernel with no channels.

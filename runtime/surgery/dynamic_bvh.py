@@ -1,7 +1,8 @@
 """A triangle BVH that an editing session keeps across strokes, updated locally (``DynamicBVH``).
 
-A scalpel session on a 1.5M-face mesh makes hundreds of strokes, each replacing a few dozen faces by
-their pieces: a ``TriangleBVH`` rebuild costs a second per stroke, an edit here O(k log m) for k faces.
+A scalpel session on a mesh of millions of faces makes hundreds of strokes, each replacing a few
+dozen faces by their pieces: a ``TriangleBVH`` rebuild per stroke would cost far more than the
+stroke, an edit here O(k log m) for k faces.
 
 Layout: the tree of ``bvh_build._build`` in node arrays that grow by doubling (int32 indices). The
 BVH owns no geometry: it reads face f's corners as positions[faces[f]] from the caller's arrays (the
@@ -18,19 +19,13 @@ The edits are compiled in ``dynamic_bvh_edits.py``, as one kernel.
 
 Degradation: the SAH cost (inner nodes weigh 1, leaves their count; over the root's area), kept at
 every change, over its value after the last build; an edit rebuilds past ``REBUILD_AT`` (or when dead
-slots outnumber live faces). Measured (``python -m benchmarks.bench_dynamic_bvh``, 2 cores, noisy,
-capsule_arm 850 x 294 = 1.58M faces), leaves of 8 faces at build against 4 in the same conditions:
-memory 64 MB, 40 bytes a face (98 MB and 62 with leaves of 4; the static tree's 76 MB); first_hit on
-20k random segments 6.5 us (6.4 us static; 8.0 with leaves of 4); faces_near_plane over 2352 faces
-0.22 ms (0.31); a stroke's edits (remove 30, insert 90 pieces, move 40, through the checked calls)
-0.31 ms median (0.32); 300 strokes of an incision leave the degradation at 1.001, first_hit as a
-rebuilt tree's. Strokes at random places that also throw 40 faces' corners ~0.02 (a few face widths):
-degradation 1.45 / 2.06 / 2.59 / 3.12 / 4.63 / 8.29 after 150 / 300 / 450 / 600 / 1000 / 2000
-strokes, first_hit 0.98 / 1.18 / 1.20 / 1.32 / 1.34 / 1.66x that of a rebuilt tree (+-15 % between
-runs; the SAH ratio also counts the faces' own growth, which no rebuild undoes): at 3 (``REBUILD_AT``)
-queries are ~10-30 % slower than rebuilt; a rebuild costs ~100k queries. An editing session on that
-mesh (``python -m benchmarks.bench_progressive``) peaks at 1.75-1.9x the mesh's own arrays (as with
-leaves of 4: the build's temporaries set the peak): its mesh buffers and this tree.
+slots outnumber live faces). Leaves hold 8 faces at build rather than 4: a smaller tree, with queries
+as fast and edits as cheap (``python -m benchmarks.bench_dynamic_bvh`` measures memory, queries and
+edits). An incision's strokes leave the degradation near 1; strokes that also move faces' corners
+raise it steadily (the SAH ratio also counts the faces' own growth, which no rebuild undoes), and at
+``REBUILD_AT`` queries have become clearly slower than a rebuilt tree's while one rebuild still costs
+as much as a great many queries. An editing session's peak memory is its mesh buffers and this tree,
+the build's temporaries setting the peak (``python -m benchmarks.bench_progressive``).
 """
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """Step 6 of a cut: the per-vertex arrays of both halves (originals they keep, then the new vertices).
 
-The arrays are made here (``recycled_empty``) and filled by the kernel: a million-face cut's ~100 MB of
-fresh pages cost the operating system about as much time as the cut computes, and a cut repeated
-after the previous halves are dropped finds their memory mapped. The halves' rigs then hold these
+The arrays are made here (``recycled_empty``) and filled by the kernel: a large cut's fresh pages
+cost the operating system about as much time as the cut computes, and a cut repeated after the
+previous halves are dropped finds their memory mapped. The halves' rigs then hold these
 arrays as they are.
 """
 import numpy as np
