@@ -36,17 +36,50 @@ class Item(NamedTuple):
     """One output item, all a worker needs to make it (small: specs and seeds cross the network,
     rigs never do).
 
-    id : str, ID_LENGTH hex digits
-    digest : str, the full sha256 (hex) the id begins with; seeds the item's generator
-    model : str, the model as the spec names it (the manifest's ``model``)
-    path : str, the model file's absolute path (read by the worker)
-    model_sha256 : str, the file's sha256 when the batch started
-    clip : str | int | None, None for the rest pose
-    time : float | None
+    Parameters
+    ----------
+    id : str
+        ``ID_LENGTH`` hex digits: the item's name in the batch folder and the manifest.
+    digest : str
+        The full sha256 (hex) the id begins with; seeds the item's generator.
+    model : str
+        The model as the spec names it (the manifest's ``model``).
+    path : str
+        The model file's absolute path (read by the worker).
+    model_sha256 : str
+        The file's sha256 when the batch started.
+    clip : str or int or None
+        The clip posed, None for the rest pose.
+    time : float or None
+        Seconds into the clip.
     edits : tuple of EditEntry
-    operation : str, cut | tear | drill | none
-    params : tuple of (name, value), the operation entry's parameters
-    instance : int, 0 .. count - 1
+        Random pose edits, drawn per item.
+    operation : {"cut", "tear", "drill", "none"}
+        What the item does to the posed model.
+    params : tuple of (str, object)
+        The operation entry's parameters.
+    instance : int
+        0 .. count - 1 among the entry's random instances.
+
+    Examples
+    --------
+    >>> cgaskin.save(cgaskin.capsule_arm(), "arm.glb")
+    PosixPath('arm.glb')
+    >>> with open("spec.toml", "w") as file:
+    ...     _ = file.write('''
+    ... seed = 7
+    ... [[models]]
+    ... path = "arm.glb"
+    ... [[poses]]
+    ... clip = "wave"
+    ... times = [0.0, 0.5]
+    ... [[operations]]
+    ... kind = "cut"
+    ... count = 2
+    ... ''')
+    >>> item = cgaskin.batch.expand(cgaskin.batch.load_spec("spec.toml"))[1]
+    >>> item.pose_label, item.operation, item.params, item.instance
+    ('wave@0', 'cut', (('cap', False),), 1)
     """
 
     id: str
@@ -67,7 +100,13 @@ class Item(NamedTuple):
         return "rest" if self.clip is None else f"{self.clip}@{self.time:g}"
 
     def rng(self) -> np.random.Generator:
-        """The item's own random generator, seeded from its whole digest (the global seed is in it)."""
+        """The item's own random generator, seeded from its whole digest (the global seed is in it).
+
+        Returns
+        -------
+        numpy.random.Generator
+            A new generator: the same draws for the same item, whatever process makes it.
+        """
         return np.random.default_rng(int(self.digest, 16))
 
 
@@ -106,15 +145,47 @@ def require_item_memory(spec: Spec, item_bytes: int, limit: int | None = None) -
 
 
 def expand(spec: Spec, hashes: dict | None = None) -> list:
-    """The spec's items in spec order (models, poses, times, operations, instances); an item that
-    an earlier one duplicates (the same file listed twice, two equal entries) appears once.
+    """The spec's items in spec order (models, poses, times, operations, instances), with their ids.
 
-    hashes : optional dict path -> sha256 (the model files', to skip hashing them again)
+    An item that an earlier one duplicates (the same file listed twice, two equal entries) appears
+    once. A model file that cannot be read is hashed as "unreadable:<reason>" (its ids from its
+    path): its items still get ids and become error rows (a bad model is a row, not a failed batch).
 
-    A model file that cannot be read is hashed as "unreadable:<reason>" (its ids from its path): its
-    items still get ids and become error rows (a bad model is a row with its error, not a failed batch).
+    Parameters
+    ----------
+    spec : Spec
+        The validated spec.
+    hashes : dict, optional
+        Model path -> sha256 of the files already hashed (filled in with the others).
 
-    Raises MemoryLimitError, before expanding, for more items than the memory available holds.
+    Returns
+    -------
+    list of Item
+
+    Raises
+    ------
+    MemoryLimitError
+        Before expanding, for more items than the memory available holds.
+
+    Examples
+    --------
+    >>> cgaskin.save(cgaskin.capsule_arm(), "arm.glb")
+    PosixPath('arm.glb')
+    >>> with open("spec.toml", "w") as file:
+    ...     _ = file.write('''
+    ... seed = 7
+    ... [[models]]
+    ... path = "arm.glb"
+    ... [[poses]]
+    ... clip = "wave"
+    ... times = [0.0, 0.5]
+    ... [[operations]]
+    ... kind = "cut"
+    ... count = 2
+    ... ''')
+    >>> items = cgaskin.batch.expand(cgaskin.batch.load_spec("spec.toml"))
+    >>> [(item.pose_label, item.instance) for item in items]   # 1 model x 2 times x 2 cuts
+    [('wave@0', 0), ('wave@0', 1), ('wave@0.5', 0), ('wave@0.5', 1)]
     """
     require_item_memory(spec, ITEM_BYTES)
     hashes = {} if hashes is None else hashes

@@ -47,8 +47,24 @@ def write_manifest(rows, path) -> None:
 
 
 def read_manifest(path) -> list:
-    """The rows of the manifest at ``path`` (``computed`` False); [] when there is none. A manifest
-    that cannot be read is reported with a warning and counts as none (everything is made again)."""
+    """The rows of a batch folder's manifest.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The manifest (``DIR/manifest.parquet``).
+
+    Returns
+    -------
+    list of Row
+        Its rows (``computed`` False); [] when there is none. A manifest that cannot be read is
+        reported with a ``ManifestWarning`` and counts as none (everything is made again).
+
+    Examples
+    --------
+    >>> cgaskin.batch.read_manifest("no-batch-here/manifest.parquet")
+    []
+    """
     import pyarrow.parquet as pq
     path = Path(path)
     if not path.exists():

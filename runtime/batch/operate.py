@@ -49,10 +49,43 @@ _RIGS: OrderedDict = OrderedDict()
 
 
 class Row(NamedTuple):
-    """One manifest row. ``files``, ``vertices``, ``faces``, ``sha256`` hold one entry per output
-    file (a cut: the positive half ``items/<id>.a.glb``, then ``items/<id>.b.glb``; else
-    ``items/<id>.glb``), paths relative to the batch folder; empty when ``error`` is set.
-    ``params`` is JSON text; ``computed`` is False for a row kept from an earlier run."""
+    """One manifest row: an item and what making it gave.
+
+    ``files``, ``vertices``, ``faces``, ``sha256`` hold one entry per output file (a cut: the
+    positive half ``items/<id>.a.glb``, then ``items/<id>.b.glb``; else ``items/<id>.glb``).
+
+    Parameters
+    ----------
+    id : str
+        The item's id.
+    model : str
+        The model as the spec names it.
+    pose : str
+        "rest" or "<clip>@<time>".
+    operation : str
+        cut, tear, drill or none.
+    params : str
+        JSON text: the operation's parameters and the pose edits drawn.
+    files : tuple of str
+        Output files, relative to the batch folder; empty when ``error`` is set.
+    vertices, faces : tuple of int
+        Each output's vertex and face counts.
+    seconds : float
+        The time making the item took.
+    sha256 : tuple of str
+        Each output file's sha256.
+    error : str or None
+        Why the item failed (``"MissesMeshError: ..."``), None when it was made.
+    computed : bool, optional
+        False for a row kept from an earlier run.
+
+    Examples
+    --------
+    >>> row = cgaskin.batch.Row("3a7b4b3a153b4529", "arm.glb", "wave@0.5", "none", "{}",
+    ...                         ("items/3a7b4b3a153b4529.glb",), (690,), (1376,), 0.02, ("f933...",), None)
+    >>> row.error is None, row.computed
+    (True, True)
+    """
 
     id: str
     model: str

@@ -33,9 +33,27 @@ __all__ = ["run", "Manifest", "Warmup"]
 
 @dataclass(frozen=True)
 class Manifest:
-    """What a run left: ``rows`` (Row, one per item, in spec order) as written to ``path``;
-    ``computed`` items were made by this run, ``kept`` ones by an earlier run; ``dashboard`` is the
-    cluster's dashboard address (None when it has none)."""
+    """What a run left: its rows, as written to the manifest.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The manifest file (``out/manifest.parquet``).
+    rows : tuple of Row
+        One per item, in spec order.
+    computed : int
+        How many items this run made.
+    kept : int
+        How many an earlier run had made (their files checked).
+    dashboard : str, optional
+        The cluster's dashboard address (None when it has none).
+
+    Examples
+    --------
+    >>> manifest = cgaskin.batch.run("spec.toml", "out", workers=2)       # doctest: +SKIP
+    >>> manifest.computed, manifest.kept, manifest.errors                  # doctest: +SKIP
+    (4, 0, [])
+    """
 
     path: Path
     rows: tuple
@@ -49,7 +67,12 @@ class Manifest:
         return [r for r in self.rows if r.error is not None]
 
     def table(self):
-        """The manifest as a ``pyarrow.Table`` (read from ``path``)."""
+        """The manifest as a table, read from ``path``.
+
+        Returns
+        -------
+        pyarrow.Table
+        """
         import pyarrow.parquet as pq
         return pq.read_table(self.path)
 
@@ -90,24 +113,48 @@ RUN_ITEM_BYTES = 16 << 10
 
 def run(spec, out, client=None, workers: int | None = None, scheduler: str | None = None,
         progress: bool = False, flush_seconds: float = 1.0, max_memory: int | None = None) -> Manifest:
-    """Make every item of ``spec`` under the folder ``out`` (``out/items/``, ``out/manifest.parquet``).
+    """Make every item of a spec under a batch folder (``out/items/``, ``out/manifest.parquet``).
 
-    spec : a path to the TOML spec, or a ``Spec`` (``load_spec``)
-    out : the batch folder (made if absent); items already there (manifest row + files with their
-        sha256) are kept, the others made
-    client : a ``dask.distributed.Client`` to run on (left open); else a cluster is made and closed
-    workers : worker processes of the default ``LocalCluster`` (default: one per core)
-    scheduler : the address of a running Dask scheduler (``tcp://host:8786``) instead of a local
-        cluster; its workers need cgaskin installed and the model files and ``out`` at the same paths
-    progress : draw a progress bar (and print the dashboard address) on stderr
-    flush_seconds : how often the manifest is rewritten while items finish
-    max_memory : bytes; more items than this run can hold in it (about ``RUN_ITEM_BYTES`` each) are
-        refused (the memory available is a limit in any case)
+    Parameters
+    ----------
+    spec : str or os.PathLike or Spec
+        The TOML spec's path, or a ``Spec`` (``load_spec``).
+    out : str or os.PathLike
+        The batch folder (made if absent); items already there (manifest row + files with their
+        sha256) are kept, the others made.
+    client : dask.distributed.Client, optional
+        A client to run on (left open); else a cluster is made and closed.
+    workers : int, optional
+        Worker processes of the default ``LocalCluster`` (default: one per core).
+    scheduler : str, optional
+        The address of a running Dask scheduler (``tcp://host:8786``) instead of a local cluster;
+        its workers need cgaskin installed and the model files and ``out`` at the same paths.
+    progress : bool, optional
+        Draw a progress bar (and print the dashboard address) on stderr.
+    flush_seconds : float, optional
+        How often the manifest is rewritten while items finish.
+    max_memory : int, optional
+        Bytes; more items than this run can hold in it (about ``RUN_ITEM_BYTES`` each) are refused
+        (the memory available is a limit in any case).
 
-    Returns the ``Manifest``. Items that fail are rows with an ``error``; nothing raises for them.
-    Raises InvalidInputError for a bad spec or conflicting arguments, MemoryLimitError for more
-    items than the memory holds, and FolderInUseError while another run holds ``out`` (one run per
-    folder: ``lock.py``), before any cluster starts.
+    Returns
+    -------
+    Manifest
+        Items that fail are rows with an ``error``; nothing raises for them.
+
+    Raises
+    ------
+    InvalidInputError
+        A bad spec or conflicting arguments (``MemoryLimitError``: more items than the memory
+        holds), before any cluster starts.
+    FolderInUseError
+        Another run holds ``out`` (one run per folder: ``lock.py``).
+
+    Examples
+    --------
+    >>> manifest = cgaskin.batch.run("spec.toml", "out", workers=2)       # doctest: +SKIP
+    >>> [row.files for row in manifest.rows][:1]                            # doctest: +SKIP
+    [('items/3a7b4b3a153b4529.a.glb', 'items/3a7b4b3a153b4529.b.glb')]
     """
     if sum(x is not None for x in (client, scheduler)) > 1:
         raise InvalidInputError("give a client or a scheduler address, not both")

@@ -95,7 +95,29 @@ class OperationEntry:
 
 @dataclass(frozen=True)
 class Spec:
-    """A validated spec; ``folder`` is where relative model paths were resolved."""
+    """A validated spec: what ``load_spec`` and ``parse_spec`` return, with every default filled in.
+
+    Parameters
+    ----------
+    seed : int
+        The batch's seed (each item's generator hashes it in).
+    models : tuple of ModelEntry
+        The model files, globs expanded.
+    poses : tuple of PoseEntry
+        Clips and times (or the rest pose), with random edits.
+    operations : tuple of OperationEntry
+        What is done to each posed model, with its parameters.
+    folder : str
+        Where relative model paths were resolved.
+    source : str, optional
+        The spec's file name, in messages.
+
+    Examples
+    --------
+    >>> spec = cgaskin.batch.parse_spec({"seed": 3, "models": [{"path": "arm.glb"}]}, folder=".")
+    >>> spec.seed, spec.poses[0].clip, spec.operations[0].kind           # rest pose, no operation
+    (3, None, 'none')
+    """
 
     seed: int
     models: tuple
@@ -106,7 +128,42 @@ class Spec:
 
 
 def load_spec(path) -> Spec:
-    """Read and validate the spec file at ``path`` (TOML); model paths resolve from its folder."""
+    """Read and validate a batch spec file (TOML); model paths resolve from its folder.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The spec file.
+
+    Returns
+    -------
+    Spec
+
+    Raises
+    ------
+    InvalidInputError
+        A file that cannot be read, is not TOML, or has a bad key (the message names the key).
+
+    Examples
+    --------
+    >>> cgaskin.save(cgaskin.capsule_arm(), "arm.glb")
+    PosixPath('arm.glb')
+    >>> with open("spec.toml", "w") as file:
+    ...     _ = file.write('''
+    ... seed = 7
+    ... [[models]]
+    ... path = "arm.glb"
+    ... [[poses]]
+    ... clip = "wave"
+    ... times = [0.0, 0.5]
+    ... [[operations]]
+    ... kind = "cut"
+    ... count = 2
+    ... ''')
+    >>> spec = cgaskin.batch.load_spec("spec.toml")
+    >>> spec.seed, spec.poses[0].times, spec.operations[0].params
+    (7, (0.0, 0.5), (('cap', False),))
+    """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -122,7 +179,34 @@ def load_spec(path) -> Spec:
 
 
 def parse_spec(data: dict, folder, source: str = "<spec>") -> Spec:
-    """Validate the parsed TOML ``data``; relative model paths and globs resolve from ``folder``."""
+    """Validate a spec already parsed from TOML (a dict), filling in every default.
+
+    Parameters
+    ----------
+    data : dict
+        The spec's tables: seed, models, poses, operations.
+    folder : str or os.PathLike
+        Where relative model paths and globs resolve from.
+    source : str, optional
+        The spec's name in messages.
+
+    Returns
+    -------
+    Spec
+
+    Raises
+    ------
+    InvalidInputError
+        A bad key or value, named (``operations[1].kind``).
+
+    Examples
+    --------
+    >>> try:
+    ...     cgaskin.batch.parse_spec({"models": [{"path": "arm.glb"}], "sed": 1}, folder=".")
+    ... except cgaskin.InvalidInputError as error:
+    ...     print(error)
+    <spec>: sed: unknown key; a spec has models, operations, poses, seed
+    """
     def fail(key, message):
         raise InvalidInputError(f"{source}: {key}: {message}")
 
