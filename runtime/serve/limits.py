@@ -24,12 +24,24 @@ REPLY_BYTES_PER_VERTEX = 120
 class Limits(NamedTuple):
     """The bounds of one server; every field a positive integer.
 
-    max_tabs : pages connected at once (one ``Surgery`` each); the next gets HTTP 503
-    max_new_vertices : the new vertices one operation may make (predicted before it runs)
-    max_vertices : the vertices a tab's mesh may reach (an operation starts only below it; a model
-        must have fewer)
-    max_undo_bytes : the memory one tab's undo log may hold; past it the oldest operations can no
-        longer be undone (a cut's record holds the whole mesh before it)
+    Parameters
+    ----------
+    max_tabs : int, optional
+        Pages connected at once (one ``Surgery`` each); the next gets HTTP 503.
+    max_new_vertices : int, optional
+        The new vertices one operation may make (predicted before it runs).
+    max_vertices : int, optional
+        The vertices a tab's mesh may reach (an operation starts only below it; a model must have
+        fewer).
+    max_undo_bytes : int, optional
+        The memory one tab's undo log may hold; past it the oldest operations can no longer be
+        undone (a cut's record holds the whole mesh before it).
+
+    Examples
+    --------
+    >>> limits = cgaskin.serve.Limits(max_tabs=2, max_vertices=100_000)
+    >>> limits.max_new_vertices, limits.checked() is limits
+    (250000, True)
     """
 
     max_tabs: int = 8
@@ -44,7 +56,18 @@ class Limits(NamedTuple):
         return self
 
     def check_model(self, n_vertices: int) -> None:
-        """Raise ``InvalidInputError`` when a model of ``n_vertices`` leaves no room to operate."""
+        """Refuse a model that leaves no room to operate.
+
+        Parameters
+        ----------
+        n_vertices : int
+            The model's vertex count.
+
+        Raises
+        ------
+        InvalidInputError
+            ``n_vertices`` is at least ``max_vertices``.
+        """
         if n_vertices >= self.max_vertices:
             raise InvalidInputError(f"the model has {n_vertices} vertices, at least Limits.max_vertices "
                                     f"({self.max_vertices}): serve it with a higher max_vertices")

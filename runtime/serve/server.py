@@ -62,8 +62,26 @@ def _websockets():
 
 
 def serve_page(rig, clip=None) -> str:
-    """The page ``cgaskin serve`` sends: the viewer with the surgery panel, ``rig`` embedded, playing
-    ``clip`` (default: the first)."""
+    """The page ``cgaskin serve`` sends: the viewer with the surgery panel, the model embedded.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model.
+    clip : str or int, optional
+        The clip the page plays (default: the first).
+
+    Returns
+    -------
+    str
+        A self-contained HTML page (three.js and the model inside).
+
+    Examples
+    --------
+    >>> page = cgaskin.serve.serve_page(cgaskin.capsule_arm(), clip="wave")
+    >>> page.startswith("<!doctype html>")
+    True
+    """
     name = clip_name(rig, clip)
     return page_html(rig_glb(rig), name=rig.name or "model", rims=rim_edges(rig).reshape(-1), clip=name,
                      play=name is not None, skinning="cgaskin", serve=True)
@@ -99,9 +117,38 @@ def _this_machine() -> frozenset:
 
 
 class Server:
-    """``cgaskin serve`` on ``model`` (a Rig or a model path) at ``host``:``port`` (port 0: any free
-    port). ``run()`` serves until interrupted; ``start()`` serves on a thread (tests, notebooks) until
-    ``close()``; ``url`` is the page's address once bound."""
+    """``cgaskin serve``: the page and its WebSocket, one ``Tab`` (one ``Surgery``) per connection.
+
+    ``run()`` serves until interrupted; ``start()`` serves on a thread (tests, notebooks) until
+    ``close()`` (or as a context manager); ``url`` is the page's address once bound, with the token
+    every request needs.
+
+    Parameters
+    ----------
+    model : Rig or str or os.PathLike
+        The model, or a model file.
+    host : str, optional
+        The address to listen on (default: loopback only).
+    port : int, optional
+        0 for any free port.
+    clip : str or int, optional
+        The clip the page plays (default: the first).
+    limits : Limits, optional
+        What the server grants its pages.
+
+    Raises
+    ------
+    InvalidInputError
+        A bad port, host or limits, or a model at least ``limits.max_vertices`` large.
+
+    Examples
+    --------
+    >>> import urllib.request
+    >>> with cgaskin.serve.Server(cgaskin.capsule_arm(), port=0) as server:
+    ...     with urllib.request.urlopen(server.url) as reply:
+    ...         print(reply.status, server.url.startswith("http://127.0.0.1:"))
+    200 True
+    """
 
     def __init__(self, model, host: str = "127.0.0.1", port: int = 8765, clip=None, limits: Limits = Limits()):
         if not isinstance(port, int) or not 0 <= port <= 65535:
@@ -180,7 +227,13 @@ class Server:
 
     # ---- WebSocket ----------------------------------------------------------------------------------
     async def connection(self, websocket) -> None:
-        """One tab: its own session; each message answered in order, on a worker thread."""
+        """Serve one tab: its own session; each message answered in order, on a worker thread.
+
+        Parameters
+        ----------
+        websocket : websockets.asyncio.server.ServerConnection
+            The tab's connection.
+        """
         loop = asyncio.get_running_loop()
         self.tabs += 1
         self.open_tabs += 1
@@ -204,8 +257,18 @@ class Server:
             await self._stop
 
     def run(self, announce=print) -> None:
-        """Serve until interrupted (Ctrl-C); ``announce`` gets the page's URL once bound. Raises
-        ``InvalidInputError`` when the address cannot be bound (a port in use, say)."""
+        """Serve until interrupted (Ctrl-C).
+
+        Parameters
+        ----------
+        announce : callable, optional
+            Called with the page's URL once bound (default: ``print``).
+
+        Raises
+        ------
+        InvalidInputError
+            The address cannot be bound (a port in use, say).
+        """
         async def main():
             task = asyncio.ensure_future(self._serve(ready := asyncio.Event()))
             waiting = asyncio.ensure_future(ready.wait())
@@ -232,7 +295,13 @@ class Server:
                                  "(0: any free one) or --host")
 
     def start(self) -> "Server":
-        """Serve on a daemon thread; returns once the port is bound."""
+        """Serve on a daemon thread until ``close()``; returns once the port is bound.
+
+        Returns
+        -------
+        Server
+            This server.
+        """
         ready, failed = threading.Event(), []
 
         def target():

@@ -23,7 +23,23 @@ from .protocol import Cut, Drill, Hello, ProtocolError, Save, Tear, Undo
 
 
 class Tab:
-    """The session of one page on ``rig`` (a ``cgaskin.Rig``, never modified), within ``limits``."""
+    """The session of one page: its own ``Surgery`` on the model, and the reply to each message.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model (never modified).
+    limits : Limits, optional
+        What the tab's operations may make.
+
+    Examples
+    --------
+    >>> import json
+    >>> tab = cgaskin.serve.Tab(cgaskin.capsule_arm())
+    >>> reply = json.loads(tab.handle('{"op": "cut", "id": 1, "normal": [1, 0, 0], "point": [1.55, 0, 0]}'))
+    >>> reply["ok"], reply["delta"]["n_vertices"], reply["operations"]
+    (True, 754, 1)
+    """
 
     def __init__(self, rig, limits: Limits = Limits()):
         self.model, self.limits = rig, limits
@@ -33,7 +49,19 @@ class Tab:
 
     # ---- messages in, replies out ---------------------------------------------------------------------
     def handle(self, text) -> str:
-        """The reply (JSON text) to one message."""
+        """The reply to one message; never raises (a bad request or a failed operation gets an
+        error reply, and the session stays as it was).
+
+        Parameters
+        ----------
+        text : str
+            The message: a JSON request (``serve.protocol``).
+
+        Returns
+        -------
+        str
+            The reply, JSON text: ``ok``, and the delta of the mesh or the error and its kind.
+        """
         id = None
         try:
             request = protocol.parse(text)
@@ -84,9 +112,19 @@ class Tab:
 
     # ---- helpers ------------------------------------------------------------------------------------
     def pose(self, spec):
-        """The ``Pose`` a ``PoseSpec`` names (None: the stored mesh, when it names no clip and no dilation).
-        Joints are named as the model names them (the page maps three.js's bone names back: three.js
-        sanitises names and may give two joints one)."""
+        """The ``Pose`` a request's pose names. Joints are named as the model names them (the page maps
+        three.js's bone names back: three.js sanitises names and may give two joints one).
+
+        Parameters
+        ----------
+        spec : serve.protocol.PoseSpec
+            A clip and time, and dilations of joints.
+
+        Returns
+        -------
+        Pose or None
+            None (the stored mesh) when it names no clip and no dilation.
+        """
         if spec.clip is None and not spec.dilations:
             return None
         rig = self.model
@@ -98,7 +136,13 @@ class Tab:
         return pose
 
     def mesh_bytes(self) -> int:
-        """The size of the whole original mesh as one delta message: what a delta is compared with."""
+        """The size of the whole original mesh as one delta message: what a delta is compared with.
+
+        Returns
+        -------
+        int
+            Bytes of that message.
+        """
         if self._mesh_bytes is None:
             self._mesh_bytes = len(protocol.reply(0, delta=full_delta(self.model), seconds=0.0, operations=0))
         return self._mesh_bytes
