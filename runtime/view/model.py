@@ -20,13 +20,29 @@ POSE_CLIP = "pose"
 
 
 def rim_edges(rig: Rig) -> np.ndarray:
-    """(b, 2) int64: the boundary edges of ``rig``'s surface as pairs of its vertices.
+    """The boundary edges of a rig's surface: the open edges the viewer draws.
 
     An edge is on the boundary when one face uses it, counted on the mesh welded by position (files
     split vertices along UV seams; those are no boundary) and by tear label (a closed slit's two sides
     coincide but are apart): so these are a cut's open rim, a slit's two lips, a hole's rim and any
-    border the model had. Each edge is given by the vertices of the one face that uses it, in the
-    rig's vertex order.
+    border the model had.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model.
+
+    Returns
+    -------
+    (b, 2) int64
+        Each edge as the vertices of the one face that uses it, in the rig's vertex order.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> hand, shoulder = cgaskin.cut(arm, [1, 0, 0], [1.55, 0, 0])
+    >>> cgaskin.view.rim_edges(arm).shape, cgaskin.view.rim_edges(hand).shape      # closed; the cut's rim
+    ((0, 2), (32, 2))
     """
     topology = tear_topology(rig)
     boundary = topology.boundary_edges
@@ -87,15 +103,35 @@ def _with_pose(rig: Rig, pose: Pose) -> tuple[Rig, str]:
 
 
 def view_html(model, *, clip=None, pose=None, play=None, time: float = 0.0, skinning: str = "cgaskin") -> str:
-    """The self-contained page that shows ``model`` (a ``Rig`` or a model path).
+    """The self-contained page that shows a model (what ``cgaskin view`` writes).
 
-    clip : name or index of the clip to start with (default: the first clip; the page can switch)
-    pose : a ``Pose`` of the rig to show instead (held by an extra still clip, "pose", selected and
-        paused); not with ``clip``
-    play : start playing (default: True for a clip, False for a pose)
-    time : seconds into the clip to start at
-    skinning : who skins the mesh in the page first (it can switch): "cgaskin" (the bones' versors
-        blended by the generated GLSL ES in the vertex shader) or "three" (three.js's bone matrices)
+    Parameters
+    ----------
+    model : Rig or str or os.PathLike
+        The model, or a model file.
+    clip : str or int, optional
+        The clip to start with (default: the first clip; the page can switch).
+    pose : Pose, optional
+        A pose of the rig to show instead (held by an extra still clip, "pose", selected and
+        paused); not with ``clip``.
+    play : bool, optional
+        Start playing (default: True for a clip, False for a pose).
+    time : float, optional
+        Seconds into the clip to start at.
+    skinning : {"cgaskin", "three"}, optional
+        Who skins the mesh in the page first (it can switch): the bones' versors blended by the
+        generated GLSL ES in the vertex shader, or three.js's bone matrices.
+
+    Returns
+    -------
+    str
+        The HTML page: three.js, the viewer and the model inside; it makes no request.
+
+    Examples
+    --------
+    >>> page = cgaskin.view.view_html(cgaskin.capsule_arm(), clip="wave", play=False)
+    >>> page.startswith("<!doctype html>"), "<title>capsule_arm: cgaskin view</title>" in page
+    (True, True)
     """
     rig = as_rig(model)
     if pose is not None and clip is not None:

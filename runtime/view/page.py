@@ -106,16 +106,38 @@ def _json_text(value) -> str:
 
 def page_html(glb: bytes, *, name: str, rims, clip: str | None, play: bool = True, time: float = 0.0,
               skinning: str = "three", serve: bool = False) -> str:
-    """The page's HTML.
+    """The viewer's HTML around a model already written as glTF.
 
-    glb : the model, a binary glTF (what ``cgaskin.save`` writes)
-    name : shown in the title and the status line
-    rims : (2b,) int flat vertex pairs of the boundary edges to draw (``model.rim_edges``)
-    clip : the clip to show first (None: the rest pose)
-    play : start playing it; time : where in it to start (seconds)
-    skinning : one of ``SKINNING_MODES``
-    serve : the page of ``cgaskin serve`` (the surgery panel, talking to the server that sent it over
-        a WebSocket at its own address); False: the offline viewer
+    Parameters
+    ----------
+    glb : bytes
+        The model, a binary glTF (what ``cgaskin.save`` writes).
+    name : str
+        Shown in the title and the status line.
+    rims : (2b,) array_like of int
+        Flat vertex pairs of the boundary edges to draw (``rim_edges``).
+    clip : str or None
+        The clip to show first (None: the rest pose).
+    play : bool, optional
+        Start playing it.
+    time : float, optional
+        Where in it to start (seconds).
+    skinning : str, optional
+        One of ``SKINNING_MODES``.
+    serve : bool, optional
+        The page of ``cgaskin serve`` (the surgery panel, talking to the server that sent it over a
+        WebSocket at its own address); False: the offline viewer.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> path = cgaskin.save(cgaskin.capsule_arm(), "arm.glb")
+    >>> page = cgaskin.view.page_html(path.read_bytes(), name="arm", rims=[], clip="wave")
+    >>> "<title>arm: cgaskin view</title>" in page
+    True
     """
     if skinning not in SKINNING_MODES:
         raise InvalidInputError(f"skinning {skinning!r}: the page knows {', '.join(SKINNING_MODES)}")

@@ -13,8 +13,18 @@ class View:
     whole page: three.js and the model inside, no request, no server); ``save(path)`` writes it as
     an .html file that opens offline in a browser.
 
-    html : str, the page (what ``cgaskin view`` writes)
-    height : int, the iframe's height in CSS pixels
+    Parameters
+    ----------
+    page : str
+        The page (what ``cgaskin view`` writes); kept as ``html``.
+    height : int, optional
+        The iframe's height in CSS pixels.
+
+    Examples
+    --------
+    >>> view = cgaskin.show(cgaskin.capsule_arm(), height=360)
+    >>> view.height, view.html.startswith("<!doctype html>")
+    (360, True)
     """
 
     def __init__(self, page: str, height: int = 480):
@@ -28,7 +38,18 @@ class View:
                 f'height: {self.height}px; border: 0;" title="cgaskin view"></iframe>')
 
     def save(self, path) -> Path:
-        """Write the page to ``path`` (an .html file); returns the path."""
+        """Write the page as an .html file.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file, ending in .html or .htm.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+        """
         path = Path(path)
         if path.suffix.lower() not in (".html", ".htm"):
             raise InvalidInputError(f"{path}: the view is a web page; give a file name ending in .html")
@@ -41,18 +62,38 @@ class View:
 
 def show(rig, pose=None, clip=None, *, play=None, time: float = 0.0, height: int = 480,
          skinning: str = "cgaskin") -> View:
-    """The viewer for ``rig`` (a ``Rig`` or a model path): plays its clips (timeline, speed, loop),
-    orbits, shows the skeleton with bone names, weights by joint, a live dilation of a joint, the
-    open edges (cut rims, slits, holes), and saves PNGs.
+    """The viewer for a rig: plays its clips (timeline, speed, loop), orbits, shows the skeleton with
+    bone names, weights by joint, a live dilation of a joint, the open edges (cut rims, slits,
+    holes), and saves PNGs.
 
-    pose : a ``Pose`` of the rig to show (held by an extra clip "pose" of two equal keys, selected
-        and paused; the rig's own clips stay in the clip menu)
-    clip : name or index of the clip to start with (default: the first); not with ``pose``
-    play : start playing (default: yes for a clip, no for a pose)
-    time : seconds into the clip to start at
-    height : the notebook iframe's height in pixels
-    skinning : "cgaskin" (the bones' versors, cgaskin's generated GLSL ES in the vertex shader) or
-        "three" (three.js's matrix skinning) to start with; the page switches between them
+    Parameters
+    ----------
+    rig : Rig or str or os.PathLike
+        The model, or a model file.
+    pose : Pose, optional
+        A pose of the rig to show (held by an extra clip "pose" of two equal keys, selected and
+        paused; the rig's own clips stay in the clip menu).
+    clip : str or int, optional
+        The clip to start with (default: the first); not with ``pose``.
+    play : bool, optional
+        Start playing (default: yes for a clip, no for a pose).
+    time : float, optional
+        Seconds into the clip to start at.
+    height : int, optional
+        The notebook iframe's height in pixels, >= 100.
+    skinning : {"cgaskin", "three"}, optional
+        The bones' versors (cgaskin's generated GLSL ES in the vertex shader) or three.js's matrix
+        skinning to start with; the page switches between them.
+
+    Returns
+    -------
+    View
+
+    Examples
+    --------
+    >>> view = cgaskin.view.show(cgaskin.capsule_arm(), clip="wave", time=0.5)
+    >>> view.save("arm.html")
+    PosixPath('arm.html')
     """
     if not isinstance(height, int) or height < 100:
         raise InvalidInputError(f"height {height!r}: give whole pixels >= 100")
