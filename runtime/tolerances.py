@@ -14,7 +14,49 @@ __all__ = ["Tolerances", "tol"]
 
 @dataclass(frozen=True)
 class Tolerances:
-    """Relative tolerances (see each field)."""
+    """Relative tolerances, in one frozen object (``tol``): when a vertex is on a plane or an edge,
+    an array a versor, a matrix a TRS. Each field's comment says what it bounds and why.
+
+    Parameters
+    ----------
+    on_plane : float
+        Cut: a vertex this close (times the diagonal) to the plane is on it.
+    snap : float
+        Tear: a vertex or a hit this close (times the diagonal) to the path is snapped to.
+    placement : float
+        Posed cut/tear: a new vertex farther (times the diagonal) from its posed target is reported.
+    on_edge : float
+        Tear: a point whose smallest barycentric coordinate is at most this lies on an edge.
+    min_sine : float
+        Tear: three points below this sine are too close to one line to define a plane.
+    collinear_sine : float
+        Caps: a loop's corner turning by a sine below this is straight.
+    box_padding : float
+        BVH: boxes grow by this times the mesh's extent.
+    affine_row : float
+        Inverse bind matrices: how far (absolute) the last row may be from (0, 0, 0, 1).
+    weight_sum : float
+        Weights: a row off 1 by more than this is renormalised with a warning.
+    exact_weight_sum : float
+        Weights: a row off 1 by at most this is left as it is.
+    versor : float
+        Versors: the relative residual of V Ṽ beyond which an array is not a versor.
+    pose_change : float
+        Clips from poses: a node whose local matrix changes by more than this is animated.
+    trs_rebuild : float
+        A matrix that its TRS rebuilds to within this is a TRS (else it has shear).
+    trs_exact : float
+        Skeletons: a stored TRS that reproduces its exact matrix to within this is exact.
+
+    Examples
+    --------
+    >>> from cgaskin.tolerances import tol
+    >>> tol.on_plane, tol.versor
+    (1e-10, 1e-06)
+    >>> import dataclasses
+    >>> dataclasses.replace(tol, on_plane=1e-8).on_plane       # a new object: tol is frozen
+    1e-08
+    """
 
     #: cut: a vertex within this times the diagonal of the plane is on it (it goes to both halves)
     on_plane: float = 1e-10
@@ -35,7 +77,7 @@ class Tolerances:
     #: BVH: boxes grow by this times the mesh's extent, so that rounding never loses a hit on a face
     #: lying in a box's side
     box_padding: float = 1e-9
-    #: inverse bind matrices: |last row - (0, 0, 0, 1)| beyond this (absolute) is not affine
+    #: inverse bind matrices: ``|last row - (0, 0, 0, 1)|`` beyond this (absolute) is not affine
     affine_row: float = 1e-6
     #: weights: a row whose sum is off 1 by more than this is renormalised with a warning
     weight_sum: float = 1e-6
