@@ -41,7 +41,8 @@ def identity(shape=()) -> np.ndarray:
 
     Returns
     -------
-    (*shape, 12) float64
+    (..., 12) float64
+        ``shape`` leading axes.
 
     Examples
     --------
