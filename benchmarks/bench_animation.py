@@ -30,7 +30,6 @@ The capsule's 300 strokes each cut about 1/400 of its length: a scalpel dragged 
 """
 from __future__ import annotations
 
-import argparse
 import itertools
 import json
 import os
@@ -43,6 +42,7 @@ import numpy as np
 
 import cgaskin
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import median_seconds, print_table
 
 MODELS = Path(os.environ.get("CGASKIN_MODELS", Path(__file__).resolve().parents[2] / "shared" / "models"))
@@ -172,8 +172,9 @@ def cases(frames: int, repeat: int, joints: int) -> list:
         if joints > 0 else [])
 
 
+@writes_tables
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--frames", type=int, default=1000)
     ap.add_argument("--repeat", type=int, default=21)
     ap.add_argument("--joints", type=int, default=551, help="joints of the synthetic capsule arm (0: none)")

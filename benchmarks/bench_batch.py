@@ -16,7 +16,6 @@ average, printed, says what else ran).
 """
 from __future__ import annotations
 
-import argparse
 import logging
 import os
 import statistics
@@ -24,6 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import print_table
 from .bench_tear import models_dir
 
@@ -92,8 +92,9 @@ def fresh_worker(folder: Path, shipped: bool = True) -> list:
     return [seconds, loaded, compiled]
 
 
+@writes_tables
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = benchmark_parser(__doc__)
     parser.add_argument("--count", type=int, default=5, help="instances of each operation per model")
     parser.add_argument("--repeat", type=int, default=3, help="timed batches per cluster (median)")
     args = parser.parse_args(argv)

@@ -30,6 +30,8 @@ import sys
 import tempfile
 import time
 
+from ._report import benchmark_parser, writes_tables
+
 CASES = {
     "first_skin": "import cgaskin; rig = cgaskin.capsule_arm(); cgaskin.skin(rig, rig.pose('wave', 1.0))",
     "first_cut": "import cgaskin; rig = cgaskin.capsule_arm(); cgaskin.cut(rig, [1, 0, 0], [1.2, 0, 0])",
@@ -118,14 +120,21 @@ def run_case(case: str, phases: bool = False, shipped: bool = True) -> tuple[flo
                                                             "loaded": result["loaded"]}
 
 
-def main(argv: list[str]) -> None:
-    top, variants, phases, compiled = 15, "--variants" in argv, "--phases" in argv, "--compiled" in argv
-    argv = [a for a in argv if a not in ("--variants", "--phases", "--compiled")]
-    if "--top" in argv:
-        i = argv.index("--top")
-        top = int(argv[i + 1])
-        del argv[i:i + 2]
-    cases = argv or ["first_tear", "demo"]
+@writes_tables
+def main(argv=None) -> None:
+    parser = benchmark_parser(__doc__)
+    parser.add_argument("cases", nargs="*", metavar="CASE",
+                        help=f"cases to run, of {', '.join(CASES)} (default: first_tear demo)")
+    parser.add_argument("--top", type=int, default=15, help="functions listed per case, by own compile seconds")
+    parser.add_argument("--variants", action="store_true", help="also list every compiled signature")
+    parser.add_argument("--phases", action="store_true", help="split the wall time into LLVM's phases")
+    parser.add_argument("--compiled", action="store_true", help="also run each case without the shipped kernels")
+    args = parser.parse_args(argv)
+    for case in args.cases:             # (not argparse's choices: with nargs="*" they reject no case at all)
+        if case not in CASES:
+            parser.error(f"unknown case {case!r}: choose from {', '.join(CASES)}")
+    top, variants, phases, compiled = args.top, args.variants, args.phases, args.compiled
+    cases = args.cases or ["first_tear", "demo"]
     for case, shipped in [(case, shipped) for case in cases for shipped in ((True, False) if compiled else (True,))]:
         started = time.perf_counter()
         wall, table, llvm = run_case(case, phases, shipped)
@@ -155,4 +164,4 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    main()

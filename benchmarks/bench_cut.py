@@ -21,7 +21,6 @@ Targets: arm cut <= 0.5 ms, 1M-face cut <= 15 ms in either order.
 """
 from __future__ import annotations
 
-import argparse
 import os
 import warnings
 from pathlib import Path
@@ -32,6 +31,7 @@ import cgaskin
 from cgaskin import capsule_arm, cut
 from cgaskin.surgery.topology import topology
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import median_seconds, print_table, timed
 
 PAPER_MS = {"arm": 22805.0, "cylinders": 898.0}
@@ -104,8 +104,9 @@ def _bent_pose(rig):
     return pose
 
 
+@writes_tables
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--repeat", type=int, default=21)
     ap.add_argument("--big-faces", type=int, default=1_000_000)
     ap.add_argument("--models", default=os.environ.get("CGASKIN_MODELS",

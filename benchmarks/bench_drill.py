@@ -17,7 +17,6 @@ Rows (medians; ratios within this run):
 """
 from __future__ import annotations
 
-import argparse
 import time
 import warnings
 
@@ -25,6 +24,7 @@ import numpy as np
 
 import cgaskin
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import median_seconds, print_table
 from .bench_tear import models_dir
 
@@ -126,8 +126,9 @@ def large_rows(rings: int, around: int, repeat: int) -> list:
     return rows
 
 
+@writes_tables
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = benchmark_parser(__doc__)
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--large-rings", type=int, default=410, help="capsule rings per segment (0: skip)")
     parser.add_argument("--large-around", type=int, default=512)

@@ -22,6 +22,8 @@ from cgaskin._shared.jit import kernel
 from cgaskin.surgery.bvh import _first_hit
 from cgaskin.surgery.dynamic_bvh import DynamicBVH
 
+from ._report import benchmark_parser, writes_tables
+
 
 @kernel()
 def _query_loop(arrays, a, b):
@@ -91,7 +93,9 @@ def _stroke(bvh, mesh, centre, rng, move):
     return time.perf_counter() - start
 
 
-def main():
+@writes_tables
+def main(argv=None):
+    benchmark_parser(__doc__).parse_args(argv)
     rig = capsule_arm(rings_per_segment=850, segments_around=294)
     points, faces = np.asarray(rig.vertices), np.asarray(rig.faces)
     start = time.perf_counter()

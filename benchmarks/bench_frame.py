@@ -10,7 +10,6 @@ the paper's per-vertex clifford sandwich loop (timed on a few frames only: it ta
 """
 from __future__ import annotations
 
-import argparse
 import os
 from pathlib import Path
 
@@ -19,6 +18,7 @@ import numpy as np
 import cgaskin
 from cgaskin import baselines
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import median_seconds, print_table
 
 DEFAULT_MODEL = Path(os.environ.get("CGASKIN_MODELS", Path(__file__).resolve().parents[2] / "shared" / "models")) / "Arm5.glb"
@@ -48,9 +48,10 @@ def paper_frame(rig, pose):
 cgaskin_e = None
 
 
+@writes_tables
 def main(argv=None):
     global cgaskin_e
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--model", default=str(DEFAULT_MODEL))
     ap.add_argument("--paper-frames", type=int, default=1, help="frames of the paper's clifford loop (0: skip)")
     args = ap.parse_args(argv)

@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import minor_faults, print_table
 
 
@@ -151,8 +152,9 @@ def run_one(name: str, strokes: int, faces: int, api_name: str) -> dict:
             "peak": _rss("VmHWM") - resident}
 
 
+@writes_tables
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = benchmark_parser(__doc__)
     parser.add_argument("--strokes", type=int, default=200)
     parser.add_argument("--large-strokes", type=int, default=20)
     parser.add_argument("--large-faces", type=int, default=1_500_000)

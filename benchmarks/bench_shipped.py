@@ -15,7 +15,6 @@ rings of 256 vertices per bone.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import statistics
@@ -23,6 +22,7 @@ import subprocess
 import sys
 import tempfile
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import print_table
 
 # in each child: build the rig, time the operations, print counts, medians and digests (one JSON line)
@@ -82,8 +82,9 @@ def run(shipped: bool, repeat: int, rings: int, cache: str) -> dict:
     return json.loads(next(line for line in done.stdout.splitlines() if line.startswith("@@"))[2:])
 
 
+@writes_tables
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = benchmark_parser(__doc__)
     parser.add_argument("--repeat", type=int, default=30, help="timed calls per operation (median)")
     parser.add_argument("--rounds", type=int, default=3, help="host and shipped processes, alternating")
     parser.add_argument("--rings", type=int, default=200, help="rings of 256 vertices per bone of the capsule arm")

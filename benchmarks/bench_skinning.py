@@ -9,7 +9,6 @@ against the hand-written numba LBS measured in the same run.
 """
 from __future__ import annotations
 
-import argparse
 
 import numba
 import numpy as np
@@ -19,6 +18,7 @@ import cgaskin
 from cgaskin import versor
 from cgaskin.animation.skinning import bone_affines
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import median_seconds, print_table
 
 
@@ -72,8 +72,9 @@ def make_problem(n, n_bones, seed=0):
     return rest, joints, weights, versors
 
 
+@writes_tables
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--vertices", type=int, default=1_000_000)
     ap.add_argument("--bones", type=int, default=32)
     ap.add_argument("--repeat", type=int, default=7)

@@ -15,7 +15,6 @@ device-to-device copy of the same bytes.
 """
 from __future__ import annotations
 
-import argparse
 import importlib.util
 import subprocess
 import sys
@@ -30,6 +29,7 @@ from numba import njit, prange
 import cgaskin
 from cgaskin.animation.skinning import bone_affines
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import median_seconds, print_table
 from .bench_skinning import make_problem
 
@@ -177,8 +177,9 @@ def cuda_table(args, kernels, work: Path) -> None:
                  [f"memory bound, device copy ({2 * src.nbytes / t_copy / 1e9:.0f} GB/s)", t_copy * 1e3, n / t_copy, 1.0]])
 
 
+@writes_tables
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--vertices", type=int, default=1_000_000)
     ap.add_argument("--bones", type=int, default=32)
     ap.add_argument("--repeat", type=int, default=7)

@@ -18,7 +18,6 @@ Medians of repeated runs (``benchmarks/_timing.py``); the paper's figures are fr
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import os
 import time
@@ -31,6 +30,7 @@ import cgaskin
 from cgaskin import TearPathError, TriangleBVH, capsule_arm, skin, tear_stroke
 from cgaskin.surgery.bvh import _first_hit
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import median_seconds, print_table
 
 #: the paper's tear (its machine): model -> (milliseconds, intersection points)
@@ -128,8 +128,9 @@ def bench_model(name, rig, want, repeat):
     return rows
 
 
+@writes_tables
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--repeat", type=int, default=21)
     args = ap.parse_args(argv)
 

@@ -9,7 +9,6 @@ the same TRS edits, so it shares nothing with the versor path but the file data.
 """
 from __future__ import annotations
 
-import argparse
 import os
 import warnings
 from pathlib import Path
@@ -19,6 +18,7 @@ import numpy as np
 import cgaskin
 from cgaskin import baselines
 
+from ._report import benchmark_parser, writes_tables
 from ._timing import print_table
 
 MODELS = ["Arm5.glb", "3Cylinder4bones.glb", "PlaneWith3Bones.glb", "Fox.glb", "simple_skin.gltf"]
@@ -63,8 +63,9 @@ def compare(rig, edit):
     return sk.names[node], moved, np.abs(cga - lbs).max() / diag, np.abs(cga - dqs).max() / diag
 
 
+@writes_tables
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--models", default=str(DEFAULT_DIR))
     args = ap.parse_args(argv)
     rows = []
