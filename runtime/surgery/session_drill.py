@@ -14,7 +14,10 @@ the vertices inside the bit as rows that no face uses.
 The region's result is then a splice, as a tear stroke's (``tear/splice.py``): the region's replaced
 faces go, the faces made in their place and the new vertices are appended, and undo takes them back.
 A hole costs the faces near the bit (the BVH's box query, in a pose through the bone-carried bounds of
-``posed_bounds.py``), plus, for a blind hole only, the winding number of the whole mesh at its tip.
+``posed_bounds.py``), plus, for a blind hole or a bit that starts inside the mesh's box only, the
+winding number of the whole mesh at a point (``wall.py``). A bit that would take every live face away is
+refused, as the functional drill refuses it; so is one over the drill's cap on new vertices, before
+the work (``predicted_session_drill`` gives the same prediction for a session without drilling).
 """
 from __future__ import annotations
 
@@ -26,7 +29,9 @@ from .._shared.frozen import kernel_array
 from .._shared.ids import ascending, distinct
 from ..animation.rig import Rig
 from ..animation.skinning import skin_affine
-from .drill.api import DrillResult, bit_reach, drill_region, missed
+from .drill.api import (DrillResult, bit_reach, check_budget, check_radius, checked_wall, drill_region, missed,
+                        near_budget, outside, takes_everything)
+from .drill.bit import bit as checked_bit
 from .drill.inside import winding_number
 from .dynamic_bvh import dyn_faces_near_plane
 from .posed_bounds import pose_region
@@ -67,10 +72,13 @@ def session_drill(session, the_bit, wall: bool, posed) -> tuple:
     faces, affines = session.faces, None if posed is None else posed.affines
     lo, hi = bit_reach(the_bit)
     diagonal = session.diagonal if posed is None else posed.diagonal
-    inside = _inside(session, affines)
     reached = _faces_in(session, posed, lo, hi)
+    check_radius(the_bit, diagonal)
     if len(reached) == 0:
         raise missed(the_bit, session._template.name)
+    budget = near_budget(session.vertices if posed is None else posed.positions, faces, reached, the_bit, wall)
+    check_budget(budget[0], the_bit)                # (before any region is made)
+    winding = _winding(session, affines, _box(session, posed))
     margin = _largest_face(session, posed, reached)
     for attempt in range(MAX_TRIES + 1):
         whole = attempt == MAX_TRIES
@@ -79,10 +87,24 @@ def session_drill(session, the_bit, wall: bool, posed) -> tuple:
         rig = _region_rig(session, region, rows)
         mesh = mesh_arrays(rig)        # (the kernels' arrays: writable buffers, as the functional drill's)
         positions = mesh.vertices if affines is None else skin_affine(mesh.vertices, mesh.joints, mesh.weights, affines)
-        result = drill_region(rig, the_bit, wall, affines, positions, diagonal, inside)
+        result = drill_region(rig, the_bit, wall, affines, positions, diagonal, winding, budget)
         if whole or not _at_border(session, region, rows[distinct(mesh.faces[result.replaced])]):
+            if result.rig.n_faces == 0 and len(region) == session._alive.view.sum():
+                raise takes_everything(the_bit, session._template.name)
             return result, _splice(session, result, region, rows)
         margin *= 2.0
+
+
+def predicted_session_drill(session, start, end, radius, pose=None, wall: bool = True) -> int:
+    """``drill.api.predicted_new_vertices`` of ``session.drill(start, end, radius, pose, wall)``: the same
+    bound, from the faces the session's BVH finds near the bit (no drill, no copy of the mesh); the same
+    checks of the arguments (a radius below the smallest raises InvalidInputError)."""
+    the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
+    posed = None if pose is None and session.pose is None else session._posed(pose)
+    check_radius(the_bit, session.diagonal if posed is None else posed.diagonal)
+    near = _faces_in(session, posed, *bit_reach(the_bit))
+    positions = session.vertices if posed is None else posed.positions
+    return near_budget(positions, session.faces, near, the_bit, wall)[0]
 
 
 def _largest_face(session, posed, faces) -> float:
@@ -127,18 +149,29 @@ def _at_border(session, region, corners) -> bool:
     return bool(np.isin(welded[:len(points)], welded[len(points):], kind="table").any())
 
 
-def _inside(session, affines):
-    """``inside(point)`` for the walls: the winding number of the session's whole live mesh (skinned by
-    ``affines`` when posed), its arrays made on the first call (a blind hole's only)."""
+def _box(session, posed) -> np.ndarray:
+    """(2, 3) a box that holds the session's live surface where it is drilled: its rest bounds, or the
+    posed BVH's root box (bone-carried bounds: every face lies in it in the pose; ``_faces_in`` made it)."""
+    if posed is None:
+        return session._bounds
+    return np.stack([posed.bvh_arrays[0][0], posed.bvh_arrays[1][0]])
+
+
+def _winding(session, affines, box):
+    """``winding(point)`` for the walls: the winding number of the session's whole live mesh (skinned by
+    ``affines`` when posed), 0 outside ``box`` (2, 3); its arrays made on the first call that needs them
+    (a blind hole's, or a bit's that starts inside the box)."""
     surface = []
 
-    def inside(point) -> bool:
+    def winding(point) -> float:
+        if outside(box, point):
+            return 0.0
         if not surface:
             positions = session.vertices if affines is None else \
                 skin_affine(session.vertices, session.joints, session.weights, affines)
             surface.extend((positions, session.faces[session._alive.view]))
-        return winding_number(*surface, point) > 0.5
-    return inside
+        return winding_number(*surface, point)
+    return winding
 
 
 def _own_arrays(rig) -> MeshArrays:

@@ -149,11 +149,12 @@ def stacked(values, src, extra) -> np.ndarray:
     return out if direct else out.astype(values.dtype)
 
 
-def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, open_rims: int, bit, tolerance: float, affines,
-             diagonal: float) -> DrillResult:
+def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, open_rims: int, unclosed: int, bit,
+             tolerance: float, affines, diagonal: float) -> DrillResult:
     """The drilled rig: the input vertices it uses (bit for bit), then the new rows it uses; the input
     faces it keeps, then the patch's faces it made; with its bookkeeping. ``rim`` (r,) the patch's rim
-    rows; ``opened``, ``walls``, ``open_rims``, ``bit``, ``tolerance`` as ``DrillResult`` names them;
+    rows; ``opened``, ``walls``, ``open_rims``, ``unclosed`` (``unclosed_edges``), ``bit``, ``tolerance`` as
+    ``DrillResult`` names them;
     ``affines`` the pose's bone maps (a posed drill: the new vertices are placed in rest space) or None.
 
     A new row's weights and attributes blend those of the two rows it was made between
@@ -184,7 +185,7 @@ def assemble(rig: Rig, patch: Patch, rim, opened: int, walls: int, open_rims: in
                              f"{rig.name}_drilled")
     sources = np.concatenate([lay.kept_input, np.full(len(lay.new_rows), NEW_VERTEX, np.int64)])
     return DrillResult(result, sources, len(lay.kept_input), np.sort(lay.row_out[rim]), new_positions, opened,
-                       lay.replaced, lay.made_in, walls, open_rims, bit, tolerance, residual,
+                       lay.replaced, lay.made_in, walls, open_rims, unclosed, bit, tolerance, residual,
                        partial(_described, *(np.array(a) for a in made), lay.new_rows))
 
 

@@ -22,6 +22,7 @@ class Frame:
         self.axes, self.length = _axes(bit.start, bit.end)
         self.u, self.e1, self.e2 = self.axes
         self.top = self.length + 0.5 * math.pi * self.r          # σ of the tip's pole
+        self.bottom = -0.5 * math.pi * self.r                     # σ of the back's pole
 
     def coordinates(self, x) -> tuple:
         """(θ, σ) of points x (k, 3) on the bit's surface."""

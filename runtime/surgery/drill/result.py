@@ -32,6 +32,10 @@ class DrillResult:
     wall_faces : int, the walls' faces: the last ``wall_faces`` rows of ``rig.faces``
     open_rims : int, rims that run into an open boundary of the mesh (``wall=True``): chains, not loops,
         which no wall joins (the hole stays open there; ``OpenRimWarning``)
+    unclosed_edges : int, edges on the bit's surface that the walls leave without exactly two faces,
+        besides the chains' (``wall=True``; ``OpenRimWarning``): 0 for closed shells of either winding,
+        disjoint or not; a hole through an open surface, or a surface wound against its neighbours
+        around a blind hole, leaves its rim's edges
     bit : Bit ; tolerance : float, the on-surface tolerance (absolute) ; residual : float, the largest
         |skinned new vertex - where it was made| (0 for a drill at rest)
     new : NewVertices, the input vertices each new vertex lies between and its coefficients there (made
@@ -49,6 +53,7 @@ class DrillResult:
     made_in: np.ndarray
     wall_faces: int
     open_rims: int
+    unclosed_edges: int
     bit: Bit
     tolerance: float
     residual: float

@@ -6,15 +6,17 @@ outside); a face with no corner outside goes; a face with corners on both sides 
 a triangle or a convex quad (two triangles over the shorter diagonal), whose new corners lie where its
 edges cross the bit's surface (``bit.crossing``: one point per welded edge, so a seam's copies meet;
 one row per vertex edge, so that each copy keeps its attributes). All of it is one compiled pass
-(``_open``). Then ``rim_loops`` traces the rims: the loops of the new boundary on the surface.
+(``_open``). Then ``rim_loop_edges`` finds the rims' edges, the new boundary on the surface, and chains
+them into loops.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..._shared.jit import B1, F1, F2, I1, I2, f8, helper, inlined, kernel
+from ..._shared.jit import F1, F2, I1, I2, f8, helper, i8, kernel
 from .bisection import EMPTY, code_table, pair, slot
 from .bit import crossing, put_on_edge, segment_distance, signed_distances
+from ..topology import chained_edges
 from .patch import Patch, put_face, squared_distance
 
 OUTSIDE, ON, INSIDE = 1, 0, -1
@@ -173,25 +175,33 @@ def _outside_parts(rows, crossed, side, crossing_rows, points, row_point):
     return out[:count].copy(), part_of[:count].copy()
 
 
-@kernel((I2, I1, B1), cost=0.9)
-def rim_loops(rows, row_point, on_rim):
-    """The loops of the boundary edges between rim points (``on_rim`` (P,) per point) of the faces ``rows``
-    (F, 3) (``row_point`` (R,) the point of each row; an edge is a boundary if one corner edge of one
-    face has its two points): chained as ``topology.directed_loops`` chains them (in the faces' order;
-    where several edges leave a point, the loop's first if it is one, else the first). A chain that
-    does not close (its rim runs into an open boundary of the mesh) comes after the loops, its corners
-    each edge's tail and the last edge's head. Returns the corners: rows (L,) and points (L,), offsets
-    (k + 1,) (loop i is [offsets[i], offsets[i + 1])), and how many of them are loops (the first ones)."""
+@kernel((I2, I1, I1, i8), cost=0.6, fused=True)
+def rim_loop_edges(rows, row_point, rim, n_points):
+    """The rims' boundary edges (``_rim_edges``: the rows of their tails (e,) and heads (e,), their
+    points (e,), (e,)) and their loops over the points as ``topology.directed_loops`` chains them
+    (``topology.chained_edges``: the loops' edges (k,) and offsets (l + 1,)), in one compiled call."""
+    tails, heads, a, b = _rim_edges(rows, row_point, rim, n_points)
+    edges, offsets = chained_edges(a, b)
+    return tails, heads, a, b, edges, offsets
+
+
+@helper
+def _rim_edges(rows, row_point, rim, n_points):
+    """The boundary edges between rim points (the points of the rows ``rim`` (r,), of ``n_points``) of
+    the faces ``rows`` (F, 3) (``row_point`` (R,) the point of each row; an edge is a boundary if one
+    corner edge of one face has its two points), in the faces' order, each in its face's direction: the
+    rows of their tails (e,) and heads (e,), and their points (e,), (e,)."""
+    on_rim = np.zeros(n_points, np.bool_)
+    for r in rim:
+        on_rim[row_point[r]] = True
     n = rows.shape[0]
     tails, heads, codes = np.empty(3 * n, np.int64), np.empty(3 * n, np.int64), np.empty(3 * n, np.int64)
-    head_rows = np.empty(3 * n, np.int64)
     count = 0
     for f in range(n):
         for k in range(3):
             a, b = row_point[rows[f, k]], row_point[rows[f, (k + 1) % 3]]
             if on_rim[a] and on_rim[b]:
-                tails[count], heads[count], codes[count] = rows[f, k], b, pair(a, b)
-                head_rows[count] = rows[f, (k + 1) % 3]
+                tails[count], heads[count], codes[count] = rows[f, k], rows[f, (k + 1) % 3], pair(a, b)
                 count += 1
     table = code_table(count)
     sides = np.zeros(table.shape[0], np.int64)          # (how many corner edges each code has)
@@ -199,91 +209,12 @@ def rim_loops(rows, row_point, on_rim):
         at = slot(table, codes[i])
         table[at] = codes[i]
         sides[at] += 1
-    # the boundary edges, in order, and the ones leaving each point (CSR by tail point)
-    edges = np.empty(count, np.int64)
-    n_edges, n_points = 0, on_rim.shape[0]
-    leaving = np.zeros(n_points + 1, np.int64)
+    n_edges = 0
     for i in range(count):
         if sides[slot(table, codes[i])] == 1:
-            edges[n_edges] = i
+            tails[n_edges], heads[n_edges] = tails[i], heads[i]
             n_edges += 1
-            leaving[row_point[tails[i]] + 1] += 1
-    for p in range(n_points):
-        leaving[p + 1] += leaving[p]
-    fill, by_tail = leaving[:-1].copy(), np.empty(n_edges, np.int64)
+    tail_points, head_points = np.empty(n_edges, np.int64), np.empty(n_edges, np.int64)
     for e in range(n_edges):
-        p = row_point[tails[edges[e]]]
-        by_tail[fill[p]] = e
-        fill[p] += 1
-    used = np.zeros(n_edges, np.bool_)
-    corners, loop, offsets = np.empty(n_edges, np.int64), np.empty(n_edges, np.int64), np.zeros(n_edges + 1, np.int64)
-    chains, chain_offsets = np.empty(n_edges, np.int64), np.zeros(n_edges + 1, np.int64)
-    arriving = np.zeros(n_points, np.int64)            # (a chain starts where no edge arrives)
-    for e in range(n_edges):
-        arriving[heads[edges[e]]] += 1
-    n_corners = n_loops = n_chain_corners = n_chains = 0
-    for first in np.concatenate((_edges_from(arriving, row_point, tails, edges, True),
-                                 _edges_from(arriving, row_point, tails, edges, False))):
-        if used[first]:
-            continue
-        length, e = 0, first
-        while True:
-            used[e] = True
-            loop[length] = e
-            length += 1
-            head = heads[edges[e]]
-            pick = -1
-            for j in range(leaving[head], leaving[head + 1]):
-                candidate = by_tail[j]
-                if candidate == first:
-                    pick = first
-                    break
-                if pick < 0 and not used[candidate]:
-                    pick = candidate
-            if pick < 0:                            # an open chain
-                n_chain_corners, n_chains = _kept(chains, chain_offsets, n_chain_corners, n_chains, loop, length)
-                break
-            if pick == first:
-                n_corners, n_loops = _kept(corners, offsets, n_corners, n_loops, loop, length)
-                break
-            e = pick
-    total = n_corners + n_chain_corners + n_chains
-    out_rows, out_points = np.empty(total, np.int64), np.empty(total, np.int64)
-    out_offsets = np.empty(n_loops + n_chains + 1, np.int64)
-    for i in range(n_loops + 1):
-        out_offsets[i] = offsets[i]
-    for c in range(n_corners):
-        out_rows[c] = tails[edges[corners[c]]]
-    at = n_corners
-    for i in range(n_chains):
-        for c in range(chain_offsets[i], chain_offsets[i + 1]):
-            out_rows[at] = tails[edges[chains[c]]]
-            at += 1
-        out_rows[at] = head_rows[edges[chains[chain_offsets[i + 1] - 1]]]     # (its last edge's head)
-        at += 1
-        out_offsets[n_loops + 1 + i] = at
-    for c in range(total):
-        out_points[c] = row_point[out_rows[c]]
-    return out_rows, out_points, out_offsets, n_loops
-
-
-@inlined
-def _kept(corners, offsets, n_corners, n_groups, loop, length):
-    """Append ``loop[:length]`` to ``corners`` as group ``n_groups`` (its end in ``offsets``); the new
-    counts of corners and groups."""
-    for i in range(length):
-        corners[n_corners + i] = loop[i]
-    offsets[n_groups + 1] = n_corners + length
-    return n_corners + length, n_groups + 1
-
-
-@helper
-def _edges_from(arriving, row_point, tails, edges, starts):
-    """The boundary edges (ids into ``edges`` (e,), in order) whose tail point has no arriving edge
-    (``starts``: a chain's first), or the others."""
-    out, count = np.empty(edges.shape[0], np.int64), 0
-    for e in range(edges.shape[0]):
-        if (arriving[row_point[tails[edges[e]]]] == 0) == starts:
-            out[count] = e
-            count += 1
-    return out[:count]
+        tail_points[e], head_points[e] = row_point[tails[e]], row_point[heads[e]]
+    return tails[:n_edges].copy(), heads[:n_edges].copy(), tail_points, head_points

@@ -1,12 +1,16 @@
 """A tunnel: the wall on the bit's surface from one rim loop up to the next (an entry to an exit), or to
 the tip's pole (a blind hole), in one compiled call (``_tunnel_grid``).
 
-Its rows lie in rings at the columns' angles (``step`` apart around the axis), the rings ``step`` apart
-along it between the two loops' heights; ring i's rows blend the rim rows nearest in angle on the two
-loops (``bit_surface.nearest_rows``) by its height. The loops get wall rows of their own (the rim's points,
-other normals), each zipped to the nearest ring by angle (``strips.zip_rings``), the rings between as a
-grid. Faces are wound to face the axis (in (θ, σ), counter-clockwise faces away from it: ∂θ × ∂σ is the
-outward radial).
+Its rows lie in rings at the columns' angles (``step`` apart around the axis: the rim's resolution), the
+rings between the two loops' heights about ``axial`` apart along the cylinder, where the bit's surface is
+straight (the mesh's resolution along the axis: ``budget.axial_step``), and ``step`` apart on its round
+ends, which curve; ring i's rows blend the rim rows nearest in angle on the two loops
+(``bit_surface.nearest_rows``) by its place between them. The loops get wall rows of their own (the rim's
+points, other normals), each zipped to the nearest ring by angle (``strips.zip_rings``), the rings between
+as a grid. A tunnel may also run down from a loop to the back's pole (the bit started inside the model).
+Faces are wound to face the axis (in (θ, σ), counter-clockwise faces away from it: ∂θ × ∂σ is the
+outward radial) where the solid they bound lies outside the bit as the input's faces wind it outward,
+else the other way (an inward-wound shell: ``wall.py``).
 """
 from __future__ import annotations
 
@@ -23,18 +27,25 @@ from .strips import grid, zip_rings
 LOOP, FRAME = record(I1, I1, F1, F1, F1), record(F1, F2, f8, f8, f8)
 
 
-def tunnel(patch: Patch, frame: Frame, a: Loop, b: Loop | None, step: float, face_source: int) -> None:
-    """Add the tunnel from loop a up to loop b (None: to the tip's pole) to the patch, its faces from
-    ``face_source``."""
+def tunnel(patch: Patch, frame: Frame, a: Loop | None, b: Loop | None, step: float, axial: float, facing: bool,
+           face_source: int) -> None:
+    """Add the tunnel from loop a up to loop b to the patch, its faces from ``face_source``: a None is the
+    back's pole (the wall runs down from b to it), b None the tip's; ``facing``: its faces face the axis
+    (else away from it). Rings ``axial`` apart along the cylinder, ``step`` on the round ends."""
+    upward = a is not None                  # (built from a up to b, or from b down to the back's pole)
+    loop, other = (a, b) if upward else (b, None)
+    pole_sigma = frame.top if upward else frame.bottom
     points, row_points, row_parents, row_t, faces, last = _tunnel_grid(
-        _loop_record(a), a.winding, _loop_record(a if b is None else b), 0 if b is None else b.winding,
-        b is not None, (frame.start, frame.axes, frame.length, frame.r, frame.top), step, patch.n_points,
-        patch.n_rows)
+        _loop_record(loop), loop.winding, _loop_record(loop if other is None else other),
+        0 if other is None else other.winding, other is not None,
+        (frame.start, frame.axes, frame.length, frame.r, pole_sigma), step, axial, patch.n_points, patch.n_rows)
     patch.add_points(points)
     patch.new_rows(row_points, row_parents[:, 0], row_parents[:, 1], row_t)
-    if b is None:                       # the last ring closed at the pole
-        pole = _pole_row(patch, frame, frame.top, a)
+    if other is None:                   # the last ring closed at the pole
+        pole = _pole_row(patch, frame, pole_sigma, loop)
         faces = np.concatenate([faces, np.column_stack([np.roll(last, -1), last, np.full(len(last), pole)])])
+    if facing != upward:                # (built downward, the grid faces away from the axis)
+        faces = faces[:, [0, 2, 1]]
     patch.add_faces(faces, face_source)
 
 
@@ -42,14 +53,17 @@ def _loop_record(loop: Loop) -> tuple:
     return loop.rows, loop.points, loop.theta, loop.sigma, loop.unwrapped
 
 
-@kernel((LOOP, i8, LOOP, i8, b1, FRAME, f8, i8, i8), cost=2.0, fused=True)
-def _tunnel_grid(a, a_winding, b, b_winding, has_b, frame, step, first_point, first_row):
-    """The tunnel's points, rows and faces from loop a up to loop b (``has_b``; else to the tip's height
-    ``top``), loops as ``_loop_record`` gives them (with their windings), ``frame`` (start, axes, length,
-    r, top) a ``Frame``'s; new points and rows numbered from ``first_point`` and ``first_row``.
+@kernel((LOOP, i8, LOOP, i8, b1, FRAME, f8, f8, i8, i8), cost=2.0, fused=True)
+def _tunnel_grid(a, a_winding, b, b_winding, has_b, frame, step, axial, first_point, first_row):
+    """The tunnel's points, rows and faces from loop a to loop b (``has_b``; else to a pole's height
+    ``pole``, above a or below it), loops as ``_loop_record`` gives them (with their windings), ``frame``
+    (start, axes, length, r, pole) a ``Frame``'s; columns ``step`` apart around the axis, rings spaced
+    evenly in ``_ring_measure`` (``axial`` apart on the cylinder, ``step`` on the round ends); new points
+    and rows numbered from ``first_point`` and ``first_row``.
 
     Returns (points (p, 3); the new rows' points (r,), parents (r, 2) and t (r,) (``Patch.new_rows``);
-    faces (G, 3); the last ring's rows (c,): b's, or the ring below the pole)."""
+    faces (G, 3), facing the axis when b (or the pole) lies above a; the last ring's rows (c,): b's, or
+    the ring next to the pole)."""
     start, axes, length, r, top = frame
     count = max(8, int(math.ceil(2.0 * math.pi * r / step)))
     columns = np.empty(count)                       # the rings' angles, step apart
@@ -57,7 +71,13 @@ def _tunnel_grid(a, a_winding, b, b_winding, has_b, frame, step, first_point, fi
         columns[c] = -math.pi + c * (2.0 * math.pi / count)
     low = _height_at(a, columns)
     high = _height_at(b, columns) if has_b else np.full(count, top)
-    rings = max(1, int(math.ceil(np.max(np.abs(high - low)) / step))) - 1       # (between the loops)
+    low_measure, high_measure = np.empty(count), np.empty(count)
+    span = 0.0
+    for c in range(count):
+        low_measure[c] = _ring_measure(low[c], length, step, axial)
+        high_measure[c] = _ring_measure(high[c], length, step, axial)
+        span = max(span, abs(high_measure[c] - low_measure[c]))
+    rings = max(1, int(math.ceil(span))) - 1       # (between the loops)
     ra = nearest_rows(a[2], a[0], columns)
     rb = nearest_rows(b[2], b[0], columns) if has_b else ra
     n_a, n_b = a[0].shape[0], b[0].shape[0] if has_b else 0
@@ -75,7 +95,8 @@ def _tunnel_grid(a, a_winding, b, b_winding, has_b, frame, step, first_point, fi
         w = (i + 1) / (rings + 1)
         for c in range(count):
             k = i * count + c
-            theta[k], sigma[k] = columns[c], (1.0 - w) * low[c] + w * high[c]
+            theta[k] = columns[c]
+            sigma[k] = _ring_height((1.0 - w) * low_measure[c] + w * high_measure[c], length, step, axial)
             row_points[n_a + k], row_parents[n_a + k, 0], row_parents[n_a + k, 1] = first_point + k, ra[c], rb[c]
             row_t[n_a + k] = w if has_b else 0.0
             inner[i, c] = first_row + n_a + k
@@ -100,6 +121,28 @@ def _tunnel_grid(a, a_winding, b, b_winding, has_b, frame, step, first_point, fi
             faces[at, 0], faces[at, 1], faces[at, 2] = s[i, 0], s[i, 2], s[i, 1]      # (to face the axis)
             at += 1
     return points, row_points, row_parents, row_t, faces, last_rows
+
+
+@helper
+def _ring_measure(sigma, length, step, axial):
+    """How many ring spacings height σ lies from the cylinder's start: σ / ``axial`` on the cylinder
+    (0 <= σ <= ``length``), each round end's arc in ``step``s (continuous, increasing; ``_ring_height``
+    inverts it)."""
+    if sigma < 0.0:
+        return sigma / step
+    if sigma > length:
+        return length / axial + (sigma - length) / step
+    return sigma / axial
+
+
+@helper
+def _ring_height(measure, length, step, axial):
+    """The height σ of a ``_ring_measure``."""
+    if measure < 0.0:
+        return measure * step
+    if measure > length / axial:
+        return length + (measure - length / axial) * step
+    return measure * axial
 
 
 @helper

@@ -2,26 +2,39 @@
 
 A point of the bit's surface is (θ, σ), its angle around the axis and its height along the profile
 (``bit_surface.Frame``). The rims (``rim.py``) are loops of the mesh's new boundary on that surface
-(``bit_surface.Loop``), where the mesh is closed around the bit:
+(``bit_surface.Loop``), chained as ``topology.directed_loops`` chains edges, where the mesh is closed
+around the bit:
 
-* a loop that winds once around the axis is an entry or an exit: the boundary of a surface around a
-  hole runs clockwise seen from the side the surface faces, so on an outward-facing surface an entry
-  (facing the bit as it comes) winds positively about the travel, an exit negatively. The loops are
-  ordered by height; an entry followed by an exit is joined to it by a tunnel; an entry followed by
-  nothing (or by another entry: a surface facing the wrong way) is joined to the tip (a blind hole's
-  wall and round bottom) or to that loop only where the axis beyond it is inside the input model (its
-  winding number, a solid-angle sum over all its faces: the one global step, taken only then);
-* a tunnel is made of rings at heights between the two loops' (columns and rings about ``step``
-  apart), zipped together by angle (``tunnel.py``); its vertices lie on the bit's surface;
+* a loop that winds once around the axis is where a surface crosses it. The boundary of a surface
+  around a hole runs clockwise seen from the side the surface faces, so the loop's winding about the
+  travel (+1 or -1) is the step the model's winding number takes there along the axis (+1 entering an
+  outward-wound shell, -1 leaving it; the other way round for an inward-wound one). From the winding
+  number at the bit's back pole (0 where it lies outside the model's box: no global step; else the
+  solid-angle sum over all the faces, ``inside.winding_number``), each loop either opens a level
+  (the winding number moves away from 0: the bit enters a solid, of either winding) or closes the last
+  one opened, and a tunnel joins the two (``_matched``): a shell of either winding, several disjoint
+  ones, one inside another, are each closed; shells that intersect one another are joined across.
+  Levels still open at the tip are joined to its pole (a blind hole's wall and round bottom) where the
+  winding number at that pole, found directly, agrees; levels open below the lowest loop run down to
+  the back's pole (a bit that starts inside the model). Where the direct count disagrees (a surface wound
+  against its neighbours, an open mesh), the stretches between loops are inside and outside in turn
+  (``_alternating``), and a last loop above which the model's winding number is 0 is left open (a
+  hole through an open surface; counted as unclosed);
+* a tunnel is made of rings at heights between the two loops' (``tunnel.py``): columns ``step`` apart
+  around the axis (the rim's resolution), rings ``axial`` apart along it (the mesh's), zipped together
+  by angle; its vertices lie on the bit's surface;
 * a loop that does not wind around the axis (a bit grazing the model's side) is filled with the part of
   the surface it encloses: its two chains zipped by angle (or ear-clipped in the unrolled (r θ, σ)
   plane and refined, ``_refine_fills``);
 * a rim that runs into an open boundary of the mesh is a chain, not a loop: it gets no wall, and no
   tunnel passes its heights (``build_walls``).
 
-Wall faces face the axis (their outside is the hole). Wall vertices are rows of their own (the rims'
+Wall faces are wound as the faces around their rims (each rim edge once each way): facing the axis
+(their outside is the hole) in an outward-wound solid. Wall vertices are rows of their own (the rims'
 positions, other normals): described, for weights and attributes, by the rim rows nearest in angle on
-the loops they lie between; their normal points to the axis.
+the loops they lie between; their normal points to the axis. What the walls leave unclosed, the edges
+of the loops and walls without exactly two faces (a loop no wall joins, an edge two walls share), is
+counted (``DrillResult.unclosed_edges``, ``OpenRimWarning``).
 """
 from __future__ import annotations
 
@@ -29,59 +42,155 @@ import math
 
 import numpy as np
 
+from ..._shared.jit import I2, inlined, kernel
 from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
+from ..topology import directed_loop_edges
+from .bisection import code_table, pair, slot
 from .bit_surface import Frame, Loop, loops
 from .patch import LOW_BITS, Patch, edge_codes
 from .refine import MAX_ROUNDS, bisect_marked
-from .rim import rim_loops
+from .rim import rim_loop_edges
 from .strips import zip_chains
 from .tunnel import tunnel
 
-#: the winding about the bit's travel of a rim where it enters an outward-facing surface
-ENTRY = 1
 #: a wall face's input face (``Patch.face_source``): a tunnel's, or a fill's (the inside of a loop that
 #: does not wind around the axis)
 WALL, WALL_FILL = -1, -2
 
 
-def build_walls(patch: Patch, rim, bit, step: float, inside) -> tuple:
-    """Add the holes' walls to the patch (module docstring); ``inside(point (3,)) -> bool`` says whether a
-    point is inside the input model. A rim that runs into an open boundary of the mesh is a chain, not
-    a loop: it gets no wall, and no loop is joined to another, or to the tip, across its heights (the
-    wall there would have no rim to end on). Returns (the number of wall faces, of such chains)."""
+def build_walls(patch: Patch, rim, bit, step: float, axial: float, winding) -> tuple:
+    """Add the holes' walls to the patch (module docstring): rings ``axial`` apart along the axis, columns
+    ``step`` around it; ``winding(point (3,)) -> float`` is the input model's winding number at a point.
+    A rim that runs into an open boundary of the mesh is a chain, not a loop: it gets no wall, and no
+    loop is joined to another, or to a pole, across its heights (the wall there would have no rim to end
+    on). Returns (the number of wall faces, of such chains, of the loops' and walls' edges left without
+    exactly two faces: ``_unclosed``)."""
     frame = Frame(bit)
-    loops, chains = _rim_loops(patch, rim, frame)
+    loops, chains, rim_pairs = _rim_loops(patch, rim, frame)
     before = len(patch.faces)
     around = sorted((loop for loop in loops if loop.winding != 0), key=lambda loop: float(loop.sigma.mean()))
-    for a, b in zip(around, around[1:] + [None]):      # None: the tip's pole
-        if a.winding != ENTRY:
-            continue
-        low, beyond = float(a.sigma.max()), frame.top if b is None else float(b.sigma.min())
-        if any(chain.max() > low and chain.min() < beyond for chain in chains):
-            continue                                    # a chain between: the wall would leave through it
-        if b is not None and b.winding != ENTRY:
-            tunnel(patch, frame, a, b, step, WALL)      # an entry, then an exit
-        elif inside(frame.axis_point(0.5 * (low + beyond))):
-            tunnel(patch, frame, a, b, step, WALL)      # a blind hole (or a surface facing the wrong way)
+    for a, b, facing in _tunnels(frame, around, winding):
+        low = frame.bottom if a is None else float(a.sigma.max())
+        beyond = frame.top if b is None else float(b.sigma.min())
+        if not any(chain.max() > low and chain.min() < beyond for chain in chains):
+            tunnel(patch, frame, a, b, step, axial, facing, WALL)
     fills = [loop for loop in loops if loop.winding == 0]
     for loop in fills:
         _fill(patch, frame, loop, step)
     if fills:
         _refine_fills(patch, frame, step)
-    return len(patch.faces) - before, len(chains)
+    walls = patch.row_point[patch.faces[before:]]
+    return len(walls), len(chains), _unclosed(walls, rim_pairs)
+
+
+def _tunnels(frame: Frame, around: list, winding) -> list:
+    """The tunnels (a, b, facing) that wall the loops ``around`` (winding loops, by height): a None for
+    the back's pole, b None for the tip's, ``facing`` whether its faces face the axis (module
+    docstring)."""
+    if not around:
+        return []
+    below = _winding_at(frame, winding, frame.bottom)
+    tunnels, still_open, at_tip = _matched(around, below)
+    if not still_open:
+        return tunnels
+    tip = _winding_at(frame, winding, frame.top)
+    if tip == at_tip:
+        return tunnels + [(a, None, facing) for a, facing in still_open if a is not None]
+    return _alternating(around, below, tip)
+
+
+def _matched(around: list, below: int) -> tuple:
+    """Each winding loop of ``around`` (by height) opens a level or closes the last one opened, from
+    ``below`` (the winding number at the back pole; levels it opens have no loop: None). Returns (the
+    tunnels (opening loop, closing loop, facing) of the closed levels, the levels (opening loop, facing)
+    still open at the top, the winding number there). A loop that winds more than once is left."""
+    levels = [(None, below > 0)] * abs(below)
+    tunnels, count = [], below
+    for loop in around:
+        if abs(loop.winding) != 1:
+            continue
+        after = count + loop.winding
+        if abs(after) > abs(count):
+            levels.append((loop, after > 0))
+        else:
+            opening, facing = levels.pop()
+            tunnels.append((opening, loop, facing))
+        count = after
+    return tunnels, levels, count
+
+
+def _alternating(around: list, below: int, tip: int) -> list:
+    """Where the winding numbers do not add up (a surface wound against its neighbours, an open mesh):
+    the stretches of the bit between loops of ``around``, inside and outside in turn from the one under
+    the lowest (inside where ``below``, at the back pole, is odd), each inside one a tunnel (facing the
+    axis as its lower loop's winding, or its upper's, says); the last to the tip's pole only where the
+    winding number there, ``tip``, is not 0, else that loop is left open (a hole in an open surface)."""
+    bounds = [None] + around + [None]
+    return [(a, b, a.winding > 0 if a is not None else b.winding < 0)
+            for i, (a, b) in enumerate(zip(bounds, bounds[1:]))
+            if (abs(below) + i) % 2 == 1 and not (a is None and b is None) and not (b is None and tip == 0)]
+
+
+def _winding_at(frame: Frame, winding, sigma: float) -> int:
+    """The input model's winding number (rounded) at a pole of the bit (σ its back's or its tip's): where
+    a wall would end (the axis between the loops may pass through surfaces whose rims do not wind
+    around it, a part of the mesh wholly inside the bit through others)."""
+    return int(round(winding(frame.axis_point(sigma))))
 
 
 def _rim_loops(patch: Patch, rim, frame: Frame) -> tuple:
-    """The loops of boundary edges between rim points (rows ``rim``), as ``Loop``s (point ids welded:
-    seams are one; ``rim.rim_loops``), and the heights σ (k,) of each chain that does not close."""
-    on_rim = np.zeros(patch.n_points, bool)
-    on_rim[patch.row_point[rim]] = True
-    rows, points, offsets, n_loops = rim_loops(patch.faces, patch.row_point, on_rim)
-    positions = patch.point_array()[points]
-    chains = [frame.coordinates(positions[i:j])[1] for i, j in zip(offsets[n_loops:-1], offsets[n_loops + 1:])]
-    return loops(frame, rows, points, positions, offsets[:n_loops + 1]), chains
+    """The loops of boundary edges between rim points (rows ``rim``), chained over their points (welded:
+    seams are one) as ``topology.directed_loops`` chains edges (``rim.rim_loop_edges``), as ``Loop``s;
+    the heights σ (k,) of each chain that does not close; the loops' edges as pairs of points (e, 2). A
+    chain is found as a loop too: its edges there and back (the chains' first edges first, so that each
+    comes round whole)."""
+    tails, heads, a, b, edges, offsets = rim_loop_edges(patch.faces, patch.row_point, rim, patch.n_points)
+    chains = []
+    if len(edges) < len(a):
+        left = np.ones(len(a), bool)
+        left[edges] = False
+        left = np.flatnonzero(left)
+        first = np.isin(a[left], b[left], invert=True)
+        left = np.concatenate([left[first], left[~first]])
+        there_and_back = np.concatenate([a[left], b[left]])
+        walked, ends = directed_loop_edges(there_and_back, np.concatenate([b[left], a[left]]))
+        chains = [frame.coordinates(patch.point_array()[there_and_back[walked[i:j]]])[1]
+                  for i, j in zip(ends[:-1], ends[1:])]
+    corners = a[edges]
+    return (loops(frame, tails[edges], corners, patch.point_array()[corners], offsets), chains,
+            np.column_stack([corners, b[edges]]))
+
+
+@kernel((I2, I2), cost=0.2)
+def _unclosed(walls, rim_pairs):
+    """The edges that do not have exactly two faces among the wall faces ``walls`` (W, 3) (points) and
+    the faces on the far side of the loops' rim edges ``rim_pairs`` (e, 2) (points; one each: a rim
+    edge is a boundary edge of the mesh): a loop without a wall, an edge two walls share."""
+    table = code_table(3 * walls.shape[0] + rim_pairs.shape[0])
+    counts = np.zeros(table.shape[0], np.int64)
+    for i in range(rim_pairs.shape[0]):
+        _count(table, counts, rim_pairs[i, 0], rim_pairs[i, 1])
+    for f in range(walls.shape[0]):
+        for k in range(3):
+            _count(table, counts, walls[f, k], walls[f, (k + 1) % 3])
+    out = 0
+    for at in range(table.shape[0]):
+        out += table[at] >= 0 and counts[at] != 2
+    return out
+
+
+@inlined
+def _count(table, counts, p, q):
+    """Count the edge between points p and q in ``table`` (a ``code_table``) and ``counts``. Its key is
+    its ``pair`` code with the lower id's multiplicative hash folded into the low half (a bijection:
+    the high half stays), so that the table's slots spread over the walls' consecutive point ids."""
+    code = pair(p, q)
+    code ^= (((code >> 32) * 0x9E3779B1) & LOW_BITS)
+    at = slot(table, code)
+    table[at] = code
+    counts[at] += 1
 
 
 def _loop_rows(patch: Patch, loop: Loop) -> np.ndarray:
@@ -127,8 +236,12 @@ def _fill(patch: Patch, frame: Frame, loop: Loop, step: float) -> None:
     triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
     x, y = frame.r * theta[triangles], sigma[triangles]
     turn = (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (y[:, 1] - y[:, 0]) * (x[:, 2] - x[:, 0])
-    # counter-clockwise in (r θ, σ) faces away from the axis (∂θ × ∂σ is the outward radial): reversed
-    triangles[turn > 0.0] = triangles[turn > 0.0][:, [0, 2, 1]]
+    # counter-clockwise in (r θ, σ) faces away from the axis (∂θ × ∂σ is the outward radial); the fill
+    # runs along its rim against the mesh's faces, so it winds against the loop: clockwise where the
+    # loop (in the faces' direction) is counter-clockwise, facing the axis (an outward-wound surface)
+    clockwise = _area(np.column_stack([frame.r * loop.unwrapped, loop.sigma])) >= 0.0
+    flip = turn > 0.0 if clockwise else turn < 0.0
+    triangles[flip] = triangles[flip][:, [0, 2, 1]]
     patch.add_faces(np.asarray(rows, np.int64)[triangles], WALL_FILL)
 
 
