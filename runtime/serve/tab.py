@@ -15,6 +15,7 @@ import traceback
 
 from ..errors import CgaskinError, LimitError
 from ..surgery.session import Surgery
+from ..surgery.session_drill import predicted_session_drill
 from ..view.model import rig_glb
 from . import protocol
 from .delta import Mirror, full_delta
@@ -109,6 +110,12 @@ class Tab:
         if have >= cap:
             raise LimitError(f"this tab's mesh holds {have} vertices, this server's limit is {cap}: undo, "
                              "or save the model and serve the saved file")
+        if isinstance(request, Drill):
+            new = predicted_session_drill(self.surgery, request.start, request.end, request.radius,
+                                          pose=self.pose(request.pose), wall=request.wall)
+            if new > self.limits.max_new_vertices:
+                raise LimitError(f"this drill would make up to {new} new vertices (predicted before it runs), "
+                                 f"this server's limit is {self.limits.max_new_vertices} an operation")
 
     # ---- helpers ------------------------------------------------------------------------------------
     def pose(self, spec):

@@ -39,6 +39,18 @@ def test_an_operation_starts_only_below_the_sessions_vertex_limit_and_over_it_ch
     assert _send(tab, id=3, op="undo")["ok"] and tab.surgery.n_vertices == rig.n_vertices   # undo is always granted
 
 
+def test_a_drill_predicted_over_the_operation_limit_is_refused_before_it_runs():
+    rig = cgaskin.capsule_arm(**ARM)
+    bit = {"op": "drill", "start": [1.0, 0, -1.0], "end": [1.0, 0, 1.0], "radius": 0.1}
+    granted = _send(Tab(rig), id=1, **bit)
+    assert granted["ok"], granted
+    made = granted["delta"]["n_vertices"] - rig.n_vertices
+    tab = Tab(rig, Limits(max_new_vertices=made - 1))      # (the prediction bounds what a drill makes)
+    refused = _send(tab, id=2, **bit)
+    assert refused["ok"] is False and refused["kind"] == "LimitError" and "new vertices" in refused["error"], refused
+    assert tab.surgery.n_operations == 0 and tab.surgery.n_vertices == rig.n_vertices
+
+
 def test_a_model_at_the_vertex_limit_and_limits_that_are_not_positive_integers_are_refused():
     rig = cgaskin.capsule_arm(**ARM)
     with pytest.raises(InvalidInputError, match="max_vertices"):
