@@ -108,7 +108,8 @@ def test_weight_repairs_warn_at_the_callers_line():
     with warnings.catch_warnings(record=True) as record:
         warnings.simplefilter("always")
         cgaskin.check_mesh(rig.vertices, rig.faces, rig.joints, rig.weights * 1.01)
-    assert _caller_lines(record) == {(__file__, UserWarning)}
+    assert _caller_lines(record) == {(__file__, cgaskin.ModelWarning)}       # (a UserWarning)
+    assert issubclass(cgaskin.ModelWarning, UserWarning)
 
 
 def test_tolerances_are_frozen_and_relative():
