@@ -119,11 +119,11 @@ def test_drill_names_its_radius(tmp_path, capsys, radius):
     assert not (tmp_path / "d.glb").exists()
 
 
-def test_the_readme_names_the_tear_attribute_as_files_hold_it():
+def test_the_formats_page_names_the_tear_attribute_as_files_hold_it():
     from pathlib import Path
     from cgaskin.surgery.tear import TEAR_LABEL
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    readme = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "formats.rst").read_text(encoding="utf-8")
     torn = cgaskin.tear(cgaskin.capsule_arm(), ([0.6, 0.05, 1.0], [0.6, 0.05, 0.0]),
                         ([1.2, 0.05, 1.0], [1.2, 0.05, 0.0]))
-    assert TEAR_LABEL in torn.attributes and f"`{TEAR_LABEL}`" in readme
+    assert TEAR_LABEL in torn.attributes and f"``{TEAR_LABEL}``" in readme
     assert "TEAR_LABEL" not in readme.replace("cgaskin.surgery.tear.TEAR_LABEL", "")

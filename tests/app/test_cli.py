@@ -158,21 +158,6 @@ def test_errors_are_messages_not_tracebacks(models_dir, tmp_path, capsys, argv, 
     assert not list(tmp_path.iterdir())                     # nothing half-written
 
 
-def test_readme_example_runs(models_dir, tmp_path, monkeypatch):
-    """The README's "Use it" block, as written (the model read from the models folder)."""
-    import re
-    from pathlib import Path
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    code = re.search(r"## Use it\n\n```python\n(.*?)```", readme, re.S).group(1)
-    assert 'cgaskin.load("Fox.glb")' in code
-    monkeypatch.chdir(tmp_path)
-    (tmp_path / "Fox.glb").symlink_to(models_dir / "Fox.glb")
-    namespace = {}
-    exec(compile(code, "README.md", "exec"), namespace)
-    assert (tmp_path / "fox_nod.glb").exists()
-    assert namespace["torn"].n_vertices > namespace["rig"].n_vertices
-
-
 def test_tear_takes_a_sequence_of_blade_positions(models_dir, tmp_path, capsys):
     """Issue 10, item 1: one progressive tear from the command line, by --stroke or a file, equal to
     the strokes made one after another from Python."""

@@ -1,4 +1,5 @@
-"""Kernel catalogues the codegen tests build: the README's example, as a user copies it."""
+"""Kernel catalogues the codegen tests build: the kernel compiler guide's example (docs/guide/kernel_compiler.rst), as a
+user copies it."""
 
 README_CATALOGUE = '''
 from cgaskin.codegen import cga, kernel
