@@ -331,16 +331,16 @@ def test_the_rims_are_chained_by_topologys_directed_loops(capsule, monkeypatch):
     """The walls chain the rims' edges into loops with topology's walk (``chained_edges``: the default
     choice of ``directed_loops``, the one way to chain directed edges into loops), not a copy of it;
     the loops a drill finds are ``directed_loops``' of its rims' edges."""
-    from cgaskin.surgery import topology
+    from cgaskin.surgery import loops
     from cgaskin.surgery.drill import rim, wall
-    assert not hasattr(rim, "rim_loops") and rim.chained_edges is topology.chained_edges
+    assert not hasattr(rim, "rim_loops") and rim.chained_edges is loops.chained_edges
     found = {}
     walls = wall._rim_loops
 
     def spy(patch, rim_rows, frame):
         tails, heads, a, b, edges, offsets = rim.rim_loop_edges(patch.faces, patch.row_point, rim_rows, patch.n_points)
         found["loops"] = [a[edges[i:j]].tolist() for i, j in zip(offsets[:-1], offsets[1:])]
-        found["directed"] = topology.directed_loops(a, b)
+        found["directed"] = loops.directed_loops(a, b)
         return walls(patch, rim_rows, frame)
     monkeypatch.setattr(wall, "_rim_loops", spy)
     result = cgaskin.drill_details(capsule, [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], 0.1)
@@ -349,7 +349,7 @@ def test_the_rims_are_chained_by_topologys_directed_loops(capsule, monkeypatch):
 
 
 def _directed_loops_before(start, end, choose=None) -> list:
-    """``topology.directed_loops`` as it was in Python before it walked in compiled code (the oracle)."""
+    """``loops.directed_loops`` as it was in Python before it walked in compiled code (the oracle)."""
     outgoing: dict = {}
     for i, s in enumerate(start.tolist()):
         outgoing.setdefault(s, []).append(i)
@@ -386,7 +386,7 @@ def test_directed_loops_chain_as_before(edges, salt, with_choose):
     """``directed_loops`` (now one compiled walk, which the drill's rims use too) gives the loops the
     Python version gave, for any directed edges (touching loops, chains, repeated edges, self-loops),
     with the default choice and with a caller's ``choose``, asked the same questions in the same order."""
-    from cgaskin.surgery.topology import directed_loops
+    from cgaskin.surgery.loops import directed_loops
     start = np.array([a for a, _ in edges], np.int64)
     end = np.array([b for _, b in edges], np.int64)
     asked = {True: [], False: []}

@@ -6,7 +6,8 @@ import numpy as np
 from ..._shared.jit import F2, I1, f8, helper, kernel
 from ...animation.rig import Rig
 from ...tolerances import tol
-from ..topology import Topology, directed_loops, topology
+from ..loops import directed_loops
+from ..topology import Topology, topology
 from .result import CAP_VERTEX
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from ..._shared.jit import F1, F2, I1, I2, f8, helper, i8, kernel
 from .bisection import EMPTY, code_table, pair, slot
 from .bit import crossing, put_on_edge, segment_distance, signed_distances
-from ..topology import chained_edges
+from ..loops import chained_edges
 from .patch import Patch, put_face, squared_distance
 
 OUTSIDE, ON, INSIDE = 1, 0, -1
@@ -178,8 +178,8 @@ def _outside_parts(rows, crossed, side, crossing_rows, points, row_point):
 @kernel((I2, I1, I1, i8), cost=0.6, fused=True)
 def rim_loop_edges(rows, row_point, rim, n_points):
     """The rims' boundary edges (``_rim_edges``: the rows of their tails (e,) and heads (e,), their
-    points (e,), (e,)) and their loops over the points as ``topology.directed_loops`` chains them
-    (``topology.chained_edges``: the loops' edges (k,) and offsets (l + 1,)), in one compiled call."""
+    points (e,), (e,)) and their loops over the points as ``loops.directed_loops`` chains them
+    (``loops.chained_edges``: the loops' edges (k,) and offsets (l + 1,)), in one compiled call."""
     tails, heads, a, b = _rim_edges(rows, row_point, rim, n_points)
     edges, offsets = chained_edges(a, b)
     return tails, heads, a, b, edges, offsets

@@ -2,7 +2,7 @@
 
 A point of the bit's surface is (θ, σ), its angle around the axis and its height along the profile
 (``bit_surface.Frame``). The rims (``rim.py``) are loops of the mesh's new boundary on that surface
-(``bit_surface.Loop``), chained as ``topology.directed_loops`` chains edges, where the mesh is closed
+(``bit_surface.Loop``), chained as ``loops.directed_loops`` chains edges, where the mesh is closed
 around the bit:
 
 * a loop that winds once around the axis is where a surface crosses it. The boundary of a surface
@@ -46,7 +46,7 @@ from ..._shared.jit import I2, inlined, kernel
 from ...errors import InternalError
 from ...tolerances import tol
 from ..cut.cap import _ear_clip
-from ..topology import directed_loop_edges
+from ..loops import directed_loop_edges
 from .bisection import code_table, pair, slot
 from .bit_surface import Frame, Loop, loops
 from .patch import LOW_BITS, Patch, edge_codes
@@ -142,7 +142,7 @@ def _winding_at(frame: Frame, winding, sigma: float) -> int:
 
 def _rim_loops(patch: Patch, rim, frame: Frame) -> tuple:
     """The loops of boundary edges between rim points (rows ``rim``), chained over their points (welded:
-    seams are one) as ``topology.directed_loops`` chains edges (``rim.rim_loop_edges``), as ``Loop``s;
+    seams are one) as ``loops.directed_loops`` chains edges (``rim.rim_loop_edges``), as ``Loop``s;
     the heights σ (k,) of each chain that does not close; the loops' edges as pairs of points (e, 2). A
     chain is found as a loop too: its edges there and back (the chains' first edges first, so that each
     comes round whole)."""
