@@ -160,19 +160,41 @@ def _find_pairs(pairs, a, b):
 class Topology:
     """Welded topology of a triangle mesh (see the module docstring for the vocabulary).
 
-    welded : (n,) int64, welded vertex of each vertex
-    representative : (w,) int64, the first vertex of each welded vertex
-    faces : (m, 3) int64, the faces over welded vertices (same order and corners as the mesh's)
-    vertex_edges : (u, 2) int64, vertex edges, lower vertex index first, ordered by it
-    face_vertex_edges : (m, 3) int64, vertex edge of each corner edge
-    vertex_edge_edge : (u,) int64, the (welded) edge of each vertex edge
-    edges : (e, 2) int64, welded edges, lower welded id first, ordered by it
-    face_edges : (m, 3) int64, edge of each corner edge
-    edge_face_offsets : (e + 1,) int64, CSR offsets: the faces of edge ``i`` are
-        ``edge_face_faces[edge_face_offsets[i]:edge_face_offsets[i + 1]]``
-    edge_face_faces : (3m,) int64, face of each incidence, increasing within an edge
-    edge_face_corners : (3m,) int8, corner k of each incidence (the face runs along the edge from its
-        corner k to corner k + 1, which gives the side: see ``edge_directions``)
+    Parameters
+    ----------
+    welded : (n,) int64
+        The welded vertex of each vertex.
+    representative : (w,) int64
+        The first vertex of each welded vertex.
+    faces : (m, 3) int64
+        The faces over welded vertices (same order and corners as the mesh's).
+    vertex_edges : (u, 2) int64
+        The vertex edges, lower vertex index first, ordered by it.
+    face_vertex_edges : (m, 3) int64
+        The vertex edge of each corner edge.
+    vertex_edge_edge : (u,) int64
+        The (welded) edge of each vertex edge.
+    edges : (e, 2) int64
+        The welded edges, lower welded id first, ordered by it.
+    face_edges : (m, 3) int64
+        The edge of each corner edge.
+    edge_face_offsets : (e + 1,) int64
+        CSR offsets: the faces of edge ``i`` are
+        ``edge_face_faces[edge_face_offsets[i]:edge_face_offsets[i + 1]]``.
+    edge_face_faces : (3m,) int64
+        The face of each incidence, increasing within an edge.
+    edge_face_corners : (3m,) int8
+        The corner k of each incidence: the face runs along the edge from its corner k to corner
+        k + 1, which gives the side (see ``edge_directions``).
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> topo = cgaskin.rig_topology(arm)
+    >>> arm.n_vertices, topo.n_welded, topo.n_edges, topo.faces.shape
+    (690, 690, 2064, (1376, 3))
+    >>> len(topo.boundary_edges), int(topo.edge_face_counts.max())     # closed: two faces an edge
+    (0, 2)
     """
 
     welded: np.ndarray
@@ -211,17 +233,45 @@ class Topology:
         return np.flatnonzero(self.edge_face_counts > 2)
 
     def edge_faces(self, edge: int) -> np.ndarray:
-        """Faces (k,) int64 on ``edge``."""
+        """The faces on one edge.
+
+        Parameters
+        ----------
+        edge : int
+            An edge id, in [0, e).
+
+        Returns
+        -------
+        (k,) int64
+            The faces with that edge, increasing (a view of ``edge_face_faces``).
+        """
         return self.edge_face_faces[self.edge_face_offsets[edge]:self.edge_face_offsets[edge + 1]]
 
     def edge_directions(self) -> np.ndarray:
-        """(3m,) bool, per incidence of ``edge_face_faces``: True when the face runs along its edge
-        from ``edges[e, 0]`` to ``edges[e, 1]``. A consistently oriented manifold edge has one of each."""
+        """The direction each face runs along each of its edges.
+
+        Returns
+        -------
+        (3m,) bool
+            Per incidence of ``edge_face_faces``: True when the face runs along its edge from
+            ``edges[e, 0]`` to ``edges[e, 1]``. A consistently oriented manifold edge has one of each.
+        """
         f, k = self.edge_face_faces, self.edge_face_corners.astype(np.int64)
         return self.faces[f, k] < self.faces[f, (k + 1) % 3]
 
     def find_edges(self, a, b) -> np.ndarray:
-        """Edge id of each welded pair {a[i], b[i]} (arrays (k,) int), -1 where there is none."""
+        """The edges joining pairs of welded vertices.
+
+        Parameters
+        ----------
+        a, b : (k,) int
+            The welded vertices of each pair {a[i], b[i]}, in either order.
+
+        Returns
+        -------
+        (k,) int64
+            The edge id of each pair, -1 where no edge joins them.
+        """
         a = np.ascontiguousarray(a, dtype=np.int64).reshape(-1)
         b = np.ascontiguousarray(b, dtype=np.int64).reshape(-1)
         if len(a) == 0:
@@ -229,12 +279,17 @@ class Topology:
         return _find_pairs(self.edges, a, b)
 
     def boundary_loops(self) -> list:
-        """Closed boundary loops, as lists of welded vertex ids in the direction their faces run along
-        them (counter-clockwise around the hole when seen from the side the normals point to).
+        """The closed loops of the mesh's boundary edges (one face).
 
         Only chains that close are returned (an open chain is impossible on a boundary of a manifold
         surface, but a non-manifold vertex can make one). Where a welded vertex starts two boundary
         edges (two holes touching at a vertex), the loops are split there arbitrarily.
+
+        Returns
+        -------
+        list of list of int
+            Each loop's welded vertex ids, in the direction its faces run along it (counter-clockwise
+            around the hole when seen from the side the normals point to); empty for a closed mesh.
         """
         be = self.boundary_edges
         if len(be) == 0:
@@ -306,8 +361,28 @@ def _build_topology(rig) -> Topology:
 
 
 def rig_topology(rig) -> Topology:
-    """The welded topology of ``rig``'s mesh (``topology(rig.vertices, rig.faces)``), built on first use
-    and cached while the rig lives (``cgaskin._shared.cache.rig_cached``)."""
+    """The welded topology of a rig's mesh, built on first use and cached while the rig lives.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model (immutable by convention: see ``clear_topology_cache``).
+
+    Returns
+    -------
+    Topology
+        ``topology(rig.vertices, rig.faces)``, the same object on every call for the same rig
+        (``cgaskin._shared.cache.rig_cached``).
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> topo = cgaskin.rig_topology(arm)
+    >>> topo is cgaskin.rig_topology(arm), topo.n_edges
+    (True, 2064)
+    >>> topo.find_edges([0, 0], [1, 600])                   # the edge joining each pair, -1: none
+    array([ 1, -1])
+    """
     return rig_cached(rig, "topology", _build_topology)
 
 

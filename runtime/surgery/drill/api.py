@@ -70,7 +70,47 @@ FLOAT32_ROUNDING = float(np.finfo(np.float32).eps)
 
 
 def drill_details(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> DrillResult:
-    """``drill`` with its bookkeeping (``DrillResult``); same arguments as ``drill``."""
+    """``drill`` with its bookkeeping: which input vertex each output vertex comes from, the new
+    vertices, the faces replaced and made, the walls, the bit and the tolerance.
+
+    Parameters
+    ----------
+    rig : Rig
+        The model to drill.
+    start, end : (3,) float
+        The bit's travel, as ``drill``'s.
+    radius : float
+        The bit's radius, positive (at least ``smallest_radius(rig)``).
+    pose : Pose, optional
+        Drill the mesh as skinned in this pose (as ``drill``).
+    wall : bool, optional
+        Line the hole with a wall where the bit passes inside the model (as ``drill``).
+
+    Returns
+    -------
+    DrillResult
+        The drilled rig and the bookkeeping.
+
+    Raises
+    ------
+    InvalidInputError
+        As ``drill``.
+    MissesMeshError
+        The bit does not reach into the mesh.
+
+    Warns
+    -----
+    OpenRimWarning
+        As ``drill``.
+
+    Examples
+    --------
+    >>> result = cgaskin.drill_details(cgaskin.capsule_arm(), [1, 0, -1], [1, 0, 1], 0.1)
+    >>> result.rig.n_faces, result.wall_faces, len(result.rim)
+    (2204, 332, 176)
+    >>> int((result.made_in == -1).sum())                  # the walls' faces lie in no input face
+    332
+    """
     the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
     affines, positions, box, diagonal = drilled_space(rig, pose)
     faces = mesh_arrays(rig).faces
@@ -249,13 +289,16 @@ def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
     Parameters
     ----------
     rig : Rig
-    start, end : (3,) float, the bit's travel (in the space drilled: rest, or posed in ``pose``); the
-        bit takes away what lies within ``radius`` of the segment (a round tip at ``end``)
-    radius : float > 0
-    pose : Pose or None
+        The model to drill.
+    start, end : (3,) float
+        The bit's travel (in the space drilled: rest, or posed in ``pose``); the bit takes away what
+        lies within ``radius`` of the segment (a round tip at ``end``).
+    radius : float
+        The bit's radius, positive and finite, at least ``smallest_radius(rig)``.
+    pose : Pose, optional
         Drill the mesh as skinned in this pose; the new vertices are placed in rest space so that the
         result skinned in ``pose`` has them where the bit made them.
-    wall : bool
+    wall : bool, optional
         Line the hole with a wall on the bit's surface where the bit passes inside the model (from
         entry to exit, or to a blind hole's round bottom; a rim that does not go around the bit, where
         it grazes the model's side, is filled along the bit), so that a closed model stays closed; with
@@ -264,22 +307,36 @@ def drill(rig: Rig, start, end, radius, pose=None, wall: bool = True) -> Rig:
 
     Returns
     -------
-    Rig : the drilled rig (same skeleton and clips; new vertices after the input vertices it keeps).
+    Rig
+        The drilled rig (same skeleton and clips; new vertices after the input vertices it keeps).
 
     Raises
     ------
-    InvalidInputError : a radius that is not positive and finite, or below ``smallest_radius(rig)``
+    InvalidInputError
+        A radius that is not positive and finite, or below ``smallest_radius(rig)``
         (``SMALLEST_RADIUS_ROUNDINGS`` = 64 float32 roundings of the model's diagonal, about 7.6e-6 of
         it; named in the message); start equal to end, non-finite or misshapen points, a pose of another
         skeleton, an invalid rig; a drill that ``predicted_new_vertices`` (an upper bound) says may make
         more than ``MAX_NEW_VERTICES`` (1,000,000) new vertices, before any work; a bit that takes away
         the whole mesh.
-    MissesMeshError : the bit does not reach into the mesh.
+    MissesMeshError
+        The bit does not reach into the mesh.
 
     Warns
     -----
-    OpenRimWarning : ``wall=True`` and a rim runs into an open boundary of the mesh (no wall there), or
-        the walls leave edges without exactly two faces (shells that intersect each other: counted).
+    OpenRimWarning
+        ``wall=True`` and a rim runs into an open boundary of the mesh (no wall there), or the walls
+        leave edges without exactly two faces (shells that intersect each other: counted).
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> holed = cgaskin.drill(arm, [1, 0, -1], [1, 0, 1], 0.1)   # through the arm, walled
+    >>> arm.n_faces, holed.n_faces
+    (1376, 2204)
+    >>> open_hole = cgaskin.drill(arm, [1, 0, -1], [1, 0, 1], 0.1, wall=False)
+    >>> len(cgaskin.rig_topology(open_hole).boundary_loops())  # its two rims
+    2
     """
     return drill_details(rig, start, end, radius, pose, wall).rig
 
