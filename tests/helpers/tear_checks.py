@@ -9,7 +9,8 @@ Invariants of a stroke (``check_stroke``):
 * weights are finite, >= 0, at most 4 per vertex, summing to 1; no non-manifold edge appears;
 * the torn rig skins, animates, dilates and exports like the original.
 When the tear reports that the plane's section does not lead from S_i to S_{i+1}, an independent
-check (connected pieces of the section, by brute force over all faces) must agree.
+check (connected pieces of the section within the swept region and short of the far side beyond the
+blade's tip, by brute force over all faces) must agree.
 """
 from __future__ import annotations
 
@@ -214,11 +215,41 @@ def check_like_original(rig, torn, pose, tmp_path=None):
         np.testing.assert_allclose(back.weights, torn.weights, atol=1e-6)
 
 
+def _beyond_the_tips(rig, topo, points, d, plane, blades, diag) -> np.ndarray:
+    """(m,) bool: the faces whose piece of the plane's section crosses the line of a blade beyond its tip
+    (blades that lie in the plane), in the plane: where the blade never reached (the far side of a limb)."""
+    n = plane[:3]
+    faces = topo.welded[np.asarray(rig.faces)]
+    cut = np.zeros(len(faces), bool)
+    for handle, tip in np.asarray(blades, np.float64):
+        if max(abs(handle @ n - plane[3]), abs(tip @ n - plane[3])) > SNAP_TOLERANCE * diag:
+            continue
+        u = unit(tip - handle)
+        v = np.cross(n, u)
+        ends = []                               # the two points where the section crosses each face
+        for k in range(3):
+            a, b = faces[:, k], faces[:, (k + 1) % 3]
+            t = d[a] / np.where(d[a] == d[b], 1.0, d[a] - d[b])
+            ends.append(((np.sign(d[a]) * np.sign(d[b]) < 0), points[a] + t[:, None] * (points[b] - points[a])))
+        crossed = np.stack([e[0] for e in ends], axis=1)                   # (m, 3)
+        both = crossed.sum(axis=1) == 2
+        first = np.argmax(crossed, axis=1)
+        second = 2 - np.argmax(crossed[:, ::-1], axis=1)
+        p = np.stack([e[1] for e in ends], axis=1)[np.arange(len(faces)), first]
+        q = np.stack([e[1] for e in ends], axis=1)[np.arange(len(faces)), second]
+        pu, pv, qu, qv = (p - tip) @ u, (p - tip) @ v, (q - tip) @ u, (q - tip) @ v
+        across = both & ((pv < 0) != (qv < 0))
+        at = pu + (qu - pu) * pv / np.where(pv == qv, 1.0, pv - qv)
+        cut |= across & (at > SNAP_TOLERANCE * diag)
+    return cut
+
+
 def section_separates(rig, result_plane, hits, pose, within=None):
     """Brute force: do the two hit faces lie on different connected pieces of the plane's section?
     (faces crossed by the plane, joined across crossed edges with two faces, where the crossing lies
-    within ``within`` = (blades, margin) of the blades' hull when given). None when a vertex lies on
-    the plane (the simple sign test does not decide then)."""
+    within ``within`` = (blades, margin) of the blades' hull when given, through faces whose piece of the
+    section does not cross the line of a blade beyond its tip: the far side, which the blade never
+    reached). None when a vertex lies on the plane (the simple sign test does not decide then)."""
     topo = tear_topology(rig)
     points = surface(rig, pose)[topo.representative]
     d = points @ result_plane[:3] - result_plane[3]
@@ -226,6 +257,8 @@ def section_separates(rig, result_plane, hits, pose, within=None):
         return None
     sign = np.sign(d)
     parent = np.arange(rig.n_faces)
+    beyond = (np.zeros(rig.n_faces, bool) if within is None else
+              _beyond_the_tips(rig, topo, points, d, result_plane, within[0], diagonal(points)))
 
     def find(i):
         while parent[i] != i:
@@ -240,7 +273,7 @@ def section_separates(rig, result_plane, hits, pose, within=None):
             da, db = d[topo.edges[e]]
             if hull_distance(a + da / (da - db) * (b - a), within[0]) > within[1]:
                 continue
-        if len(faces) == 2:
+        if len(faces) == 2 and not beyond[faces].any():
             parent[find(faces[0])] = find(faces[1])
     bvh = TriangleBVH(surface(rig, pose), rig.faces)
     f0, _ = bvh.first_hit(*hits[0])

@@ -7,6 +7,15 @@ longest edge of the two faces the blade hit: the surface between two nearby hits
 hull by about a face where the mesh is coarse or curved, never by more than the stroke itself -- a
 path that goes further is a detour round an obstacle (an existing slit, a fold), which the blade
 never touched.
+
+Where the stroke is long or the mesh coarse next to a thin part (a limb whose radius is about the
+margin), the whole section may lie within the margin: where an existing opening stops the near way
+(a slit the path cannot cross there), the way round the far side of the limb would pass. So such a
+path also may not go beyond the blade's reach (``_beyond_the_blade``): in the tear plane, it may not
+cross the line of the blade beyond its tip, as the way round the far side does, coming back under the
+tip, where the blade never was. (Only there: a tilted blade's line beyond its tip can come out through
+the skin the stroke tears, on a bent or thin part, and a blade that passes right through a limb
+reaches its far side.)
 """
 import math
 
@@ -14,6 +23,7 @@ import numpy as np
 
 from ..._shared.jit import helper
 from ...algebra.vec3 import _distance
+from .records import POINT
 
 
 # 3-vectors as tuples of floats here: numba keeps them in registers, where a (3,) array would be a
@@ -115,3 +125,41 @@ def _margin(wpos, wfaces, hit_faces, s_pos, t_pos):
         for k in range(3):
             longest = max(longest, _distance(wpos[wfaces[f, k]], wpos[wfaces[f, (k + 1) % 3]]))
     return _distance(s_pos, t_pos) + longest
+
+
+
+@helper
+def _crosses_ray(points, chain, origin, direction, normal, snap):
+    """Whether the polyline ``points[chain]`` (rows of x, y, z from column ``POINT``: the walk's nodes)
+    crosses the ray from ``origin`` along the unit ``direction`` (tuples), both in the plane of unit
+    ``normal``, further than ``snap`` from the origin (a vertex on the ray counts on its positive side:
+    the half-open rule, so that a path through a point of the ray counts once)."""
+    side = _tcross(normal, direction)
+    prev_u, prev_v = 0.0, 0.0
+    for r in range(chain.shape[0]):
+        q = chain[r]
+        d = (points[q, POINT] - origin[0], points[q, POINT + 1] - origin[1], points[q, POINT + 2] - origin[2])
+        u, v = _tdot(d, direction), _tdot(d, side)
+        if r > 0 and (prev_v < 0.0) != (v < 0.0):
+            if prev_u + (u - prev_u) * prev_v / (prev_v - v) > snap:
+                return True
+        prev_u, prev_v = u, v
+    return False
+
+
+@helper
+def _beyond_the_blade(points, chain, plane, region, snap):
+    """Whether the path ``points[chain]`` (the walk's node floats: x, y, z from column ``POINT``) passes
+    beyond the reach of the blade: in the tear ``plane`` (4,), across the line of a blade position of
+    ``region`` (a0, b0, a1, b1) beyond its tip (a blade that lies in the plane, within ``snap`` of it)."""
+    normal = _t(plane)
+    for end in range(2):
+        handle, tip = _t(region[2 * end]), _t(region[2 * end + 1])
+        if not (abs(_tdot(normal, handle) - plane[3]) <= snap and abs(_tdot(normal, tip) - plane[3]) <= snap):
+            continue
+        blade = _tsub(tip, handle)
+        length = math.sqrt(_tdot(blade, blade))
+        direction = (blade[0] / length, blade[1] / length, blade[2] / length)
+        if _crosses_ray(points, chain, tip, direction, normal, snap):
+            return True
+    return False

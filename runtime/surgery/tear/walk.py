@@ -11,7 +11,7 @@ from .flat import _across_flat, _flat, _line_plane, _line_side
 from .junctions import _boundary_vertex, _jumps, _openings
 from .records import (CARRIER, CARRIER_KIND, EDGE, EDGE_CARRIER, EDGE_T, FACE, FACE_CARRIER, ID, JUMP_CARRIER,
                       KIND, LENGTH, NO_CARRIER, PARENT, POINT, VERTEX, NodeTable, Reach, Target)
-from .region import _margin
+from .region import _beyond_the_blade, _margin
 
 
 @callee((WELDED_MESH, S1, F1, record(i8, i8, F1), record(i8, i8, F1), BVH_ARRAYS, record(F1, F1, F1, F1), I1, f8),
@@ -34,10 +34,11 @@ def _walk_within(mesh, cls, plane, start, target, bvh, region, hit_faces, snap, 
     advancing the shortest one, so the first front to pop the target is the shorter way round.
     Each face (and each in-plane edge) is crossed at most once, which bounds the search by the face
     count and keeps fronts from looping. A front dies where it leaves the swept region (``region``,
-    ``margin``: see region.py). A front that reaches the surface's boundary (an existing slit, a hole,
-    a border) may jump through the opening to a boundary point across it on the plane in the region
-    (``_jump``): the new slit then crosses the old one (an X junction), or ends on it (a T junction)
-    when the target is there.
+    ``margin``: see region.py); where an opening stopped a front, a path that goes beyond the blade's
+    tip (round the far side of a limb, which the margin may hold) is none. A front that reaches the
+    surface's boundary (an existing slit, a hole, a border) may jump through the opening to a boundary
+    point across it on the plane in the region (``_jump``): the new slit then crosses the old one (an X
+    junction), or ends on it (a T junction) when the target is there.
 
     mesh : WeldedMesh (as a tuple) ; cls : (w,) int8 sides of the welded vertices ; plane : (4,)
     bvh : BVHArrays (as a tuple) of the surface ; region : the blade at both times, (a0, b0, a1, b1)
@@ -72,6 +73,7 @@ def _walk_within(mesh, cls, plane, start, target, bvh, region, hit_faces, snap, 
     openings = np.empty((0, 2), np.int64)   # boundary points on the plane, found when first needed
     jumped = np.empty(0, np.bool_)
     looked = False
+    blocked = False                         # a front met an opening it could not cross
 
     ni, nf = table.ints, table.floats
     ni[0, KIND], ni[0, ID], ni[0, PARENT], ni[0, CARRIER_KIND], ni[0, CARRIER] = s_kind, s_id, -1, NO_CARRIER, -1
@@ -193,7 +195,9 @@ def _walk_within(mesh, cls, plane, start, target, bvh, region, hit_faces, snap, 
                 openings = _openings(cls, edges, ef_offsets, plane, wpos, region, margin)
                 jumped = np.zeros(openings.shape[0], np.bool_)
             table, fronts = _room(table, fronts, n, openings.shape[0])   # a jump per opening
+            pushed = n
             n = _jumps(node, table, n, openings, jumped, bvh, mesh, cls, plane, goal, reach, snap)
+            blocked = blocked or n == pushed
         for q in range(before, n):
             n_open = _push_front(fronts, n_open, q, table.floats)
 
@@ -212,6 +216,9 @@ def _walk_within(mesh, cls, plane, start, target, bvh, region, hit_faces, snap, 
     for r in range(length - 1, -1, -1):
         chain[r] = q
         q = ni[q, PARENT]
+    if blocked and _beyond_the_blade(nf, chain, plane, region, snap):
+        # round the far side, where an opening blocked the near way (region.py)
+        return False, np.empty((0, 4), np.int64), np.empty((0, 4))
     first, last = 0, length - 1
     while last > 0 and ni[chain[last], CARRIER_KIND] == JUMP_CARRIER:
         last -= 1
