@@ -61,8 +61,11 @@ class Tolerances:
     #: cut: a vertex within this times the diagonal of the plane is on it (it goes to both halves)
     on_plane: float = 1e-10
     #: tear: a vertex within this times the diagonal of the tear plane is on it (the path goes
-    #: through it), and a scalpel hit this close to a vertex (or to a plane/edge crossing) is that one
-    snap: float = 1e-10
+    #: through it), and a scalpel hit this close to a vertex (or to a plane/edge crossing) is that one.
+    #: As large as the rounding of float32 data: a vertex stored on a symmetry plane lies 2e-9 of the
+    #: diagonal off it once skinned through float32 bind matrices (Fox in its rest pose), and a plane
+    #: passing that close beside a vertex would cut pieces of near-zero area around it
+    snap: float = 1e-8
     #: posed cut/tear: a new vertex whose skinned rest position misses its posed target by more than
     #: this times the diagonal is reported (its blended transform is singular or nearly so)
     placement: float = 1e-9

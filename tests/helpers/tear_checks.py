@@ -2,8 +2,9 @@
 independent checks of a stroke's result.
 
 Invariants of a stroke (``check_stroke``):
-* every path vertex lies on the tear plane (1e-9 of the bounding-box diagonal), in the space torn
-  (rest, or skinned in the pose);
+* every path vertex lies on the tear plane (1e-9 of the bounding-box diagonal; a vertex of the mesh
+  within the snap distance, ``tol.snap``: the plane goes through it), in the space torn (rest, or
+  skinned in the pose);
 * the welded boundary that the tear adds is exactly the path, once per side;
 * with opening 0 the area is unchanged (relative 1e-9) and the original vertices keep their rows;
 * weights are finite, >= 0, at most 4 per vertex, summing to 1; no non-manifold edge appears;
@@ -152,8 +153,11 @@ def check_stroke(rig, result, pose, opening=0.0):
     path = np.concatenate([result.side_a, result.side_b])
     k = len(result.points)
 
-    # path vertices on the plane; the original vertices untouched (opening 0)
-    distance = after[path] @ plane[:3] - plane[3]
+    # path vertices on the plane (a vertex of the mesh within the snap distance: the plane goes through
+    # it); the original vertices untouched (opening 0)
+    kinds = np.concatenate([result.kinds, result.kinds])
+    scale = np.where(kinds == 0, max(SNAP_TOLERANCE, PLANE_TOL) / PLANE_TOL, 1.0)    # (distances in PLANE_TOL)
+    distance = (after[path] @ plane[:3] - plane[3]) / scale
     if opening == 0:
         assert np.abs(distance).max() <= PLANE_TOL * diag
         np.testing.assert_allclose(after[result.side_a], result.points, rtol=0, atol=PLANE_TOL * diag)

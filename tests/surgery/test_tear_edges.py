@@ -1,9 +1,10 @@
 """The tear at its edges (issue 43, part C): a stroke across an opened slit stays on the side the
-blade swept (item 9).
+blade swept (item 9), and a tear plane along mesh edges makes no repeated path point and no face of
+near-zero area (item 11).
 
 Oracles: the blade's own geometry (the capsule's far side lies beyond the blade's tips, below its
 axis), the hull of the blade positions widened by the stroke's margin (``tests.helpers.swept_region``),
-and the number of connected pieces of the welded mesh.
+the number of connected pieces of the welded mesh, and face areas computed with numpy.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 import cgaskin
 from cgaskin import TearPathError, capsule_arm, tear_stroke
 
+from tests.helpers import grid_meshes
 from tests.helpers.swept_region import hull_distance, margin
 from tests.helpers.tear_checks import pieces
 
@@ -91,3 +93,87 @@ def test_random_strokes_across_opened_slits_stay_on_the_swept_side(y, x0, span, 
     except TearPathError:
         return
     check_on_the_swept_side(first.rig, across, *blades)
+
+
+# ---- item 11: a tear plane along mesh edges ---------------------------------------------------------------
+#: the README's Fox stroke
+FOX_FROM, FOX_TO = ([0, 120, 0], [0, 40, 0]), ([0, 120, 10], [0, 40, 10])
+
+
+def skinned_areas(rig, pose) -> np.ndarray:
+    points = cgaskin.skin(rig, pose) if pose is not None else np.asarray(rig.vertices, np.float64)
+    corners = points[np.asarray(rig.faces)]
+    return 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+
+
+def check_no_slivers(result, pose, diagonal):
+    """No path point repeats the previous one (closer than 1e-9 of the diagonal), and no face of the torn
+    rig has an area below 1e-12 of the diagonal squared (the issue's had 3e-18)."""
+    steps = np.linalg.norm(np.diff(result.points, axis=0), axis=1)
+    assert steps.min() > 1e-9 * diagonal, f"a path point repeats: steps {np.sort(steps)[:3] / diagonal} of D"
+    areas = skinned_areas(result.rig, pose)
+    assert areas.min() > 1e-12 * diagonal ** 2, f"a face of area {areas.min() / diagonal ** 2:.3g} D^2"
+
+
+@pytest.fixture(scope="module")
+def fox(models_dir):
+    return cgaskin.load(models_dir / "Fox.glb")
+
+
+@pytest.mark.parametrize("opening", [0.0, 0.5])
+def test_the_readme_fox_stroke_in_the_rest_pose_makes_no_sliver(fox, opening):
+    """Issue 43 item 11: torn with ``pose=fox.rest_pose()`` the README's stroke (along Fox's symmetry
+    plane, where a vertex lies 2e-9 of the diagonal off the plane once skinned) repeated one path point
+    three times: 1742 vertices instead of 1732, two faces of area 3e-18 D^2. It runs through that vertex,
+    as the stroke on the stored vertices does."""
+    pose = fox.rest_pose()
+    posed = tear_stroke(fox, FOX_FROM, FOX_TO, opening=opening, pose=pose)
+    stored = tear_stroke(fox, FOX_FROM, FOX_TO, opening=opening)
+    diagonal = float(np.linalg.norm(np.ptp(cgaskin.skin(fox, pose), axis=0)))
+    check_no_slivers(posed, pose, diagonal)
+    assert posed.rig.n_vertices == stored.rig.n_vertices == 1732
+    assert posed.kinds.tolist() == stored.kinds.tolist()
+
+
+def _noisy(rig, relative, seed):
+    """``rig`` with every vertex moved by up to ``relative`` of its diagonal (the rounding of float32 data
+    skinned through float32 matrices), each copy of a position alike."""
+    vertices = np.asarray(rig.vertices, np.float64)
+    diagonal = float(np.linalg.norm(np.ptp(vertices, axis=0)))
+    unique, inverse = np.unique(vertices, axis=0, return_inverse=True)
+    shift = np.random.default_rng(seed).uniform(-1.0, 1.0, unique.shape) * relative * diagonal
+    return rig._with_checked_mesh(vertices + shift[inverse.reshape(-1)], rig.faces, rig.joints, rig.weights,
+                                  dict(rig.attributes))
+
+
+_BOX = grid_meshes.voxel_rig(np.ones((4, 4, 2), bool))
+
+
+@settings(suppress_health_check=[HealthCheck.too_slow], deadline=None, max_examples=30)
+@given(along=st.sampled_from(["x", "diagonal"]), line=st.integers(1, 3), start=st.floats(0.0, 1.0),
+       end=st.floats(0.0, 1.0), noise=st.floats(1e-9, 9e-9), seed=st.integers(0, 2 ** 16),
+       opening=st.sampled_from([0.0, 0.05]))
+def test_tear_planes_along_grid_edges_with_rounded_vertices(along, line, start, end, noise, seed, opening):
+    """A stroke on top of a box of voxels (4 x 4 x 2) in a plane that holds rows of its edges (a grid line
+    y = line, or a diagonal of the top's squares x - y = line - 2), its vertices moved by float32-like
+    rounding (up to 9e-9 of the diagonal): the path runs through the rows' vertices as on the exact grid
+    (the same vertices made), no path point repeats and no face has near-zero area."""
+    offset = 0.0 if along == "x" else line - 2.0
+    lo, hi = max(0.1, 0.1 - offset), min(3.9, 3.9 - offset)      # the stretch of the line on the top
+    ends = []
+    for f in (start, end):
+        t = lo + f * (hi - lo)
+        ends.append(np.array([t, line, 2.0]) if along == "x" else np.array([t + offset, t, 2.0]))
+    if np.linalg.norm(ends[1] - ends[0]) < 0.2:
+        return
+    blades = [np.array([e + [0, 0, 3.0], e - [0, 0, 1.0]]) for e in ends]
+    try:
+        reference = tear_stroke(_BOX, *blades, opening=opening)
+    except TearPathError:
+        return
+    noisy = _noisy(_BOX, noise, seed)
+    result = tear_stroke(noisy, *blades, opening=opening)
+    diagonal = float(np.linalg.norm(np.ptp(np.asarray(noisy.vertices), axis=0)))
+    check_no_slivers(result, None, diagonal)
+    assert result.rig.n_vertices == reference.rig.n_vertices
+    assert result.kinds.tolist() == reference.kinds.tolist()
