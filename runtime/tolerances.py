@@ -27,6 +27,8 @@ class Tolerances:
         Posed cut/tear: a new vertex farther (times the diagonal) from its posed target is reported.
     on_edge : float
         Tear: a point whose smallest barycentric coordinate is at most this lies on an edge.
+    tip_reach : float
+        Tear: a blade this close (times the diagonal) to the last slit's tip continues that slit.
     min_sine : float
         Tear: three points below this sine are too close to one line to define a plane.
     collinear_sine : float
@@ -72,6 +74,10 @@ class Tolerances:
     #: tear: a point whose smallest barycentric coordinate in a triangle is at most this lies on the
     #: edge opposite that corner (splitting the triangle in three there would leave one of zero area)
     on_edge: float = 1e-9
+    #: tear: a blade at t_i that passes within this times the diagonal (or within the stroke's opening,
+    #: when wider) of the tip of the slit the last stroke made starts there: it continues that slit,
+    #: wherever the pose carried the tip since
+    tip_reach: float = 1e-3
     #: tear: below this sine, three points are too close to one line to define the tear plane
     min_sine: float = 1e-6
     #: caps: a corner of a loop turning by a sine below this is straight (no ear: collinear loop

@@ -49,9 +49,10 @@ from .session_drill import session_drill
 from .session_undo import History, SessionState, Undo
 from .session_write import _grown_box, _write_splice
 from .surface import TEAR_LABEL
-from .tear.rig_source import RigSource
+from .tear.rig_source import RigSource, slit_tip
 from .tear.splice import stroke_splice
-from .tear.stroke import StrokeResult, check_blades, check_ends, check_opening, check_path
+from .tear.stroke import StrokeResult, check_blade, check_blades, check_ends, check_opening, check_path
+from .tear.tip import TipLog, blade_through, tip_point
 
 __all__ = ["Surgery", "OperationCost"]
 
@@ -74,10 +75,11 @@ class Surgery:
     (default: the stored vertices); ``max_undo_bytes`` bounds the undo log (None: unbounded; past it
     the oldest operations can no longer be undone, ``undo_dropped`` counts them).
 
-    Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``cut(normal, point, pose=None,
-    cap=False)``, ``drill(start, end, radius, pose=None, wall=True)``, ``undo()``; ``rig`` the current
-    mesh as an immutable Rig; ``n_vertices``, ``n_faces``, ``n_operations``, ``pose``, ``last_cost`` (an
-    ``OperationCost``). The caller's rig is never modified.
+    Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``continue_slit(scalpel_to,
+    pose=None, opening=0.0)``, ``cut(normal, point, pose=None, cap=False)``, ``drill(start, end, radius,
+    pose=None, wall=True)``, ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``,
+    ``n_faces``, ``n_operations``, ``pose``, ``last_cost`` (an ``OperationCost``). The caller's rig is
+    never modified.
 
     What a stroke reads of the session (``vertices``, ``faces``, ``positions``, ``labels``,
     ``boundary``, ... : the source interface of ``tear/splice.py``) are views of its own buffers,
@@ -93,6 +95,7 @@ class Surgery:
     def __init__(self, rig, pose=None, max_undo_bytes: int | None = None):
         self._history = History(max_undo_bytes)
         self._last_cost = None
+        self._tips = TipLog(self._history)
         self._reset(rig)
         self._pose, self._affines = pose, None if pose is None else bone_affines_of(rig, pose)
 
@@ -127,6 +130,7 @@ class Surgery:
         self._attributes = {name: (Rows(values), tail) for name, (values, tail) in source.attributes.items()}
         self._faces, self._alive = Rows(source.faces), Rows(np.ones(len(source.faces), bool))
         self.top_label = source.top_label
+        self._tips.tip = source.tip                 # (a rig a stroke made knows its slit's tip)
         self._influences, self._scratch = SessionInfluences(self._bvh, rig.skeleton.n_bones), PosedScratch()
         self._used = self._pad = None               # (what a posed stroke needs: made by the first one)
         self._labelled = TEAR_LABEL in rig.attributes
@@ -154,6 +158,7 @@ class Surgery:
     faces = property(lambda self: self._faces.view)
 
     positions = vertices          # (the session's surface is its rest mesh; a posed stroke poses it)
+    tip = property(lambda self: self._tips.tip, doc="the vertex at the tip of the last slit (-1: none; tear/tip.py)")
 
     @property
     def attributes(self) -> dict:
@@ -175,16 +180,68 @@ class Surgery:
     def tear(self, scalpel_from, scalpel_to, pose=None, opening: float = 0.0) -> StrokeResult:
         """One scalpel stroke (as ``cgaskin.tear_stroke``: the same arguments but the rig, the same
         errors) in ``pose`` (None: the session's pose); the session keeps the torn mesh. A stroke in a
-        pose skins only the vertices its blade reaches. A stroke that raises changes nothing."""
+        pose skins only the vertices its blade reaches. A stroke that raises changes nothing. A blade at
+        t_i that passes near the tip of the last slit starts there (``tear/tip.py``: within the opening,
+        or a thousandth of the diagonal, of where the pose carried the tip): the stroke continues it."""
         with self._costed("tear"):
             blades = check_blades(scalpel_from, scalpel_to)
             opening = check_opening(opening)
             source = self if pose is None and self._pose is None else self._posed(pose)
             splice = stroke_splice(source, blades, opening, check_ends, check_path)
             self._history.append(self._apply(splice))
+            self._tips.operated(self.tip)
+            self._tips.tip = slit_tip(splice.stroke)
             self._labelled = self._labelled or bool(splice.stroke["split"].any())
             self._snapshot = None
         return StrokeResult(**splice.stroke)
+
+    def continue_slit(self, scalpel_to, pose=None, opening: float = 0.0) -> StrokeResult:
+        """Continue the last slit from its tip, wherever ``pose`` carried it, to where ``scalpel_to`` meets
+        the skin.
+
+        The stroke's blade at t_i is ``scalpel_to`` moved, without turning, to pass through the tip in the
+        stroke's pose (the page of ``cgaskin serve`` carries its previous hit with the skin the same way,
+        by barycentric coordinates): a drag across a playing model continues one slit.
+
+        Parameters
+        ----------
+        scalpel_to : (2, 3) float
+            The blade (handle a, tip b) at the end of the stroke, in the pose's space.
+        pose : Pose, optional
+            The pose of the stroke (None: the session's pose).
+        opening : float >= 0
+            As ``tear``.
+
+        Returns
+        -------
+        StrokeResult
+            As ``tear``; ``points[0]`` is the tip (``split[0]``: the slit goes on through it).
+
+        Raises
+        ------
+        InvalidInputError
+            No slit to continue (no stroke yet; the last one ended on an existing opening; a cut since),
+            a malformed ``scalpel_to``; and the errors of ``tear``.
+
+        Examples
+        --------
+        >>> import cgaskin
+        >>> rig = cgaskin.capsule_arm()
+        >>> surgery = cgaskin.Surgery(rig)
+        >>> blade = lambda x: ([x, 0.03, 1.0], [x, 0.03, 0.0])      # above the arm, down to its axis
+        >>> first = surgery.tear(blade(1.0), blade(1.1))
+        >>> strokes = [surgery.continue_slit(blade(x), pose=rig.pose("wave", t))   # while the arm waves
+        ...            for x, t in [(1.2, 0.02), (1.3, 0.04), (1.4, 0.06)]]
+        >>> [bool(stroke.split[0]) for stroke in strokes]             # each goes on from the last tip
+        [True, True, True]
+        """
+        if self.tip < 0:
+            raise InvalidInputError("no slit to continue: the session has no stroke whose slit ends inside the "
+                                    "surface (none yet, the last one ended on an existing opening, or a cut since)")
+        blade = check_blade(scalpel_to, "scalpel_to")
+        affines = self._affines if pose is None else bone_affines_of(self._template, pose)
+        point = tip_point(self.vertices, self.joints, self.weights, affines, self.tip)
+        return self.tear(blade_through(blade, point), blade, pose=pose, opening=opening)
 
     def cut(self, normal, point, pose=None, cap: bool = False) -> None:
         """Cut the whole mesh with the plane through ``point`` with normal ``normal`` (``cgaskin.cut``
@@ -194,9 +251,10 @@ class Surgery:
         with self._costed("cut"):
             positive, negative = cut_rig(self.rig, normal, point, pose=self._pose if pose is None else pose,
                                          cap=cap)
-            previous = self._state()
+            previous, tip = self._state(), self.tip
             self._reset(replace(_joined(positive, negative), name=self._template.name))
             self._history.append(Undo.of_state(previous))
+            self._tips.operated(tip)
 
     def drill(self, start, end, radius, pose=None, wall: bool = True):
         """Drill a hole (``cgaskin.drill`` in ``pose``, None: the session's pose; the same arguments but
@@ -210,6 +268,7 @@ class Surgery:
             posed = None if pose is None and self._pose is None else self._posed(pose)
             result, splice = session_drill(self, the_bit, wall, posed)
             self._history.append(self._apply(splice))
+            self._tips.operated(self.tip)             # (the rows stay: the slit's tip is where it was)
             self._snapshot = None
         return warned(result)
 
@@ -223,6 +282,7 @@ class Surgery:
                 self._revert(record)
             else:
                 self._restore(record.replaced)
+            self._tips.undone()
             self._snapshot = None
 
     @property
@@ -257,6 +317,7 @@ class Surgery:
                                            self.joints.copy(), self.weights.copy(), attributes)
             seed(rig, "tear.boundary", self.boundary.copy())
             seed(rig, "tear.top_label", self.top_label)
+            seed(rig, "tear.tip", self.tip)
             self._snapshot = rig
         return self._snapshot
 

@@ -232,3 +232,96 @@ def test_each_operation_reports_its_cost():
         assert session.last_cost.page_faults > 0
     session.undo()
     assert session.last_cost.operation == "undo"
+
+
+# ---- strokes on a playing model continue one slit (issue 43 item 10) --------------------------------------
+def _top(rig):
+    """The rows of ``rig``'s vertices on top of the capsule arm (largest z), and the vertices."""
+    vertices = np.asarray(rig.vertices)
+    return np.flatnonzero(vertices[:, 2] >= vertices[:, 2].max() - 1e-12), vertices
+
+
+def _blade_over(rig, pose, x):
+    """The issue's blade: vertical, 0.3 above and 0.05 below the skin point (lifted by 0.001) posed from
+    the rest vertex on top nearest x."""
+    rows, vertices = _top(rig)
+    row = rows[np.argmin(np.abs(vertices[rows, 0] - x))]
+    point = cgaskin.skin(rig, pose)[row] + [0.0, 0.0, 0.001]
+    return np.array([point + [0.0, 0.0, 0.3], point - [0.0, 0.0, 0.05]])
+
+
+_SMALL_ARM = cgaskin.capsule_arm(rings_per_segment=40, segments_around=32)
+
+
+def _slits(rig) -> int:
+    """The boundary loops of the rig's welded mesh: one per separate slit on a closed model."""
+    return len(tear_topology(rig).boundary_loops())
+
+
+@pytest.mark.parametrize("around, opening", [(64, 0.0), (64, 0.01), (512, 0.01)])
+def test_strokes_on_a_playing_model_continue_one_slit(around, opening):
+    """Issue 43 item 10: 16 strokes on ``capsule_arm(rings_per_segment=410, segments_around=around)``
+    playing its clip, stroke k at 0.05 + 0.01k from where the previous stroke's blade was (posed at the
+    previous time: the skin has moved since) to a blade over x = 0.2 + 0.005(k + 1): each continues the
+    slit from its tip (it started a slit of its own beside it, or fell through the opened gap), and the
+    functional chain (``cgaskin.tear_stroke`` on the rig each stroke returns) does the same."""
+    rig = cgaskin.capsule_arm(rings_per_segment=410, segments_around=around)
+    session, current = Surgery(rig), rig
+    scalpel_from = _blade_over(rig, rig.pose(0, 0.05), 0.2)
+    for k in range(16):
+        pose = rig.pose(0, 0.05 + 0.01 * k)
+        scalpel_to = _blade_over(rig, pose, 0.2 + 0.005 * (k + 1))
+        stroke = session.tear(scalpel_from, scalpel_to, pose=pose, opening=opening)
+        assert k == 0 or stroke.split[0], f"stroke {k} does not continue the slit"
+        if around == 64:
+            current = cgaskin.tear(current, scalpel_from, scalpel_to, pose=pose, opening=opening)
+        scalpel_from = scalpel_to
+    assert _slits(session.rig) == 1 and pieces(session.rig) == 1
+    if around == 64:
+        assert_same_mesh(session.rig, current, 1.0)
+
+
+@settings(max_examples=15, **SETTINGS)
+@given(times=st.lists(st.floats(0.0, 0.2), min_size=6, max_size=6), opening=st.sampled_from([0.0, 0.004]))
+def test_continue_slit_follows_the_tip_in_random_poses(times, opening):
+    """``Surgery.continue_slit`` in a random pose per stroke: each stroke starts at the tip of the slit
+    where that pose carries it (S_i is the tip's skinned position, split: the slit goes on) and the
+    strokes make one slit."""
+    rig = _SMALL_ARM
+    session = Surgery(rig)
+    session.tear(_blade_over(rig, rig.rest_pose(), 0.5), _blade_over(rig, rig.rest_pose(), 0.6), opening=opening)
+    for k, t in enumerate(times):
+        pose = rig.pose("wave", t)
+        tip = cgaskin.skin(session.rig, pose)[session.tip]
+        stroke = session.continue_slit(_blade_over(rig, pose, 0.7 + 0.1 * k), pose=pose, opening=opening)
+        np.testing.assert_allclose(stroke.points[0], tip, rtol=0, atol=1e-9)
+        assert stroke.split[0] and stroke.kinds[0] == 0
+    assert _slits(session.rig) == 1 and pieces(session.rig) == 1
+
+
+def test_continue_slit_after_undo_and_its_errors():
+    """Undo takes the tip back with the stroke; with no slit to continue -- none yet, the last stroke ended
+    on an existing slit (a T junction), a cut since -- continue_slit says so."""
+    rig = _SMALL_ARM
+    session = Surgery(rig)
+    with pytest.raises(InvalidInputError, match="no slit to continue"):
+        session.continue_slit(_blade_over(rig, None, 0.6))
+    first = session.tear(_blade_over(rig, None, 0.5), _blade_over(rig, None, 0.6))
+    second = session.continue_slit(_blade_over(rig, None, 0.7))
+    assert second.split[0] and np.array_equal(second.points[0], first.points[-1])
+    session.undo()
+    again = session.continue_slit(_blade_over(rig, None, 0.8))
+    np.testing.assert_array_equal(again.points[0], first.points[-1])
+    with pytest.raises(InvalidInputError, match="scalpel_to"):
+        session.continue_slit([[0.0, 0.0, 0.0]])
+    # a stroke that ends on the slit's side: no tip
+    side = session.rig.vertices[again.side_b[1]]
+    session.tear([[0.65, -0.15, 1.0], [0.65, -0.15, 0.0]], [[side[0], side[1], 1.0], [side[0], side[1], 0.0]])
+    with pytest.raises(InvalidInputError, match="no slit to continue"):
+        session.continue_slit(_blade_over(rig, None, 0.9))
+    session.undo()
+    session.cut([1.0, 0.0, 0.0], [2.5, 0.0, 0.0])
+    with pytest.raises(InvalidInputError, match="no slit to continue"):
+        session.continue_slit(_blade_over(rig, None, 0.9))
+    session.undo()
+    assert session.continue_slit(_blade_over(rig, None, 0.9)).split[0]

@@ -1,6 +1,7 @@
 """The tear at its edges (issue 43, part C): a stroke across an opened slit stays on the side the
-blade swept (item 9), and a tear plane along mesh edges makes no repeated path point and no face of
-near-zero area (item 11).
+blade swept (item 9), a blade near a slit's tip continues the slit wherever the pose carried the tip
+(item 10; the session's ``continue_slit`` in test_session.py), and a tear plane along mesh edges makes
+no repeated path point and no face of near-zero area (item 11).
 
 Oracles: the blade's own geometry (the capsule's far side lies beyond the blade's tips, below its
 axis), the hull of the blade positions widened by the stroke's margin (``tests.helpers.swept_region``),
@@ -14,6 +15,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 import cgaskin
 from cgaskin import TearPathError, capsule_arm, tear_stroke
+from cgaskin.surgery.tear import tear_topology
 
 from tests.helpers import grid_meshes
 from tests.helpers.swept_region import hull_distance, margin
@@ -177,3 +179,37 @@ def test_tear_planes_along_grid_edges_with_rounded_vertices(along, line, start, 
     check_no_slivers(result, None, diagonal)
     assert result.rig.n_vertices == reference.rig.n_vertices
     assert result.kinds.tolist() == reference.kinds.tolist()
+
+
+# ---- item 10: a stroke near the slit's tip continues the slit --------------------------------------------------
+_ARM = capsule_arm(rings_per_segment=40, segments_around=32)
+
+
+@settings(suppress_health_check=[HealthCheck.too_slow], deadline=None, max_examples=20)
+@given(t=st.floats(0.0, 0.3), angle=st.floats(0.0, 2 * np.pi), within=st.floats(0.0, 0.95),
+       opening=st.sampled_from([0.0, 0.002, 0.02]))
+def test_a_blade_within_reach_of_the_tip_continues_the_slit(t, angle, within, opening):
+    """A slit torn at rest, then a stroke in a pose of the clip whose blade at t_i passes within
+    max(opening, 1e-3 of the diagonal) of where that pose carries the slit's tip (in any direction across
+    the blade): the stroke starts at the tip and continues the slit (one slit, split there); a blade
+    twice that far starts a slit of its own."""
+    first = tear_stroke(_ARM, vertical(0.5, 0.03), vertical(0.6, 0.03), opening=opening)
+    pose = _ARM.pose("wave", t)
+    skinned = cgaskin.skin(first.rig, pose)
+    tip = skinned[first.side_a[-1]]
+    reach = max(opening, 1e-3 * float(np.linalg.norm(np.ptp(skinned, axis=0))))
+    aside = np.array([np.cos(angle), np.sin(angle), 0.0])
+    ahead = skinned[np.argmin(np.linalg.norm(skinned - (tip + [0.1, 0.0, 0.0]), axis=1))]
+    scalpel_to = np.array([ahead + [0, 0, 0.3], ahead - [0, 0, 0.05]])
+    near = tip + within * reach * aside
+    result = tear_stroke(first.rig, [near + [0, 0, 0.3], near - [0, 0, 0.05]], scalpel_to, pose=pose,
+                         opening=opening)
+    assert result.split[0] and np.array_equal(result.points[0], tip)
+    assert len(tear_topology(result.rig).boundary_loops()) == 1
+    far = tip + 2.0 * reach * aside
+    try:
+        apart = tear_stroke(first.rig, [far + [0, 0, 0.3], far - [0, 0, 0.05]], scalpel_to, pose=pose,
+                            opening=opening)
+    except (TearPathError, cgaskin.MissesMeshError):
+        return
+    assert not np.array_equal(apart.points[0], tip)

@@ -4,7 +4,8 @@ What a stroke needs of the whole rig is built once per rig (its arrays, tear lab
 the rest surface's BVH and its nodes' bone influences) and kept while the rig lives (``_shared.cache``);
 a stroke in a pose poses only what it reaches (``posed_source.PosedSource``), so nothing is built per
 pose. A torn rig gets its boundary flags and highest label from the stroke that made it, so that a
-chain of functional tears never rebuilds the whole welded topology.
+chain of functional tears never rebuilds the whole welded topology, and the tip of the slit it made
+(``tip.py``), which a stroke on it continues from.
 """
 from __future__ import annotations
 
@@ -50,6 +51,11 @@ def _top_label(rig) -> int:
     return max(0, int(labels.max())) if len(labels) else 0
 
 
+def _no_tip(rig) -> int:
+    """A rig that no stroke of this process made has no slit whose tip is known (``tip.py``)."""
+    return -1
+
+
 class _Rest:
     """The surface of a rig as stored: positions, bounding-box diagonal, and its BVH (built on first
     use: an editing session keeps a BVH of its own) with its nodes' bone influences."""
@@ -93,6 +99,7 @@ class RigSource:
             rig_cached(rig, "tear.arrays", _arrays)
         self.boundary = rig_cached(rig, "tear.boundary", _boundary_flags)
         self.top_label = rig_cached(rig, "tear.top_label", _top_label)
+        self.tip = rig_cached(rig, "tear.tip", _no_tip)
         rest = rig_cached(rig, "tear.rest", _Rest)
         self.positions, self.diagonal, self.affines, self.posing = rest.positions, rest.diagonal, None, NO_POSING
         self._rest, self._user_bvh, self._posed = rest, bvh, None
@@ -156,4 +163,12 @@ def torn_rig(rig, source: RigSource, splice):
     boundary[splice.boundary_rows] = splice.boundary_flags
     seed(torn, "tear.boundary", boundary)
     seed(torn, "tear.top_label", max(source.top_label, int(splice.labels.max(initial=0))))
+    seed(torn, "tear.tip", slit_tip(splice.stroke))
     return torn
+
+
+def slit_tip(stroke: dict) -> int:
+    """The tip of the slit a stroke made (its fields: ``StrokeResult``'s): the vertex of S_(i+1), which
+    stays single where the stroke ended inside the surface; -1 where it ended on an existing boundary
+    (it split there: the slit runs into an opening, no tip to continue from)."""
+    return -1 if stroke["split"][-1] else int(stroke["side_a"][-1])

@@ -11,6 +11,7 @@ session writes the rows into its arrays). A source is any object with:
     faces (m, 3) int64         rows that queries do not return may hold anything (removed faces)
     boundary (n,) bool         whether each vertex lies on a boundary edge of the label-aware weld
     top_label int ; diagonal float ; affines (B, 12) float64 or None (rest)
+    tip int                    the vertex at the tip of the slit the last stroke made (-1: none; ``tip.py``)
     bvh_arrays                 ``bvh.BVHArrays`` (as a tuple) of a BVH over positions and faces
     check_hits(faces)          raises when the BVH does not hold these faces' triangles (a user's BVH;
                                -1: no face)
@@ -38,6 +39,7 @@ from .records import (CARRIER_KIND, FROM_MISSES, ID, JUMP_CARRIER, KIND, MOVED_V
 from .retriangulate import _retriangulate
 from .settle import PATCH_ARRAYS, STROKE_SOURCE, _settle
 from .slit import _open_slit, _torn_faces
+from .tip import _onto_tip
 from .vertex_data import _vertex_data
 from .walk import _walk
 
@@ -86,7 +88,7 @@ def stroke_splice(source, blades, opening: float, check_ends, no_path) -> Splice
     """
     tolerances = Tolerances(tol.snap, tol.min_sine, tol.on_edge)
     status, hit_faces, located = _stroke(tuple(stroke_source(source)), blades, tuple(tolerances), opening,
-                                         source.posing)
+                                         source.posing, source.tip, max(opening, tol.tip_reach * source.diagonal))
     source.check_hits(hit_faces)
     if status != OK:
         name, i = ("scalpel_from", 0) if status == FROM_MISSES else ("scalpel_to", 2)
@@ -121,13 +123,15 @@ def stroke_source(source) -> StrokeSource:
                         posed, source.top_label, source.diagonal)
 
 
-@kernel((STROKE_SOURCE, F2, record(f8, f8, f8), f8, POSING), cost=13.0, fused=True)
-def _stroke(source, blades, tolerances, opening, posing):
+@kernel((STROKE_SOURCE, F2, record(f8, f8, f8), f8, POSING, i8, f8), cost=13.0, fused=True)
+def _stroke(source, blades, tolerances, opening, posing, tip, reach):
     """Steps 2-7 of one stroke on a source's arrays (``records.StrokeSource``; ``tolerances`` a
     ``records.Tolerances``, relative), compiled in one call: every step hands the next a dozen arrays,
     and from Python each returned array cost a boxing and each step a call (half a small mesh's
     stroke). ``posing`` (``posed_bounds.Posing``), when active, poses the parts of the rest tree and
-    mesh each query reaches first (the source's ``bvh`` is then the posed tree it fills).
+    mesh each query reaches first (the source's ``bvh`` is then the posed tree it fills). A blade at
+    t_i that passes within ``reach`` of vertex ``tip``, the tip of the slit the last stroke made (-1:
+    none), is moved onto it first (``tip.py``): the stroke continues that slit.
 
     returns the guess's status (``records.OK``, or which scalpel position missed) and hit faces (2,),
     then None when it missed, else (settled, the fields of ``Ends``, (found, the fields of ``Path``),
@@ -137,6 +141,7 @@ def _stroke(source, blades, tolerances, opening, posing):
     bvh, boundary, _, _, _, _, _, _, _, _, _, diagonal = source
     snap, min_sine, on_edge = tolerances
     snap = snap * diagonal
+    blades = _onto_tip(source, blades, tip, reach, snap)
     _pose_blades(bvh, posing, blades, 2.0 * snap)      # the guess's queries stay within snap of the blades
     status, plane, margin, hit_faces = _guess(bvh, boundary, blades, snap, min_sine)
     located = None

@@ -147,6 +147,11 @@ def _scalpel(value, name):
     return handle, tip
 
 
+def check_blade(value, name: str) -> np.ndarray:
+    """(2, 3) float64 handle and tip of one blade position, checked (``name`` the argument's)."""
+    return np.array(_scalpel(value, name))
+
+
 def check_opening(value) -> float:
     opening = real_number(value, "opening")
     if opening < 0:
