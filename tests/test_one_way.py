@@ -57,3 +57,13 @@ def test_one_pose_spec_class():
     assert found == {"cgaskin.serve.protocol.PoseSpec"}
     from cgaskin.batch.spec import PoseEntry
     assert PoseEntry.__name__ == "PoseEntry"
+
+
+def test_a_splice_is_written_from_records():
+    """``session_write._write_splice`` took 21 positional arguments; now the session's buffers and the
+    splice's rows, each a record (a plain tuple to the kernel), and it returns one."""
+    from cgaskin.surgery import session_write
+    assert list(inspect.signature(session_write._write_splice.py_func).parameters) == ["buffers", "n", "m", "splice"]
+    session = cgaskin.Surgery(cgaskin.capsule_arm())
+    session.tear(([0.6, 0.05, 1.0], [0.6, 0.05, 0.0]), ([1.2, 0.05, 1.0], [1.2, 0.05, 0.0]), opening=0.05)
+    assert session.rig.n_vertices > cgaskin.capsule_arm().n_vertices

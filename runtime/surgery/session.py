@@ -47,7 +47,7 @@ from .posed_source import PosedSource, SessionInfluences, bone_affines_of
 from .rows import Rows
 from .session_drill import session_drill
 from .session_undo import History, SessionState, Undo
-from .session_write import _grown_box, _write_splice
+from .session_write import SessionBuffers, _grown_box, write_splice
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource, slit_tip
 from .tear.splice import stroke_splice
@@ -56,7 +56,7 @@ from .tear.tip import TipLog, blade_through, tip_point
 
 __all__ = ["Surgery", "OperationCost"]
 
-#: the per-vertex buffers a stroke writes, in ``session_write._write_splice``'s order
+#: the per-vertex buffers a stroke writes, in ``session_write.SessionBuffers``' order
 _VERTEX_ARRAYS = ("vertices", "labels", "joints", "weights", "boundary")
 
 
@@ -358,11 +358,8 @@ class Surgery:
         buffers = [self._arrays[name] for name in _VERTEX_ARRAYS]
         # a stroke changes the labels (the far side) and positions (an opening) of a few of its patch's
         # rows; their weights and attributes stay: those are only appended
-        rows, old_vertices, old_labels, moved, old_positions, old_flags, old_kept, moved_faces, top = _write_splice(
-            *[buffer.reserve(added) for buffer in buffers], self._faces.reserve(k), self._alive.reserve(k), n, m,
-            splice.rows, splice.changed, splice.vertices, splice.labels, splice.joints, splice.weights,
-            splice.boundary_rows, splice.boundary_flags, splice.removed, splice.kept, splice.kept_corners,
-            splice.pieces)
+        written = write_splice(SessionBuffers(*[buffer.reserve(added) for buffer in buffers],
+                                              self._faces.reserve(k), self._alive.reserve(k)), n, m, splice)
         for buffer in buffers:
             buffer.n += added
         self._faces.n += k
@@ -371,13 +368,14 @@ class Surgery:
             buffer.append(splice.attributes[name][p:])
         # (a new row's bones are some of its sources': the bones in use, ``_used``, stay as they are)
         scalars = (self.top_label, self._labelled, self._bounds.copy())
-        self.top_label = max(self.top_label, top)
+        self.top_label = max(self.top_label, written.top)
         # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
-        self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, moved_faces, self.positions,
-                       self.faces, moved, n, self.n_vertices)
-        self._grow_bounds(moved, n, old_positions)
-        return Undo(n, m, rows, {"vertices": old_vertices, "labels": old_labels}, moved, splice.removed,
-                    splice.parents, splice.kept, old_kept, moved_faces, splice.boundary_rows, old_flags, scalars)
+        self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, written.moved_faces,
+                       self.positions, self.faces, written.moved, n, self.n_vertices)
+        self._grow_bounds(written.moved, n, written.old_positions)
+        return Undo(n, m, written.rows, {"vertices": written.old_vertices, "labels": written.old_labels},
+                    written.moved, splice.removed, splice.parents, splice.kept, written.old_kept, written.moved_faces,
+                    splice.boundary_rows, written.old_flags, scalars)
 
     def _grow_bounds(self, moved, first_new, old) -> None:
         """The bounding box of the surface after the rows ``moved`` changed position (from ``old``) and

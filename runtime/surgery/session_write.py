@@ -1,27 +1,82 @@
 """A stroke's splice written into an editing session's buffers, in one kernel (``session.py``): two
 dozen numpy operations on a few hundred rows cost a small stroke a fifth of its time; and the
 surface's bounding box grown by the rows it wrote."""
+from typing import NamedTuple
+
 import numpy as np
 
-from .._shared.jit import B1, F2, I1, I2, i8, kernel
+from .._shared.jit import B1, F2, I1, I2, i8, kernel, record
+
+__all__ = ["SessionBuffers", "SpliceRows", "Written", "write_splice"]
 
 
-@kernel((F2, I1, I2, F2, B1, I2, B1, i8, i8, I1, I1, F2, I1, I2, F2, I1, B1, I1, I1, I2, I2), cost=1.8)
-def _write_splice(vertices, labels, joints, weights, flags, faces, alive, n, m,
-                  patch_rows, changed, new_vertices, new_labels, new_joints, new_weights, boundary_rows, boundary_flags,
-                  removed, kept, kept_corners, pieces):
-    """Write a splice (``tear/splice.py``) into the session's buffers, which hold n vertices and m face
-    rows and have room for the rows appended here; returns what undo needs.
+class SessionBuffers(NamedTuple):
+    """A session's buffers, with room for the rows a splice appends: vertices (N, 3), labels (N,),
+    joints (N, 4), weights (N, 4), flags (N,) boundary flags ; faces (M, 3), alive (M,)."""
 
-    vertices (N, 3), labels (N,), joints (N, 4), weights (N, 4), flags (N,) boundary flags ; faces
-    (M, 3), alive (M,) : the buffers ; patch_rows (p,) the source vertices of the splice's first p rows,
-    of which it may change those at ``changed`` (c,) (increasing) ; new_* : the splice's rows (p + v) ;
-    boundary_rows (b,), boundary_flags (b,) ; removed (a,), kept (r,) with kept_corners (r, 3),
-    pieces (k, 3) : its faces
-    returns rows (c,) = patch_rows[changed], their old_vertices (c, 3) and old_labels (c,), moved (u,)
-    the rows whose position changed (increasing) and their old positions (u, 3), old_flags (b,),
-    old_kept (r, 3), moved_faces (the kept faces with a moved corner), top (the highest label written)
-    """
+    vertices: np.ndarray
+    labels: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+    flags: np.ndarray
+    faces: np.ndarray
+    alive: np.ndarray
+
+
+class SpliceRows(NamedTuple):
+    """A splice's rows as the kernel writes them (``tear/splice.Splice``, ``session_drill.DrillSplice``):
+    patch_rows (p,) the source vertices of its first p rows, of which it may change those at ``changed``
+    (c,) (increasing) ; vertices (p + v, 3), labels, joints, weights : its rows ; boundary_rows (b,),
+    boundary_flags (b,) ; removed (a,), kept (r,) with kept_corners (r, 3), pieces (k, 3) : its faces."""
+
+    patch_rows: np.ndarray
+    changed: np.ndarray
+    vertices: np.ndarray
+    labels: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+    boundary_rows: np.ndarray
+    boundary_flags: np.ndarray
+    removed: np.ndarray
+    kept: np.ndarray
+    kept_corners: np.ndarray
+    pieces: np.ndarray
+
+
+class Written(NamedTuple):
+    """What undo needs of a written splice: rows (c,) = patch_rows[changed], their old_vertices (c, 3)
+    and old_labels (c,), moved (u,) the rows whose position changed (increasing) and their
+    old_positions (u, 3), old_flags (b,), old_kept (r, 3), moved_faces (the kept faces with a moved
+    corner), top (the highest label written)."""
+
+    rows: np.ndarray
+    old_vertices: np.ndarray
+    old_labels: np.ndarray
+    moved: np.ndarray
+    old_positions: np.ndarray
+    old_flags: np.ndarray
+    old_kept: np.ndarray
+    moved_faces: np.ndarray
+    top: int
+
+
+def write_splice(buffers: SessionBuffers, n: int, m: int, splice) -> Written:
+    """Write ``splice`` (any record with ``SpliceRows``' fields but ``patch_rows``, which it calls
+    ``rows``) into ``buffers``, which hold n vertices and m face rows; what undo needs."""
+    rows = SpliceRows(splice.rows, splice.changed, splice.vertices, splice.labels, splice.joints, splice.weights,
+                      splice.boundary_rows, splice.boundary_flags, splice.removed, splice.kept, splice.kept_corners,
+                      splice.pieces)
+    return Written(*_write_splice(tuple(buffers), n, m, tuple(rows)))
+
+
+@kernel((record(F2, I1, I2, F2, B1, I2, B1), i8, i8, record(I1, I1, F2, I1, I2, F2, I1, B1, I1, I1, I2, I2)),
+        cost=1.8)
+def _write_splice(buffers, n, m, splice):
+    """``write_splice``: ``buffers`` a ``SessionBuffers`` and ``splice`` a ``SpliceRows``, as tuples;
+    returns ``Written``'s fields."""
+    vertices, labels, joints, weights, flags, faces, alive = buffers
+    (patch_rows, changed, new_vertices, new_labels, new_joints, new_weights, boundary_rows, boundary_flags,
+     removed, kept, kept_corners, pieces) = splice
     c, p = changed.shape[0], patch_rows.shape[0]
     rows = np.empty(c, np.int64)
     old_vertices, old_labels = np.empty((c, 3)), np.empty(c, np.int64)
