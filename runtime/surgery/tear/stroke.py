@@ -102,17 +102,37 @@ class StrokeResult:
     """A tear stroke's bookkeeping (an editing session's ``Surgery.tear`` returns it; ``tear_stroke``
     returns it with the torn rig, as ``TearResult``).
 
-    plane : (4,) float64 dual plane n̂ + d e∞ of the tear, in the surface's space (posed if posed)
-    points : (k, 3) float64 path points in the surface's space, S_i first and S_{i+1} last
-    kinds : (k,) int64 what each path point is: 0 an existing vertex, 1 an edge crossing, 2 a point
-        inside a face (the ends, or the midpoint of a one-segment path)
-    side_a, side_b : (k,) int64 one vertex of each path point in the torn mesh on the side the plane
-        normal points to, and one on the other side (equal where the point was not split: the
-        slit's ends inside the surface); other attribute-split copies may exist
-    split : (k,) bool, whether the path point was split into two sides
-    hits : (2, 3) float64 S_i and S_{i+1} as the scalpel met the surface (before snapping)
-    jumps : (k,) bool, whether the path reaches the point by jumping from the previous one across an
-        opening of the surface (where it crosses an existing slit: both points lie on its sides)
+    Parameters
+    ----------
+    plane : (4,) float64
+        The dual plane n̂ + d e∞ of the tear, in the surface's space (posed if posed).
+    points : (k, 3) float64
+        The path points in the surface's space, S_i first and S_{i+1} last.
+    kinds : (k,) int64
+        What each path point is: 0 an existing vertex, 1 an edge crossing, 2 a point inside a face
+        (the ends, or the midpoint of a one-segment path).
+    side_a, side_b : (k,) int64
+        One vertex of each path point in the torn mesh on the side the plane normal points to, and
+        one on the other side (equal where the point was not split: the slit's ends inside the
+        surface); other attribute-split copies may exist.
+    split : (k,) bool
+        Whether the path point was split into two sides.
+    hits : (2, 3) float64
+        S_i and S_{i+1} as the scalpel met the surface (before snapping).
+    jumps : (k,) bool
+        Whether the path reaches the point by jumping from the previous one across an opening of the
+        surface (where it crosses an existing slit: both points lie on its sides).
+
+    Examples
+    --------
+    >>> blade_from = [[1.0, 0.05, 1.0], [1.0, 0.05, 0.0]]          # handle above the arm, tip below
+    >>> blade_to = [[1.5, 0.05, 1.0], [1.5, 0.05, 0.0]]
+    >>> stroke = cgaskin.tear_stroke(cgaskin.capsule_arm(), blade_from, blade_to)
+    >>> stroke.points.shape, stroke.kinds.tolist()[:4], int(stroke.split.sum()), bool(stroke.jumps.any())
+    ((13, 3), [1, 1, 1, 1], 11, False)
+    >>> stroke.hits.round(3)                                       # where the blade met the skin
+    array([[1.  , 0.05, 0.24],
+           [1.5 , 0.05, 0.24]])
     """
 
     plane: np.ndarray
@@ -127,7 +147,38 @@ class StrokeResult:
 
 @dataclass(frozen=True, eq=False)
 class TearResult(StrokeResult):
-    """A tear stroke with its bookkeeping: ``StrokeResult`` and rig : Rig, the torn rig."""
+    """A tear stroke with its bookkeeping (``tear_stroke``): a ``StrokeResult`` with the torn rig.
+
+    Parameters
+    ----------
+    plane : (4,) float64
+        The dual plane n̂ + d e∞ of the tear, in the surface's space (posed if posed).
+    points : (k, 3) float64
+        The path points in the surface's space, S_i first and S_{i+1} last.
+    kinds : (k,) int64
+        What each path point is: 0 an existing vertex, 1 an edge crossing, 2 a point inside a face.
+    side_a, side_b : (k,) int64
+        One vertex of each path point in ``rig`` on the side the plane normal points to, and one on
+        the other side (equal where the point was not split).
+    split : (k,) bool
+        Whether the path point was split into two sides.
+    hits : (2, 3) float64
+        S_i and S_{i+1} as the scalpel met the surface (before snapping).
+    jumps : (k,) bool
+        Whether the path reaches the point by jumping across an opening of the surface.
+    rig : Rig
+        The torn rig.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> result = cgaskin.tear_stroke(arm, [[1.0, 0.05, 1.0], [1.0, 0.05, 0.0]],
+    ...                              [[1.5, 0.05, 1.0], [1.5, 0.05, 0.0]])
+    >>> arm.n_vertices, result.rig.n_vertices, len(result.points)
+    (690, 714, 13)
+    >>> result.side_a[:3].tolist(), result.side_b[:3].tolist()     # the first point (an end) is not split
+    ([690, 691, 692], [690, 703, 704])
+    """
 
     rig: Rig
 
@@ -166,6 +217,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     Parameters
     ----------
     rig : Rig
+        The model to tear (never modified).
     scalpel_from, scalpel_to : (2, 3) float
         The blade (handle a, tip b) at t_i and at t_{i+1}.
     pose : Pose, optional
@@ -183,6 +235,7 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     Returns
     -------
     TearResult
+        The torn rig (``rig``) and the stroke's path, plane and hits.
 
     Raises
     ------
@@ -194,6 +247,16 @@ def tear_stroke(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 
     InvalidInputError
         Wrong shapes, non-finite values, a negative opening, a zero-length blade, a stroke that does
         not move across the surface, a pose of another skeleton, a BVH of other positions.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> result = cgaskin.tear_stroke(arm, [[1.0, 0.05, 1.0], [1.0, 0.05, 0.0]],
+    ...                              [[1.5, 0.05, 1.0], [1.5, 0.05, 0.0]], opening=0.02)
+    >>> result.rig.n_vertices, len(result.points), int(result.split.sum())
+    (714, 13, 11)
+    >>> float(abs(result.plane[1]))                                # the tear plane is y = 0.05
+    1.0
     """
     if not isinstance(rig, Rig):
         raise InvalidInputError(f"rig must be a cgaskin.Rig, got {type(rig).__name__}")
@@ -264,13 +327,42 @@ def tear(rig: Rig, scalpel_from, scalpel_to, pose=None, opening: float = 0.0,
          bvh: TriangleBVH | None = None) -> Rig:
     """Tear ``rig`` along the surface between two positions of a scalpel; returns the torn rig.
 
-    scalpel_from, scalpel_to : (2, 3) the blade (handle a, tip b) at t_i and at t_{i+1}
-    pose : Pose or None (tear the skinned surface in that pose; default the stored vertices
-        ``rig.vertices``; ``rig.rest_pose()`` tears what a viewer shows at rest)
-    opening : float >= 0, how far apart the two sides of the slit are moved
-    bvh : optional TriangleBVH of the surface (built and cached per rig and pose otherwise)
+    See the module docstring for the algorithm and ``tear_stroke`` for a variant that also returns the
+    path. Tearing the result again from where this stroke ended continues the slit.
 
-    See the module docstring for the algorithm and ``tear_stroke`` for the errors and a variant that
-    also returns the path. Tearing the result again from where this stroke ended continues the slit.
+    Parameters
+    ----------
+    rig : Rig
+        The model to tear (never modified).
+    scalpel_from, scalpel_to : (2, 3) float
+        The blade (handle a, tip b) at t_i and at t_{i+1}.
+    pose : Pose, optional
+        Tear the mesh as skinned in this pose; None (default) tears the stored vertices
+        ``rig.vertices``, ``rig.rest_pose()`` what a viewer shows at rest.
+    opening : float >= 0, optional
+        How far apart the two sides of the slit are moved, along the tear plane's normal.
+    bvh : TriangleBVH, optional
+        A BVH of the surface being torn; by default one is built and cached per rig and pose.
+
+    Returns
+    -------
+    Rig
+        The torn rig: the slit's vertices duplicated on its two sides, the crossed faces replaced by
+        their pieces at the end of the face array; full skeleton and clips.
+
+    Raises
+    ------
+    MissesMeshError, TearPathError, InvalidInputError
+        As ``tear_stroke``.
+
+    Examples
+    --------
+    >>> arm = cgaskin.capsule_arm()
+    >>> torn = cgaskin.tear(arm, [[1.0, 0.05, 1.0], [1.0, 0.05, 0.0]],
+    ...                     [[1.5, 0.05, 1.0], [1.5, 0.05, 0.0]])
+    >>> arm.n_vertices, torn.n_vertices, len(arm.faces), len(torn.faces)
+    (690, 714, 1376, 1402)
+    >>> longer = cgaskin.tear(torn, [[1.5, 0.05, 1.0], [1.5, 0.05, 0.0]],     # continues the slit
+    ...                       [[1.8, 0.05, 1.0], [1.8, 0.05, 0.0]])
     """
     return tear_stroke(rig, scalpel_from, scalpel_to, pose=pose, opening=opening, bvh=bvh).rig
