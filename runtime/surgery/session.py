@@ -1,29 +1,17 @@
-"""An editing session: many tears (and cuts) on one model, each costing what it touches.
+"""An editing session: many tears, cuts and holes on one model, each costing what it touches.
 
-``cgaskin.tear(rig, ...)`` returns a new rig, and the next stroke on it builds that rig's BVH again:
-the whole mesh per stroke. A ``Surgery`` keeps the mutable state across operations instead:
+``cgaskin.tear(rig, ...)`` returns a new rig, and the next stroke on it builds that rig's BVH again: the
+whole mesh per stroke. A ``Surgery`` keeps the mutable state across operations instead: the mesh in
+arrays with spare capacity (``rows.Rows``; a stroke rewrites the few rows it changes and appends its
+new ones: ``session_splice.py``), removed faces as tombstones (face ids stay stable), a ``DynamicBVH``
+updated for the faces a stroke removes, adds and moves, per vertex whether it lies on a boundary of
+the label-aware weld (all a stroke needs of the whole mesh's topology), and an undo log of the rows
+each operation changed. The state is in rest space, and so is the BVH: a stroke in a pose poses only
+what its blade reaches (``posed_bounds.py``, ``posed_source.py``).
 
-* the mesh in arrays with spare capacity (``rows.Rows``): a stroke rewrites the few rows it changes
-  (the far side's labels, an opening's positions) and appends its new vertices and faces, amortised,
-  never copying the mesh (``session_write.py``, one kernel);
-* removed faces become tombstones (``alive`` False), so face ids stay stable for the BVH;
-* a ``DynamicBVH`` of the surface, updated for the faces a stroke removes, adds and moves (refit and
-  local insertion; it rebuilds itself only past its measured degradation threshold);
-* per vertex, whether it lies on a boundary edge of the label-aware weld, which is all a stroke needs
-  of the whole mesh's topology (its patch has its own: ``tear/patch.py``), updated for the path's
-  vertices;
-* an undo log of the rows each operation changed.
-
-The state is in rest space, and so is the BVH: a stroke in a pose (the session's, or one given to the
-operation: surgery on a playing model) poses only what its blade reaches through the bone-carried
-bounds of the BVH's nodes (``posed_bounds.py``, ``posed_source.py``), so a stroke in a new pose costs
-what it touches, like one at rest.
-
-A stroke is ``tear/splice.py`` run on the session as its source, exactly as the functional ``tear``
-runs it on a rig, so a session's mesh after k strokes is the functional chain's (tests check it).
-``rig`` is an immutable snapshot, copied on export (once per state; O(mesh)). ``cut`` cuts the whole
-mesh (a global operation: its cost is the mesh's) and keeps both halves in the session, apart; ``drill``
-drills the whole mesh the same way (for now: a hole should cost what the bit touches, as a stroke does).
+A stroke is ``tear/splice.py`` run on the session as its source, exactly as the functional ``tear`` runs
+it on a rig, so a session's mesh after k strokes is the functional chain's (tests check it). ``cut`` cuts
+the whole mesh and keeps both halves, apart; ``drill`` works on the faces around the bit.
 """
 from __future__ import annotations
 
@@ -47,7 +35,7 @@ from .posed_source import PosedSource, SessionInfluences, bone_affines_of
 from .rows import Rows
 from .session_drill import session_drill
 from .session_undo import History, SessionState, Undo
-from .session_write import SessionBuffers, _grown_box, write_splice
+from .session_splice import SplicedRows
 from .surface import TEAR_LABEL
 from .tear.rig_source import RigSource, slit_tip
 from .tear.splice import stroke_splice
@@ -56,36 +44,66 @@ from .tear.tip import TipLog, blade_through, tip_point
 
 __all__ = ["Surgery", "OperationCost"]
 
-#: the per-vertex buffers a stroke writes, in ``session_write.SessionBuffers``' order
-_VERTEX_ARRAYS = ("vertices", "labels", "joints", "weights", "boundary")
-
-
 class OperationCost(NamedTuple):
-    """What a session's operation cost: ``operation`` ("tear", "cut", "drill" or "undo"), its wall-clock
-    ``seconds``, and the minor ``page_faults`` of the process while it ran (the fresh memory pages it
-    wrote, each a trip to the operating system; 0 where the system does not count them)."""
+    """What a session's last operation cost (``Surgery.last_cost``).
+
+    Parameters
+    ----------
+    operation : str
+        "tear", "cut", "drill" or "undo".
+    seconds : float
+        Its wall-clock time.
+    page_faults : int
+        The process's minor page faults while it ran: the fresh memory pages it wrote, each a trip to
+        the operating system (0 where the system does not count them).
+
+    Examples
+    --------
+    >>> import cgaskin
+    >>> surgery = cgaskin.Surgery(cgaskin.capsule_arm())
+    >>> surgery.cut([1, 0, 0], [1.1, 0, 0])
+    >>> surgery.last_cost.operation
+    'cut'
+    """
 
     operation: str
     seconds: float
     page_faults: int
 
 
-class Surgery:
-    """An editing session on ``rig``; ``pose`` the pose its operations happen in unless they name one
-    (default: the stored vertices); ``max_undo_bytes`` bounds the undo log (None: unbounded; past it
-    the oldest operations can no longer be undone, ``undo_dropped`` counts them).
+class Surgery(SplicedRows):
+    """An editing session: many strokes, cuts and holes on one model, each costing what it touches.
 
-    Methods: ``tear(scalpel_from, scalpel_to, pose=None, opening=0.0)``, ``continue_slit(scalpel_to,
-    pose=None, opening=0.0)``, ``cut(normal, point, pose=None, cap=False)``, ``drill(start, end, radius,
-    pose=None, wall=True)``, ``undo()``; ``rig`` the current mesh as an immutable Rig; ``n_vertices``,
-    ``n_faces``, ``n_operations``, ``pose``, ``last_cost`` (an ``OperationCost``). The caller's rig is
-    never modified.
+    Parameters
+    ----------
+    rig : Rig
+        The model (never modified).
+    pose : Pose, optional
+        The pose operations happen in unless they name one (None: the stored vertices).
+    max_undo_bytes : int, optional
+        A bound on the undo log's memory (None: unbounded); past it the oldest operations can no longer
+        be undone (``undo_dropped`` counts them).
 
+    Notes
+    -----
     What a stroke reads of the session (``vertices``, ``faces``, ``positions``, ``labels``,
     ``boundary``, ... : the source interface of ``tear/splice.py``) are views of its own buffers,
     valid until the next operation: read them, never write them (``rig`` is the copy to keep). The
     undo log holds, per stroke, the old labels and positions of the rows it changed and the old
-    corners of the faces it changed (about 6 KB a stroke of the 1.6M-face capsule incision).
+    corners of the faces it changed.
+
+    Examples
+    --------
+    >>> import cgaskin
+    >>> rig = cgaskin.capsule_arm()
+    >>> surgery = cgaskin.Surgery(rig)
+    >>> blade = lambda x: ([x, 0.05, 1.0], [x, 0.05, 0.0])
+    >>> stroke = surgery.tear(blade(1.0), blade(1.5))
+    >>> surgery.n_operations, surgery.n_vertices > rig.n_vertices
+    (1, True)
+    >>> surgery.undo()
+    >>> surgery.n_vertices == rig.n_vertices
+    True
     """
 
     #: the source interface's posing (``posed_bounds.Posing``): the session's own surface is at rest
@@ -174,7 +192,13 @@ class Surgery:
         return self._bvh.arrays
 
     def check_hits(self, faces) -> None:
-        """Nothing to check: the session's BVH is built and kept over its own arrays."""
+        """Nothing to check: the session's BVH is built and kept over its own arrays.
+
+        Parameters
+        ----------
+        faces : (k,) int64
+            The faces a blade hit (the source interface of ``tear/splice.py``).
+        """
 
     # ---- operations -------------------------------------------------------------------------------
     def tear(self, scalpel_from, scalpel_to, pose=None, opening: float = 0.0) -> StrokeResult:
@@ -182,7 +206,22 @@ class Surgery:
         errors) in ``pose`` (None: the session's pose); the session keeps the torn mesh. A stroke in a
         pose skins only the vertices its blade reaches. A stroke that raises changes nothing. A blade at
         t_i that passes near the tip of the last slit starts there (``tear/tip.py``: within the opening,
-        or a thousandth of the diagonal, of where the pose carried the tip): the stroke continues it."""
+        or a thousandth of the diagonal, of where the pose carried the tip): the stroke continues it.
+
+        Parameters
+        ----------
+        scalpel_from, scalpel_to : (2, 3) float
+            The blade (handle, tip) at the previous step and now.
+        pose : Pose, optional
+            The pose of the stroke (None: the session's pose).
+        opening : float >= 0
+            How far the slit's lips open.
+
+        Returns
+        -------
+        StrokeResult
+            The stroke's path (``cgaskin.tear_stroke``'s result, without the rig).
+        """
         with self._costed("tear"):
             blades = check_blades(scalpel_from, scalpel_to)
             opening = check_opening(opening)
@@ -247,7 +286,17 @@ class Surgery:
         """Cut the whole mesh with the plane through ``point`` with normal ``normal`` (``cgaskin.cut``
         in ``pose``, None: the session's pose); both halves stay in the session, apart (the negative
         half's tear labels are moved past the positive half's, so that the halves do not weld along the
-        cut)."""
+        cut).
+
+        Parameters
+        ----------
+        normal, point : (3,) float
+            The cutting plane.
+        pose : Pose, optional
+            The pose of the cut (None: the session's pose).
+        cap : bool
+            Close each half's rim with a cap.
+        """
         with self._costed("cut"):
             positive, negative = cut_rig(self.rig, normal, point, pose=self._pose if pose is None else pose,
                                          cap=cap)
@@ -262,7 +311,24 @@ class Surgery:
         ``DrillResult`` of that region (its ``rig`` the region drilled, ``replaced`` and ``sources`` in
         its numbering; ``rig`` of the session is the whole mesh). The session's mesh is the functional
         drill's, but for the rows inside the bit, which it keeps unused. A drill that raises changes
-        nothing."""
+        nothing.
+
+        Parameters
+        ----------
+        start, end : (3,) float
+            Where the bit enters and where its round tip stops.
+        radius : float
+            The bit's radius.
+        pose : Pose, optional
+            The pose of the drill (None: the session's pose).
+        wall : bool
+            Wall the hole on the bit's surface.
+
+        Returns
+        -------
+        DrillResult
+            The drill of the region around the bit.
+        """
         with self._costed("drill"), collection_paused():     # (Python containers: see _shared/memory.py)
             the_bit, wall = checked_bit(start, end, radius), checked_wall(wall)
             posed = None if pose is None and self._pose is None else self._posed(pose)
@@ -333,98 +399,6 @@ class Surgery:
         influences = self._influences.influences(self.joints, self.weights)
         return PosedSource(self, affines, self._bvh.arrays, self._bvh.n_nodes, influences,
                            self._used, self._scratch, self._pad)
-
-    def _edit_bvh(self, removed, inserted, near, moved, positions, faces, moved_rows, first_row, end_row) -> None:
-        """``DynamicBVH.edit``, with the bone influences kept (once a posed stroke made them) and what is
-        posed of the changed nodes and rows forgotten (``moved_rows`` and the rows from ``first_row`` to
-        ``end_row``: their rest positions changed, or they are new or gone)."""
-        if not self._influences.kept:
-            self._bvh.edit(removed, inserted, near, moved, positions, faces)
-            self._scratch.reset()
-            return
-        leaves, first_node = self._influences.removing(removed), self._bvh.n_nodes
-        self._bvh.edit(removed, inserted, near, moved, positions, faces)
-        changed = self._influences.edited(leaves, first_node, inserted, moved, self.joints, self.weights)
-        if changed is None:
-            self._scratch.reset()
-        else:
-            self._scratch.forget(changed, self._bvh.parents,
-                                 np.concatenate((moved_rows, np.arange(first_row, end_row))))
-
-    # ---- a stroke's rows in, and out again ------------------------------------------------------------
-    def _apply(self, splice) -> Undo:
-        p, n, m, k = len(splice.rows), self.n_vertices, self._faces.n, len(splice.pieces)
-        added = len(splice.vertices) - p
-        buffers = [self._arrays[name] for name in _VERTEX_ARRAYS]
-        # a stroke changes the labels (the far side) and positions (an opening) of a few of its patch's
-        # rows; their weights and attributes stay: those are only appended
-        written = write_splice(SessionBuffers(*[buffer.reserve(added) for buffer in buffers],
-                                              self._faces.reserve(k), self._alive.reserve(k)), n, m, splice)
-        for buffer in buffers:
-            buffer.n += added
-        self._faces.n += k
-        self._alive.n += k
-        for name, (buffer, _) in self._attributes.items():
-            buffer.append(splice.attributes[name][p:])
-        # (a new row's bones are some of its sources': the bones in use, ``_used``, stay as they are)
-        scalars = (self.top_label, self._labelled, self._bounds.copy())
-        self.top_label = max(self.top_label, written.top)
-        # each piece into its face's leaf (it lies inside that face: no descent), then the faces out
-        self._edit_bvh(splice.removed, np.arange(m, self._faces.n), splice.parents, written.moved_faces,
-                       self.positions, self.faces, written.moved, n, self.n_vertices)
-        self._grow_bounds(written.moved, n, written.old_positions)
-        return Undo(n, m, written.rows, {"vertices": written.old_vertices, "labels": written.old_labels},
-                    written.moved, splice.removed, splice.parents, splice.kept, written.old_kept, written.moved_faces,
-                    splice.boundary_rows, written.old_flags, scalars)
-
-    def _grow_bounds(self, moved, first_new, old) -> None:
-        """The bounding box of the surface after the rows ``moved`` changed position (from ``old``) and
-        rows from ``first_new`` on appeared: grown by their new positions, or found again from every
-        vertex when a moved one was on the old box's side."""
-        if len(old) and ((old == self._bounds[0]) | (old == self._bounds[1])).any():
-            moved, first_new = np.empty(0, np.int64), 0
-            box = np.stack([np.full(3, np.inf), np.full(3, -np.inf)])
-        else:
-            box = self._bounds.copy()
-        if _grown_box(self.positions, moved, first_new, box):
-            self._set_bounds(box)
-
-    def _revert(self, record: Undo) -> None:
-        rows, m, n = record.rows, self._faces.n, self.n_vertices
-        self._faces.truncate(record.m)
-        self._alive.truncate(record.m)
-        self._faces.view[record.kept] = record.old_kept
-        self._alive.view[record.removed] = True
-        for name in ("vertices", "joints", "weights", "labels"):
-            self._arrays[name].truncate(record.n)
-        for name, values in record.old_rows.items():
-            self._arrays[name].view[rows] = values
-        for buffer, _ in self._attributes.values():
-            buffer.truncate(record.n)
-        flags = self._arrays["boundary"]
-        flags.truncate(record.n)
-        valid = record.boundary_rows < record.n
-        flags.view[record.boundary_rows[valid]] = record.old_flags[valid]
-        self.top_label, self._labelled, bounds = record.scalars
-        self._set_bounds(bounds)
-        # the whole buffers: the faces taken out (ids from record.m on, vertices from record.n on) keep
-        # their rows there until the next stroke overwrites them, and the BVH reads them as it lets them go
-        near = _piece_in_each(record.removed, record.piece_parents, record.m)     # (its leaf takes the face back)
-        self._edit_bvh(np.arange(record.m, m), record.removed, near, record.moved_faces,
-                       self._arrays["vertices"].data, self._faces.data, record.moved, record.n, n)
-
-
-def _piece_in_each(removed, parents, first_piece: int) -> np.ndarray:
-    """(r,) for each face of ``removed`` (r,) a piece made inside it (face id ``first_piece + i`` for the
-    piece i whose ``parents[i]`` it is), -1 where none was."""
-    out = np.full(len(removed), -1, np.int64)
-    if not len(removed):
-        return out
-    order = np.argsort(removed)
-    at = order[np.minimum(np.searchsorted(removed, parents, sorter=order), len(removed) - 1)]
-    found = np.flatnonzero(removed[at] == parents)          # (a wall piece's parent, -1, is no face)
-    out[at[found]] = first_piece + found
-    return out
 
 
 def _joined(positive, negative):
