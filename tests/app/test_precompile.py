@@ -84,6 +84,12 @@ WORKLOAD = textwrap.dedent("""
                 cgaskin.drill(rig, v - side * z, v + side * 0.01 * z, 0.03 * size, pose=pose)
             session.drill(v - z, v + z, 0.03 * size)
             session.undo()
+    from cgaskin import versor                  # the versor API, as its docs call it
+    V = versor.compose(versor.motor([0, 0, 1], 0.5, [1, 0, 0]), versor.dilator(2.0))
+    versor.apply(V, [[1.0, 0, 0]])
+    versor.apply(versor.normalise(versor.inverse(V)), [1.0, 2, 3])
+    versor.from_matrix(versor.to_matrix(V) @ np.eye(4))
+    versor.exp(versor.log(V))
     print(" ".join(sorted(set(compiled))))
 """)
 

@@ -115,9 +115,10 @@ def test_importing_cgaskin_imports_no_dask():
     assert done.stdout.strip() == "[]"
 
 
-def test_the_readme_spec_is_valid(tmp_path, models_dir):
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
-    text = readme.split("### Datasets: `cgaskin batch`")[1].split("```toml\n")[1].split("```")[0]
+def test_the_batch_pages_spec_is_valid(tmp_path, models_dir):
+    import textwrap
+    page = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "batch.rst").read_text(encoding="utf-8")
+    text = textwrap.dedent(page.split(".. code-block:: toml\n\n")[1].split("\n\n")[0])
     (tmp_path / "models").mkdir()
     (tmp_path / "models" / "Fox.glb").symlink_to(models_dir / "Fox.glb")
     spec = load_spec(_spec(tmp_path, text))
