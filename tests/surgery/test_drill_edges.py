@@ -16,6 +16,7 @@ import cgaskin
 from cgaskin.errors import InvalidInputError, MissesMeshError
 from cgaskin.surgery.drill import api as drill_api
 
+from tests.helpers.drill_cases import CASES as WALL_CASES       # (test_drill_wall's holes)
 from tests.helpers.cut_checks import chain_skeleton, random_closed_rig, random_pose
 from tests.helpers.tear_checks import get_rig
 from tests.surgery.test_drill import diagonal, drilled_positions, through, unit_vectors
@@ -24,17 +25,6 @@ from tests.surgery.test_drill import diagonal, drilled_positions, through, unit_
 few = settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow],
                phases=[Phase.explicit, Phase.reuse, Phase.generate])
 
-
-#: test_drill_wall.py's holes in the capsule arm (that module needs manifold3d; these tests do not)
-WALL_CASES = {
-    "through": ([1.0, 0.0, -1.0], [1.0, 0.0, 1.0], 0.1),
-    "blind": ([1.0, 0.0, -1.0], [1.0, 0.0, 0.05], 0.1),
-    "along the axis": ([-1.0, 0.0, 0.0], [0.5, 0.0, 0.0], 0.1),
-    "grazing": ([1.0, 0.22, -1.0], [1.0, 0.22, 1.0], 0.1),
-    "oblique": ([0.6, -0.5, -0.6], [1.4, 0.5, 0.7], 0.07),
-    "from the pole": ([-0.25, 0.0, 0.0], [-0.25, 0.0, 0.5], 0.0625),
-    "grazing lengthwise": ([0.8, 0.25, 0.0], [2.2, 0.25, 0.0], 0.1),
-}
 
 
 @pytest.fixture(scope="module")

@@ -17,27 +17,12 @@ from cgaskin.surgery.drill import RIM_STEP
 from cgaskin.surgery.topology import topology
 
 from tests.helpers.cut_checks import random_closed_rig, random_pose
+from tests.helpers.drill_cases import CASES
 from tests.surgery.test_drill import (barycentric_grid, boundary_edges, check_no_face_inside, check_rim_on_surface,
                                       check_weights, diagonal, drilled_positions, max_depth, segment_distance,
                                       through, unit_vectors, welded)
 
 manifold3d = pytest.importorskip("manifold3d", reason="manifold3d (pip, in the test extras) is the drill's oracle")
-
-#: bits through the built-in capsule arm (radius 0.25 around the x axis from x = -0.25 to 3.25): a hole
-#: through it, a blind one, one along its axis from its end, one grazing its side, one oblique, one from
-#: its pole along its surface, one grazing it lengthwise
-CASES = {
-    "through": ([1.0, 0.0, -1.0], [1.0, 0.0, 1.0], 0.1),
-    "blind": ([1.0, 0.0, -1.0], [1.0, 0.0, 0.05], 0.1),
-    "along the axis": ([-1.0, 0.0, 0.0], [0.5, 0.0, 0.0], 0.1),
-    "grazing": ([1.0, 0.22, -1.0], [1.0, 0.22, 1.0], 0.1),
-    "oblique": ([0.6, -0.5, -0.6], [1.4, 0.5, 0.7], 0.07),
-    # the bit's start on the capsule's pole, travelling along its surface: the fill on the bit's round
-    # start reaches that end's pole (found by test_session_drill's random bits; the fill did not converge)
-    "from the pole": ([-0.25, 0.0, 0.0], [-0.25, 0.0, 0.5], 0.0625),
-    # the axis on the surface along the capsule: a fill longer along the bit than across it
-    "grazing lengthwise": ([0.8, 0.25, 0.0], [2.2, 0.25, 0.0], 0.1),
-}
 
 
 def _segment_distance(x, a, b):
