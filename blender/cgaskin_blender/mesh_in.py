@@ -1,0 +1,173 @@
+"""A Blender mesh read into a cgaskin ``Rig``, with what the operators carry through the surgery.
+
+Blender keeps UVs, custom normals, materials and smooth flags per face corner; cgaskin carries data
+per vertex. So a Blender vertex becomes one cgaskin vertex per distinct corner data (as a glTF
+exporter splits along seams: cgaskin welds positions for its topology, so the surgery sees one
+surface), and each copy carries its Blender vertex index (``VERTEX``) for ``mesh_out`` to weld the
+copies back. Faces are the mesh's loop triangles.
+
+Everything is read with ``foreach_get`` except vertex-group weights, which Blender exposes per vertex
+only (``read_weights``, timed apart by the operators).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+import cgaskin
+
+from .scene_rig import Skin, armature_skin
+
+#: cgaskin attribute names of what the operators carry (``UV`` and ``SHAPE`` take a number)
+VERTEX, MATERIAL, SHARP, NORMAL, GROUPS, WEIGHT_SUM, TEAR = (
+    "_BLENDER_VERTEX", "_MATERIAL", "_SHARP", "_CUSTOM_NORMAL", "_GROUPS", "_WEIGHT_SUM", "_TEAR")
+UV, SHAPE = "_UV{}", "_SHAPE{}"
+#: below this total a vertex's bone weights do not move it in Blender's Armature modifier
+NO_WEIGHT = 1e-4
+
+
+class Weights(NamedTuple):
+    """Every vertex-group weight of a mesh, one row per (vertex, group) pair."""
+
+    vertex: np.ndarray      # (k,) int64
+    group: np.ndarray       # (k,) int64, index into obj.vertex_groups
+    weight: np.ndarray      # (k,) float64
+
+
+class MeshIn(NamedTuple):
+    """A mesh object as a cgaskin rig and what writing a result back needs."""
+
+    rig: cgaskin.Rig
+    skin: Skin
+    group_names: list       # the object's vertex groups, in order
+    other_groups: list      # indices of the groups carried as the GROUPS attribute (not deforming bones)
+    uv_names: list
+    shape_names: list       # the shape keys after the basis, carried as SHAPE attributes
+    custom_normals: bool
+    over_four: int          # vertices that had more than four bone weights (the four largest kept)
+
+
+def read_weights(obj) -> Weights:
+    """All vertex-group weights of ``obj`` (a Python loop over the vertices: Blender has no bulk read)."""
+    vertex, group, weight = [], [], []
+    for v in obj.data.vertices:
+        for element in v.groups:
+            vertex.append(v.index)
+            group.append(element.group)
+            weight.append(element.weight)
+    return Weights(np.array(vertex, dtype=np.int64), np.array(group, dtype=np.int64),
+                   np.array(weight, dtype=np.float64))
+
+
+def _corner_arrays(mesh, name: str, width: int, dtype, count: int, collection=None) -> np.ndarray:
+    values = np.empty(count * width, dtype=dtype)
+    (collection if collection is not None else mesh.attributes[name].data).foreach_get(
+        {1: "value"}.get(width, "vector"), values)
+    return values.reshape(count, width)
+
+
+def _triangles(mesh):
+    """(t, 3) corners, (t,) polygons of the loop triangles, (c,) vertex of each corner."""
+    mesh.calc_loop_triangles()
+    tris = mesh.loop_triangles
+    corners = np.empty(len(tris) * 3, dtype=np.int32)
+    tris.foreach_get("loops", corners)
+    polygon = np.empty(len(tris), dtype=np.int32)
+    tris.foreach_get("polygon_index", polygon)
+    corner_vertex = np.empty(len(mesh.loops), dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", corner_vertex)
+    return corners.reshape(-1, 3).astype(np.int64), polygon.astype(np.int64), corner_vertex.astype(np.int64)
+
+
+def _bone_rows(weights: Weights, group_names: list, bone_names: list, n: int):
+    """(joints (n, 4), bone weights (n, 4), sums (n,), how many vertices had more than four)."""
+    bone_of_name = {name: k for k, name in enumerate(bone_names)}
+    bone_of_group = np.array([bone_of_name.get(name, -1) for name in group_names] + [-1], dtype=np.int64)
+    bone = bone_of_group[weights.group] if len(weights.group) else np.empty(0, dtype=np.int64)
+    keep = (bone >= 0) & (weights.weight > 0)
+    vertex, bone, weight = weights.vertex[keep], bone[keep], weights.weight[keep]
+    order = np.lexsort((-weight, vertex))
+    vertex, bone, weight = vertex[order], bone[order], weight[order]
+    first = np.searchsorted(vertex, np.arange(n))
+    rank = np.arange(len(vertex)) - first[vertex]
+    sums = np.bincount(vertex, weights=weight, minlength=n)
+    joints = np.zeros((n, 4), dtype=np.int64)
+    rows = np.zeros((n, 4))
+    top = rank < 4
+    joints[vertex[top], rank[top]] = bone[top]
+    rows[vertex[top], rank[top]] = weight[top]
+    # (Blender divides by the vertex's total: the same rows, summing to 1)
+    rows /= np.maximum(rows.sum(axis=1), 1e-300)[:, None]
+    return joints, rows, sums, int(np.count_nonzero(np.bincount(vertex[rank >= 4], minlength=n)))
+
+
+def read_mesh(obj, armature, weights: Weights) -> MeshIn:
+    """``obj``'s mesh (the data, not the evaluated mesh) as a cgaskin rig in ``armature``'s skeleton."""
+    mesh = obj.data
+    n = len(mesh.vertices)
+    group_names = [group.name for group in obj.vertex_groups]
+    skin = armature_skin(obj, armature, static=False)
+    joints, rows, sums, over_four = _bone_rows(weights, group_names, skin.bone_names, n)
+    unweighted = sums <= NO_WEIGHT
+    if unweighted.any():                    # (the static bone comes last: the others keep their index)
+        skin = armature_skin(obj, armature, static=True)
+        joints[unweighted] = len(skin.bone_names) - 1
+        rows[unweighted] = [1.0, 0.0, 0.0, 0.0]
+        sums[unweighted] = 0.0
+    other = [k for k, name in enumerate(group_names) if name not in skin.bone_names]
+
+    corners, polygon, corner_vertex = _triangles(mesh)
+    n_corners = len(corner_vertex)
+    per_corner = {}                         # attribute name -> (c, w) values of every corner
+    uv_names = [layer.name for layer in mesh.uv_layers]
+    for k, layer in enumerate(mesh.uv_layers):
+        per_corner[UV.format(k)] = _corner_arrays(mesh, None, 2, np.float32, n_corners, layer.uv)
+    custom = bool(mesh.has_custom_normals)
+    if custom:
+        per_corner[NORMAL] = _corner_arrays(mesh, None, 3, np.float32, n_corners, mesh.corner_normals)
+    face_material = np.zeros(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("material_index", face_material)
+    face_sharp = np.zeros(len(mesh.polygons), dtype=bool)
+    mesh.polygons.foreach_get("use_smooth", face_sharp)
+    corner_polygon = np.empty(n_corners, dtype=np.int64)
+    corner_polygon[corners.ravel()] = np.repeat(polygon, 3)
+    per_corner[MATERIAL] = face_material[corner_polygon][:, None].astype(np.float32)
+    per_corner[SHARP] = (~face_sharp[corner_polygon])[:, None].astype(np.float32)
+
+    # one cgaskin vertex per distinct (Blender vertex, corner data) among the triangles' corners
+    used = corners.ravel()
+    key = np.concatenate([corner_vertex[used, None].astype(np.float64)]
+                         + [values[used].astype(np.float64) for values in per_corner.values()], axis=1)
+    _, first, split_of = np.unique(np.ascontiguousarray(key).view(np.dtype((np.void, key.shape[1] * 8))).ravel(),
+                                   return_index=True, return_inverse=True)
+    source_corner = used[first]
+    source = corner_vertex[source_corner]
+    faces = split_of.reshape(-1, 3)
+
+    positions = np.empty(n * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", positions)
+    positions = positions.reshape(n, 3).astype(np.float64)
+    attributes = {VERTEX: source[:, None].astype(np.float64), WEIGHT_SUM: sums[source, None]}
+    attributes.update({name: values[source_corner].astype(np.float64) for name, values in per_corner.items()})
+    if other:
+        dense = np.zeros((n, len(other)))
+        column = np.full(len(group_names) + 1, -1)
+        column[other] = np.arange(len(other))
+        pick = column[weights.group] >= 0 if len(weights.group) else np.zeros(0, dtype=bool)
+        dense[weights.vertex[pick], column[weights.group[pick]]] = weights.weight[pick]
+        attributes[GROUPS] = dense[source]
+    shape_names = []
+    if mesh.shape_keys is not None:
+        for k, block in enumerate(mesh.shape_keys.key_blocks[1:]):
+            co = np.empty(n * 3, dtype=np.float32)
+            block.data.foreach_get("co", co)
+            attributes[SHAPE.format(k)] = (co.reshape(n, 3) - positions)[source]
+            shape_names.append(block.name)
+    if TEAR in mesh.attributes and mesh.attributes[TEAR].domain == "POINT":
+        tear = np.empty(n, dtype=np.float32)
+        mesh.attributes[TEAR].data.foreach_get("value", tear)
+        attributes[TEAR] = tear[source, None].astype(np.float64)
+    rig = cgaskin.Rig(positions[source], faces, joints[source], rows[source], skin.skeleton,
+                      attributes=attributes, name=obj.name)
+    return MeshIn(rig, skin, group_names, other, uv_names, shape_names, custom, over_four)
