@@ -7,9 +7,9 @@ Operators ``cgaskin.cut``, ``cgaskin.tear``, ``cgaskin.drill``, ``cgaskin.revert
 """
 import bpy
 
-from . import operators, panel
+from . import kernels, operators, panel
 
-_CLASSES = operators.CLASSES + panel.CLASSES
+_CLASSES = kernels.CLASSES + operators.CLASSES + panel.CLASSES
 
 
 def register():

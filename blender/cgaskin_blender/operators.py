@@ -12,7 +12,7 @@ from mathutils import Vector
 
 import cgaskin
 
-from . import surgery
+from . import kernels, surgery
 from .strokes import stroke_points
 from .scene_rig import Refusal
 
@@ -36,6 +36,14 @@ class _Operation:
     def poll(cls, context):
         obj = context.active_object
         return obj is not None and obj.type == "MESH" and context.mode == "OBJECT"
+
+    def invoke(self, context, event):
+        if not kernels.ready():                 # (first use where the kernels did not ship compiled)
+            bpy.ops.cgaskin.prepare_kernels("INVOKE_DEFAULT")
+            self.report({"INFO"}, "cgaskin compiles its kernels once, in the background: run the tool "
+                        "again when the status bar says it is done")
+            return {"CANCELLED"}
+        return self.execute(context)
 
     def execute(self, context):
         try:
@@ -87,7 +95,7 @@ class CGASKIN_OT_tear(_Operation, bpy.types.Operator):
         view = context.region_data
         if not any(self.blade_direction) and view is not None and hasattr(view, "view_rotation"):
             self.blade_direction = view.view_rotation @ Vector((0.0, 0.0, -1.0))
-        return self.execute(context)
+        return super().invoke(context, event)
 
     def run(self, scene):
         if not any(self.blade_direction):

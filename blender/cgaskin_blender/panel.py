@@ -4,7 +4,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, FloatProperty, PointerProperty
 
-from . import surgery
+from . import kernels, surgery
 
 
 def _is_stroke(_, obj) -> bool:
@@ -56,6 +56,8 @@ class CGASKIN_PT_tools(bpy.types.Panel):
         op.bit = settings.bit.name if settings.bit else ""
         op.radius, op.depth, op.wall = settings.radius, settings.drill_depth, settings.wall
         layout.operator("cgaskin.revert", text="Revert")
+        if kernels.compiling():
+            layout.label(text="compiling cgaskin's kernels (once)...")
         if surgery.LAST:
             layout.label(text=surgery.LAST[0].times.line())
 

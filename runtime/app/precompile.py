@@ -30,7 +30,7 @@ import time
 from .._shared.jit import SIGNATURES, Signature
 from ..errors import InvalidInputError
 
-__all__ = ["precompile", "KERNELS", "Signature"]
+__all__ = ["precompile", "missing_kernels", "KERNELS", "Signature"]
 
 #: every kernel the Python side calls, with the argument types of the runtime's own calls: the
 #: ``Signature`` records that ``cgaskin._shared.jit`` collects where each kernel is defined (importing
@@ -121,6 +121,24 @@ def _in_parallel(shares: list) -> list:
 def default_jobs() -> int:
     """The cores this process may run on (``os.cpu_count()`` counts the machine's)."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def missing_kernels() -> list:
+    """The kernels that would compile at their first call: neither shipped compiled for this setup nor
+    in numba's cache. Those it finds are loaded, so that their first call does not look again.
+
+    Returns
+    -------
+    list of str
+        "module.function" of each missing kernel (empty where every kernel loads).
+
+    Examples
+    --------
+    >>> from cgaskin.app.precompile import missing_kernels
+    >>> missing_kernels()                     # doctest: +SKIP
+    []
+    """
+    return [f"{KERNELS[i].module}.{KERNELS[i].name}" for i in range(len(KERNELS)) if not _is_cached(*_dispatcher(i))]
 
 
 def precompile(jobs: int | None = None, verbose: bool = False) -> int:
