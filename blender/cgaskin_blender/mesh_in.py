@@ -23,6 +23,9 @@ from .scene_rig import Skin, armature_skin
 VERTEX, MATERIAL, SHARP, NORMAL, GROUPS, WEIGHT_SUM, TEAR = (
     "_BLENDER_VERTEX", "_MATERIAL", "_SHARP", "_CUSTOM_NORMAL", "_GROUPS", "_WEIGHT_SUM", "_TEAR")
 UV, SHAPE = "_UV{}", "_SHAPE{}"
+#: corners of a vertex whose custom normals differ less than this share a copy (Blender decodes a
+#: vertex's custom normal for each of its corners with noise of about 3e-5)
+NORMAL_TOLERANCE = 1e-3
 #: below this total a vertex's bone weights do not move it in Blender's Armature modifier
 NO_WEIGHT = 1e-4
 
@@ -67,17 +70,40 @@ def _corner_arrays(mesh, name: str, width: int, dtype, count: int, collection=No
     return values.reshape(count, width)
 
 
+def _face_attribute(mesh, name: str, dtype) -> np.ndarray:
+    """(f,) values of a face attribute (zeros where the mesh has none)."""
+    values = np.zeros(len(mesh.polygons), dtype=dtype)
+    if name in mesh.attributes:
+        mesh.attributes[name].data.foreach_get("value", values)
+    return values
+
+
 def _triangles(mesh):
-    """(t, 3) corners, (t,) polygons of the loop triangles, (c,) vertex of each corner."""
-    mesh.calc_loop_triangles()
-    tris = mesh.loop_triangles
-    corners = np.empty(len(tris) * 3, dtype=np.int32)
-    tris.foreach_get("loops", corners)
-    polygon = np.empty(len(tris), dtype=np.int32)
-    tris.foreach_get("polygon_index", polygon)
+    """(t, 3) corners, (t,) polygons of the triangles, (c,) vertex of each corner. Triangles and quads
+    are read from the polygons (a quad split at its first corner); other polygons by Blender's
+    loop triangles."""
     corner_vertex = np.empty(len(mesh.loops), dtype=np.int32)
     mesh.loops.foreach_get("vertex_index", corner_vertex)
+    start = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_start", start)
+    sizes = np.diff(np.r_[start, len(corner_vertex)]) if len(start) else start
+    if np.all((sizes == 3) | (sizes == 4)):
+        quads = np.flatnonzero(sizes == 4)
+        corners = np.concatenate([start[:, None] + np.arange(3), _quads_second(start[quads])])
+        polygon = np.r_[np.arange(len(start)), quads]
+    else:
+        mesh.calc_loop_triangles()
+        tris = mesh.loop_triangles
+        corners = np.empty(len(tris) * 3, dtype=np.int32)
+        tris.foreach_get("loops", corners)
+        polygon = np.empty(len(tris), dtype=np.int32)
+        tris.foreach_get("polygon_index", polygon)
     return corners.reshape(-1, 3).astype(np.int64), polygon.astype(np.int64), corner_vertex.astype(np.int64)
+
+
+def _quads_second(start: np.ndarray) -> np.ndarray:
+    """(q, 3) the second triangle (corners 0, 2, 3) of quads starting at ``start``."""
+    return start[:, None] + np.array([0, 2, 3])
 
 
 def _bone_rows(weights: Weights, group_names: list, bone_names: list, n: int):
@@ -100,6 +126,37 @@ def _bone_rows(weights: Weights, group_names: list, bone_names: list, n: int):
     # (Blender divides by the vertex's total: the same rows, summing to 1)
     rows /= np.maximum(rows.sum(axis=1), 1e-300)[:, None]
     return joints, rows, sums, int(np.count_nonzero(np.bincount(vertex[rank >= 4], minlength=n)))
+
+
+def _split(used: np.ndarray, corner_vertex: np.ndarray, columns: list, n: int):
+    """One cgaskin vertex per distinct (Blender vertex, corner data) among the ``used`` corners:
+    (the corner each cgaskin vertex is read from, the cgaskin vertex of each used corner).
+
+    ``columns``: (values (c,), tolerance) per column of corner data. Most corners hold what the first
+    corner of their vertex holds, within the tolerance: those share the vertex's first copy; only the
+    others (along seams) are told apart, on their data rounded to the tolerance. (Column by column:
+    numpy gathers and compares 1-D arrays several times faster than rows of a few columns.)"""
+    vertex_of = corner_vertex[used]
+    first = np.full(n, -1, dtype=np.int64)
+    first[vertex_of[::-1]] = used[::-1]
+    present = np.flatnonzero(first >= 0)
+    primary = np.full(n, -1, dtype=np.int64)
+    primary[present] = np.arange(len(present))
+    split_of = primary[vertex_of]
+    first_of_corner = first[vertex_of]
+    differs = np.zeros(len(used), dtype=bool)
+    for values, tolerance in columns:
+        differs |= np.abs(values[used] - values[first_of_corner]) > tolerance
+    odd = np.flatnonzero(differs)
+    if not len(odd):
+        return first[present], split_of
+    key = np.ascontiguousarray(np.stack([vertex_of[odd].astype(np.float64)] + [
+        np.round(values[used[odd]] / tolerance) if tolerance else values[used[odd]].astype(np.float64)
+        for values, tolerance in columns], axis=1))
+    _, index, inverse = np.unique(key.view(np.dtype((np.void, key.shape[1] * 8))).ravel(),
+                                  return_index=True, return_inverse=True)
+    split_of[odd] = len(present) + inverse.ravel()
+    return np.r_[first[present], used[odd][index]], split_of
 
 
 def read_mesh(obj, armature, weights: Weights) -> MeshIn:
@@ -126,22 +183,14 @@ def read_mesh(obj, armature, weights: Weights) -> MeshIn:
     custom = bool(mesh.has_custom_normals)
     if custom:
         per_corner[NORMAL] = _corner_arrays(mesh, None, 3, np.float32, n_corners, mesh.corner_normals)
-    face_material = np.zeros(len(mesh.polygons), dtype=np.int32)
-    mesh.polygons.foreach_get("material_index", face_material)
-    face_sharp = np.zeros(len(mesh.polygons), dtype=bool)
-    mesh.polygons.foreach_get("use_smooth", face_sharp)
-    corner_polygon = np.empty(n_corners, dtype=np.int64)
+    corner_polygon = np.zeros(n_corners, dtype=np.int64)
     corner_polygon[corners.ravel()] = np.repeat(polygon, 3)
-    per_corner[MATERIAL] = face_material[corner_polygon][:, None].astype(np.float32)
-    per_corner[SHARP] = (~face_sharp[corner_polygon])[:, None].astype(np.float32)
+    per_corner[MATERIAL] = _face_attribute(mesh, "material_index", np.int32)[corner_polygon][:, None].astype(np.float32)
+    per_corner[SHARP] = _face_attribute(mesh, "sharp_face", bool)[corner_polygon][:, None].astype(np.float32)
 
-    # one cgaskin vertex per distinct (Blender vertex, corner data) among the triangles' corners
-    used = corners.ravel()
-    key = np.concatenate([corner_vertex[used, None].astype(np.float64)]
-                         + [values[used].astype(np.float64) for values in per_corner.values()], axis=1)
-    _, first, split_of = np.unique(np.ascontiguousarray(key).view(np.dtype((np.void, key.shape[1] * 8))).ravel(),
-                                   return_index=True, return_inverse=True)
-    source_corner = used[first]
+    columns = [(np.ascontiguousarray(values[:, k]), NORMAL_TOLERANCE if name == NORMAL else 0.0)
+               for name, values in per_corner.items() for k in range(values.shape[1])]
+    source_corner, split_of = _split(corners.ravel(), corner_vertex, columns, n)
     source = corner_vertex[source_corner]
     faces = split_of.reshape(-1, 3)
 

@@ -29,10 +29,13 @@ def weld(rig) -> Welded:
     columns = [rig.vertices, rig.attributes[VERTEX]]
     if TEAR in rig.attributes:
         columns.append(rig.attributes[TEAR])
-    key = np.ascontiguousarray(np.concatenate(columns, axis=1))
-    _, first, of_split = np.unique(key.view(np.dtype((np.void, key.shape[1] * 8))).ravel(),
-                                   return_index=True, return_inverse=True)
-    return Welded(of_split.ravel(), first)
+    key = np.concatenate(columns, axis=1)
+    order = np.lexsort(key.T[::-1])
+    ordered = key[order]
+    starts = np.r_[True, (ordered[1:] != ordered[:-1]).any(axis=1)]
+    of_split = np.empty(len(key), dtype=np.int64)
+    of_split[order] = np.cumsum(starts) - 1
+    return Welded(of_split, order[starts])
 
 
 def new_mesh(name: str, rig, welded: Welded, source: MeshIn, materials) -> bpy.types.Mesh:
@@ -51,8 +54,11 @@ def new_mesh(name: str, rig, welded: Welded, source: MeshIn, materials) -> bpy.t
     first_corner = corner_split[::3]
     for material in materials:
         mesh.materials.append(material)
-    mesh.polygons.foreach_set("material_index", np.rint(rig.attributes[MATERIAL][first_corner, 0]).astype(np.int32))
-    mesh.polygons.foreach_set("use_smooth", rig.attributes[SHARP][first_corner, 0] < 0.5)
+    # (face attributes written directly: ``Polygon.use_smooth`` is set one face at a time)
+    mesh.attributes.new("material_index", "INT", "FACE").data.foreach_set(
+        "value", np.rint(rig.attributes[MATERIAL][first_corner, 0]).astype(np.int32))
+    mesh.attributes.new("sharp_face", "BOOLEAN", "FACE").data.foreach_set(
+        "value", rig.attributes[SHARP][first_corner, 0] >= 0.5)
     for k, uv_name in enumerate(source.uv_names):
         layer = mesh.uv_layers.new(name=uv_name, do_init=False)
         layer.uv.foreach_set("vector", rig.attributes[UV.format(k)][corner_split].astype(np.float32).ravel())
@@ -60,7 +66,11 @@ def new_mesh(name: str, rig, welded: Welded, source: MeshIn, materials) -> bpy.t
     if source.custom_normals:
         normals = rig.attributes[NORMAL][corner_split]
         normals /= np.maximum(np.linalg.norm(normals, axis=1), 1e-30)[:, None]
-        mesh.normals_split_custom_set(normals)
+        if bpy.app.version >= (4, 5, 0):     # free custom normals: one float vector per corner
+            mesh.attributes.new("custom_normal", "FLOAT_VECTOR", "CORNER").data.foreach_set(
+                "vector", normals.astype(np.float32).ravel())
+        else:
+            mesh.normals_split_custom_set(normals)
     if TEAR in rig.attributes:
         labels = mesh.attributes.new(TEAR, "FLOAT", "POINT")
         labels.data.foreach_set("value", rig.attributes[TEAR][welded.first, 0].astype(np.float32))

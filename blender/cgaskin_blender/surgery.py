@@ -56,7 +56,7 @@ class Outcome(NamedTuple):
     objects: list           # the object, then any it made
     results: list           # cgaskin's rig for each of them (split vertices)
     welds: list             # mesh_out.Welded: each Blender vertex's row in its rig (``first``)
-    skin: object            # scene_rig.Skin of the armature (poses the results: ``screen_pose``)
+    source: MeshIn          # the object as read (its ``skin`` poses the results: ``screen_pose``)
 
 
 #: the latest operation's Outcome (the panel shows its times; tests and benchmarks read it)
@@ -112,7 +112,7 @@ def operate(context, obj, run: Callable[[Scene], list]) -> Outcome:
     obj[MADE] = [made.name for made in objects[1:]]
     done = time.perf_counter()
     times = Times(read_w - start, read_g - read_w, ran - read_g, wrote_g - ran, done - wrote_g)
-    outcome = Outcome(times, notes, objects, results, welds, mesh_in.skin)
+    outcome = Outcome(times, notes, objects, results, welds, mesh_in)
     LAST[:] = [outcome]
     return outcome
 

@@ -216,7 +216,7 @@ def run_job(job: dict) -> dict:
     errors, diagonal = [], None
     for frame in [job["frame"]] + job["check_frames"]:
         scene.frame_set(frame)
-        pose = scene_rig.screen_pose(outcome.skin, armature, bpy.context.evaluated_depsgraph_get())
+        pose = scene_rig.screen_pose(outcome.source.skin, armature, bpy.context.evaluated_depsgraph_get())
         for target, rig, welded in zip(outcome.objects, outcome.results, outcome.welds):
             blender = evaluated_positions(target)
             ours = cgaskin.skin(rig, pose)[welded.first]
