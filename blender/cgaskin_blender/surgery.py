@@ -19,7 +19,7 @@ import cgaskin
 
 from .mesh_in import MeshIn, read_mesh, read_weights
 from .mesh_out import add_shape_keys, new_mesh, result_weights, weld, write_weights
-from .scene_rig import armature_modifier, screen_pose
+from .scene_rig import STATIC_BONE, Refusal, armature_modifier, screen_pose
 
 #: custom properties of an operated object: the mesh it had before, the objects the operation made
 PREVIOUS, MADE = "cgaskin_previous_mesh", "cgaskin_made_objects"
@@ -85,6 +85,7 @@ def operate(context, obj, run: Callable[[Scene], list]) -> Outcome:
         warnings.simplefilter("always", cgaskin.ModelWarning)
         warnings.simplefilter("always", cgaskin.OpenRimWarning)
         results = run(scene)
+    _check_unweighted(results, mesh_in)
     ran = time.perf_counter()
     notes = [str(w.message).splitlines()[0] for w in caught if issubclass(w.category, Warning)]
     if mesh_in.over_four:
@@ -115,6 +116,21 @@ def operate(context, obj, run: Callable[[Scene], list]) -> Outcome:
     outcome = Outcome(times, notes, objects, results, welds, mesh_in)
     LAST[:] = [outcome]
     return outcome
+
+
+def _check_unweighted(results: list, mesh_in: MeshIn) -> None:
+    """Refuse a result with vertices made between a vertex no bone weighs and a weighted one: cgaskin
+    blends them, Blender cannot (its Armature modifier divides by the bone weights' total, so a vertex
+    either follows its bones or stays)."""
+    if mesh_in.skin.bone_names[-1] != STATIC_BONE:
+        return
+    static = len(mesh_in.skin.bone_names) - 1
+    for rig in results:
+        share = np.where(rig.joints == static, rig.weights, 0.0).sum(axis=1)
+        blended = np.count_nonzero((share > 1e-9) & (share < 1 - 1e-9))
+        if blended:
+            raise Refusal(f"the operation makes {blended} vertices between vertices no bone weighs and weighted "
+                          "ones, which Blender cannot skin as cgaskin does: weight the vertices there")
 
 
 def _copy_of(obj, context):

@@ -148,6 +148,29 @@ def open_edges(obj) -> int:
     return int(np.count_nonzero(counts != 2))
 
 
+def boundary_loops(obj) -> int:
+    """Connected pieces of the edges not shared by two triangles (welded positions): one per slit."""
+    mesh = obj.data
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    _, welded = np.unique(co.reshape(-1, 3), axis=0, return_inverse=True)
+    mesh.calc_loop_triangles()
+    tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    tris = welded.ravel()[tris.reshape(-1, 3)]
+    edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    parent = {}
+
+    def find(a):
+        while parent.setdefault(a, a) != a:
+            a = parent[a]
+        return a
+    for a, b in unique[counts != 2].tolist():
+        parent[find(a)] = find(b)
+    return len({find(a) for a in parent})
+
+
 def group_sums(obj) -> np.ndarray:
     weights = mesh_in.read_weights(obj)
     return np.bincount(weights.vertex, weights=weights.weight, minlength=len(obj.data.vertices))
@@ -243,8 +266,10 @@ def run_job(job: dict) -> dict:
         first = out["vertices"][0]
         points, view = surface_line(obj, {**job, **job["continue"]})
         stroke = curve_through("stroke2", points)
-        bpy.ops.cgaskin.tear(stroke=stroke.name, blade_direction=view)
+        out["loops_before_continuing"] = boundary_loops(obj)
+        bpy.ops.cgaskin.tear(stroke=stroke.name, blade_direction=view, **job.get("options", {}))
         out["continued_vertices"] = len(obj.data.vertices) - first
+        out["loops_after_continuing"] = boundary_loops(obj)
     if job.get("undo"):
         name, made = obj.name, out["objects"][1:]
         try:

@@ -28,6 +28,8 @@ ANIMATED = {"animate": True, "frame": 30, "check_frames": CHECK}
 FOX = {"frame": 30, "check_frames": [10, 55, 80]}
 CAPSULE = {"frame": 12, "check_frames": [1, 20, 30]}
 
+#: the capsule arm's shoulder end (x < 0.4) left without weights
+UNWEIGHT_SHOULDER = "[g.remove([v.index for v in obj.data.vertices if v.co.x < 0.4]) for g in obj.vertex_groups]"
 REFUSALS = {
     "preserve_volume": ("obj.modifiers[0].use_deform_preserve_volume = True", "Preserve Volume"),
     "modifier_before": ("obj.modifiers.new('Bend', 'DISPLACE'); obj.modifiers.move(len(obj.modifiers) - 1, 0)",
@@ -58,9 +60,22 @@ def jobs(models: Path, capsule: Path, fbx: Path) -> dict:
         "capsule_drill": {"model": str(capsule), **CAPSULE, "operation": "drill", "radius": 0.03, "view": [0, 1, 0],
                           "shift": [0.1, 0, 0]},
         "capsule_tear_grease_pencil": {"model": str(capsule), **CAPSULE, "operation": "tear_gp", "view": [0, 1, 0],
-                                       "options": {"opening": 0.01}},
+                                       "options": {"opening": 0.01}, "from": -0.1, "to": 0.0,
+                                       "continue": {"from": 0.0, "to": 0.1}},
+        # the armature far from the origin, turned and scaled (the mesh's space is not the world's)
+        "fox_far_cut": {"model": fox, **FOX, "operation": "cut",
+                        "set": {"far": "a = obj.find_armature(); a.location = (900.0, -400.0, 250.0); "
+                                       "a.rotation_euler = (0.3, -0.5, 2.0); a.scale = (2.5, 2.5, 2.5)"}},
+        # vertices no bone weighs stay where they are in Blender: so they must in cgaskin
+        "capsule_unweighted_drill": {"model": str(capsule), **CAPSULE, "operation": "drill", "radius": 0.03,
+                                     "view": [0, 1, 0], "shift": [0.1, 0, 0],
+                                     "set": {"unweighted": UNWEIGHT_SHOULDER}},
         **{f"refuse_{name}": {"model": fox, **FOX, "operation": "cut", "set": {name: code}}
            for name, (code, _) in REFUSALS.items()},
+        # a hole across the edge of an unweighted upper half would blend it with weighted vertices
+        "refuse_blend_with_unweighted": {"model": str(capsule), **CAPSULE, "operation": "drill", "radius": 0.03,
+                                         "view": [0, 1, 0], "shift": [0.1, 0, 0],
+                                         "set": {"unweighted": UNWEIGHT_SHOULDER.replace("v.co.x < 0.4", "v.co.z > 0")}},
     }
 
 
@@ -88,8 +103,9 @@ def result(runs, name) -> dict:
     return out
 
 
-OPERATED = ["fox_cut", "fox_cut_revert", "fox_tear", "fox_drill", "arm5_cut", "arm5_tear", "arm5_drill",
-            "arm5_fbx_cut", "arm5_fbx_drill", "capsule_drill", "capsule_tear_grease_pencil"]
+OPERATED = ["fox_cut", "fox_cut_revert", "fox_tear", "fox_drill", "fox_far_cut", "arm5_cut", "arm5_tear",
+            "arm5_drill", "arm5_fbx_cut", "arm5_fbx_drill", "capsule_drill", "capsule_tear_grease_pencil",
+            "capsule_unweighted_drill"]
 
 
 @pytest.mark.parametrize("name", OPERATED)
@@ -109,6 +125,8 @@ def test_groups_uvs_materials_modifier_and_parent_are_kept(runs, name):
     out = result(runs, name)
     assert out["groups_same"]
     lo, hi = out["sums_before"]
+    if name == "capsule_unweighted_drill":
+        assert lo == 0.0                                     # (some vertices without weights, as set)
     assert abs(out["sums_after"][0] - lo) < 1e-6 and abs(out["sums_after"][1] - hi) < 1e-6
     assert all(uv == out["uv_before"] for uv in out["uv_after"])
     assert out["materials_same"]
@@ -138,9 +156,11 @@ def test_a_second_stroke_continues_the_slit(runs):
     assert out["continued_vertices"] > 0
 
 
-def test_an_opened_grease_pencil_tear_opens_the_mesh(runs):
+def test_an_opened_grease_pencil_tear_opens_the_mesh_and_a_second_stroke_lengthens_its_slit(runs):
     out = result(runs, "capsule_tear_grease_pencil")
     assert out["open_before"] == 0 and out["open_after"][0] > 0
+    assert out["loops_before_continuing"] == 1
+    assert out["continued_vertices"] > 0 and out["loops_after_continuing"] == 1     # one slit, longer
 
 
 def test_shape_keys_are_carried(runs):
@@ -166,11 +186,11 @@ def test_what_undo_does_headless(runs):
         assert all(out["undone"].values()) and out["undo_removed"]
 
 
-@pytest.mark.parametrize("name", sorted(REFUSALS))
+@pytest.mark.parametrize("name", sorted(REFUSALS) + ["blend_with_unweighted"])
 def test_what_cgaskin_cannot_reproduce_is_refused_in_one_line(runs, name):
     out = runs[f"refuse_{name}"]
     assert "crash" not in out, out["crash"]
     message = out["refused"].strip()
     assert "\n" not in message and "Traceback" not in message
-    assert REFUSALS[name][1] in message
+    assert (REFUSALS[name][1] if name in REFUSALS else "no bone weighs") in message
     assert out["unchanged"]
