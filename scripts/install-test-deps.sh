@@ -55,6 +55,37 @@ if "$PYTHON" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
         "$PYTHON" -m venv --clear "$BLENDER_VENV"
         "$BLENDER_VENV/bin/python" -m pip install -q bpy==5.0.1
     fi
+    # what runs in it besides bpy: cgaskin itself (editable, this checkout) with its run-time deps under
+    # Blender 5.0's NumPy (tests/blender: the extension's install test, and tests/surgery again under
+    # NumPy 1.26) and what tests/surgery imports. numba and llvmlite at the versions the NumPy 1.26 layer of
+    # shipped kernels was built for, where it is there (else Blender would compile every kernel); the
+    # rest as pip resolves it with NumPy pinned. Checked first: when all is there, no pip runs.
+    venv_wants=(numpy==1.26.4 pygltflib pytest hypothesis clifford trimesh manifold3d sympy galgebra)
+    layer_versions="$("$BLENDER_VENV/bin/python" -c '
+import json, pathlib
+for manifest in sorted(pathlib.Path("runtime/_kernels").glob("*-numpy1.26/manifest.json")):
+    built_for = json.loads(manifest.read_text())["built_for"]
+    print("numba==" + built_for["numba"], "llvmlite==" + built_for["llvmlite"])
+    break
+else:
+    print("numba")')"
+    read -r -a layer_versions <<< "$layer_versions"
+    venv_wants+=("${layer_versions[@]}")
+    if ! "$BLENDER_VENV/bin/python" - "$(pwd)" "${venv_wants[@]}" <<'PY' 2>/dev/null; then
+import importlib.metadata as m, importlib.util, sys
+repo, wants = sys.argv[1], sys.argv[2:]
+for want in wants:                      # "name" or "name==version"
+    name, _, version = want.partition("==")
+    if version and m.version(name) != version:
+        sys.exit(1)
+    m.version(name)                     # raises when absent
+spec = importlib.util.find_spec("cgaskin")
+sys.exit(not (spec and spec.origin.startswith(repo + "/runtime/")))
+PY
+        echo "install-test-deps: ${venv_wants[*]} and cgaskin (editable) into $BLENDER_VENV"
+        "$BLENDER_VENV/bin/python" -m pip install -q "${venv_wants[@]}"
+        "$BLENDER_VENV/bin/python" -m pip install -q --no-deps -e .
+    fi
 else
     echo "install-test-deps: bpy 5.0.1 needs Python 3.11, this is $("$PYTHON" -V 2>&1):" \
          "the Blender tests cannot run here (they skip, and fail under CGASKIN_CI=1)" >&2
