@@ -42,7 +42,7 @@ def capsule_scene(rings: int, around: int, folder: Path):
     path = cgaskin.save(cgaskin.capsule_arm(n_joints=5, rings_per_segment=rings, segments_around=around),
                         folder / "capsule.glb")
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.import_scene.gltf(filepath=str(path))
+    bpy.ops.import_scene.gltf(filepath=str(path), loglevel=50)     # (its progress lines would fill the table)
     (obj,) = [o for o in bpy.context.scene.objects if o.type == "MESH" and o.find_armature() is not None]
     bpy.context.view_layer.objects.active = obj
     scene = bpy.context.scene
