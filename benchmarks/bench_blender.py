@@ -17,6 +17,8 @@ Rows (medians; ratios within this run):
 """
 from __future__ import annotations
 
+import contextlib
+import io
 import sys
 import tempfile
 import time
@@ -37,12 +39,18 @@ import cgaskin_blender  # noqa: E402
 from cgaskin_blender import mesh_out, surgery  # noqa: E402
 
 
+def quiet():
+    """Keep what Blender prints (the importer's progress, the operators' reports) out of the tables."""
+    return contextlib.redirect_stdout(io.StringIO())
+
+
 def capsule_scene(rings: int, around: int, folder: Path):
     """The posed capsule arm in an empty scene, active, and an empty across its middle."""
     path = cgaskin.save(cgaskin.capsule_arm(n_joints=5, rings_per_segment=rings, segments_around=around),
                         folder / "capsule.glb")
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.import_scene.gltf(filepath=str(path), loglevel=50)     # (its progress lines would fill the table)
+    with quiet():
+        bpy.ops.import_scene.gltf(filepath=str(path))
     (obj,) = [o for o in bpy.context.scene.objects if o.type == "MESH" and o.find_armature() is not None]
     bpy.context.view_layer.objects.active = obj
     scene = bpy.context.scene
@@ -58,7 +66,8 @@ def cut_rows(obj, plane, repeat: int) -> list:
     stages = []
 
     def cut():
-        bpy.ops.cgaskin.cut(plane=plane.name)
+        with quiet():
+            bpy.ops.cgaskin.cut(plane=plane.name)
         stages.append(surgery.LAST[0].times)
 
     samples = []
@@ -97,7 +106,8 @@ def cut_rows(obj, plane, repeat: int) -> list:
 
 def weight_rows(obj, repeat: int) -> list:
     """Writing the weights of the cut's first object again, by three routes."""
-    bpy.ops.cgaskin.cut(plane="plane")
+    with quiet():
+        bpy.ops.cgaskin.cut(plane="plane")
     outcome = surgery.LAST[0]
     weights = mesh_out.result_weights(outcome.results[0], outcome.welds[0], outcome.source)
     names = [group.name for group in obj.vertex_groups]
