@@ -23,6 +23,7 @@ import pytest
 
 from cgaskin._shared import shipped
 from cgaskin.app import ship
+from tests.helpers.compile_events import RECORD_COMPILES
 
 REPO = Path(__file__).resolve().parents[2]
 NO_JIT = os.environ.get("NUMBA_DISABLE_JIT") == "1"
@@ -32,18 +33,7 @@ PROBE = textwrap.dedent("""\
     import hashlib, json, sys, time
     from pathlib import Path
     start = time.perf_counter()
-    from numba.core import event
-    compiled = []
-
-    class Recorder(event.Listener):
-        def on_start(self, ev):
-            f = ev.data["dispatcher"].py_func
-            compiled.append(f"{f.__module__}.{f.__qualname__}")
-
-        def on_end(self, ev):
-            pass
-
-    event.register("numba:compile", Recorder())
+""") + RECORD_COMPILES + textwrap.dedent("""\
     import numpy as np
     import cgaskin
     from cgaskin._shared import shipped

@@ -133,23 +133,8 @@ def bit_empty(obj, job: dict):
     return empty, size
 
 
-def open_edges(obj) -> int:
-    """Edges not shared by exactly two triangles, on positions welded where equal (rest)."""
-    mesh = obj.data
-    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.vertices.foreach_get("co", co)
-    _, welded = np.unique(co.reshape(-1, 3), axis=0, return_inverse=True)
-    mesh.calc_loop_triangles()
-    tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
-    mesh.loop_triangles.foreach_get("vertices", tris)
-    tris = welded.ravel()[tris.reshape(-1, 3)]
-    edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return int(np.count_nonzero(counts != 2))
-
-
-def boundary_loops(obj) -> int:
-    """Connected pieces of the edges not shared by two triangles (welded positions): one per slit."""
+def _open_edges(obj) -> np.ndarray:
+    """(k, 2) the edges not shared by exactly two triangles, on positions welded where equal (rest)."""
     mesh = obj.data
     co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
     mesh.vertices.foreach_get("co", co)
@@ -160,13 +145,22 @@ def boundary_loops(obj) -> int:
     tris = welded.ravel()[tris.reshape(-1, 3)]
     edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
     unique, counts = np.unique(edges, axis=0, return_counts=True)
+    return unique[counts != 2]
+
+
+def open_edges(obj) -> int:
+    return len(_open_edges(obj))
+
+
+def boundary_loops(obj) -> int:
+    """Connected pieces of the open edges: one per slit."""
     parent = {}
 
     def find(a):
         while parent.setdefault(a, a) != a:
             a = parent[a]
         return a
-    for a, b in unique[counts != 2].tolist():
+    for a, b in _open_edges(obj).tolist():
         parent[find(a)] = find(b)
     return len({find(a) for a in parent})
 

@@ -14,6 +14,7 @@ import pytest
 
 import cgaskin
 from tests.clients.conftest import SUMMARY
+from tests.helpers.compile_events import RECORD_COMPILES
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -52,18 +53,7 @@ CHECK = textwrap.dedent("""\
             registered[name] = getattr(bpy.ops.cgaskin, name).get_rna_type().identifier
         except (AttributeError, KeyError):
             registered[name] = None
-    from numba.core import event
-    compiled = []
-
-    class Recorder(event.Listener):
-        def on_start(self, ev):
-            f = ev.data["dispatcher"].py_func
-            compiled.append(f"{f.__module__}.{f.__qualname__}")
-
-        def on_end(self, ev):
-            pass
-
-    event.register("numba:compile", Recorder())
+""") + RECORD_COMPILES + textwrap.dedent("""\
     import numba, cgaskin
     from cgaskin._shared import shipped
     start = time.perf_counter()
