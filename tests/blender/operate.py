@@ -187,15 +187,22 @@ def operate(obj, job: dict, out: dict) -> dict:
         empty.location += Vector(job.get("view", (0.0, 1.0, 0.0))).normalized() * obj.dimensions.length
         empty.rotation_euler = Vector(job.get("normal", (1.0, 0.2, 0.1))).normalized().to_track_quat("Z", "Y").to_euler()
         options["plane"] = empty.name
+        if job.get("cursor"):                 # the same plane given by the 3D cursor
+            bpy.context.scene.cursor.matrix = empty.matrix_world
+            options["plane"] = ""
     elif operation in ("tear", "tear_gp"):
         points, view = surface_line(obj, job)
         out["stroke_points"] = len(points)
         maker = curve_through if operation == "tear" else grease_pencil_through
         options.update(stroke=maker("stroke", points).name, blade_direction=view)
+        if job.get("no_direction"):           # headless there is no view to take it from
+            del options["blade_direction"]
         operation = "tear"
     elif operation == "drill":
         empty, size = bit_empty(obj, job)
         options.update(bit=empty.name, radius=job["radius"] * size)
+        if "depth" in job:                    # (the bit starts a size away from the middle)
+            options["depth"] = job["depth"] * size
     return {"operation": operation, **options}
 
 
@@ -256,6 +263,8 @@ def run_job(job: dict) -> dict:
     out["open_after"] = [open_edges(o) for o in outcome.objects]
     out["shape_keys"] = [[b.name for b in o.data.shape_keys.key_blocks] if o.data.shape_keys else [] for o in outcome.objects]
     out["custom_normals"] = [o.data.has_custom_normals for o in outcome.objects]
+    out["material_faces"] = [np.bincount([p.material_index for p in o.data.polygons], minlength=2).tolist()
+                             for o in outcome.objects]
     if job.get("continue"):                   # a second stroke from where the first ended
         first = out["vertices"][0]
         points, view = surface_line(obj, {**job, **job["continue"]})

@@ -66,12 +66,21 @@ def jobs(models: Path, capsule: Path, fbx: Path) -> dict:
         "fox_far_cut": {"model": fox, **FOX, "operation": "cut",
                         "set": {"far": "a = obj.find_armature(); a.location = (900.0, -400.0, 250.0); "
                                        "a.rotation_euler = (0.3, -0.5, 2.0); a.scale = (2.5, 2.5, 2.5)"}},
+        # the plane given by the 3D cursor; two materials, on alternate faces
+        "fox_cut_cursor": {"model": fox, **FOX, "operation": "cut", "cursor": True,
+                           "set": {"materials": "obj.data.materials.append(bpy.data.materials.new('second')); "
+                                                "[setattr(p, 'material_index', p.index % 2) for p in obj.data.polygons]"}},
+        # a blind, open hole: the bit stops inside
+        "capsule_blind_open_drill": {"model": str(capsule), **CAPSULE, "operation": "drill", "radius": 0.03,
+                                     "view": [0, 1, 0], "shift": [0.1, 0, 0], "depth": 1.03,
+                                     "options": {"wall": False}},
         # vertices no bone weighs stay where they are in Blender: so they must in cgaskin
         "capsule_unweighted_drill": {"model": str(capsule), **CAPSULE, "operation": "drill", "radius": 0.03,
                                      "view": [0, 1, 0], "shift": [0.1, 0, 0],
                                      "set": {"unweighted": UNWEIGHT_SHOULDER}},
         **{f"refuse_{name}": {"model": fox, **FOX, "operation": "cut", "set": {name: code}}
            for name, (code, _) in REFUSALS.items()},
+        "refuse_no_blade_direction": {"model": fox, **FOX, "operation": "tear", "view": [0, 1, 0], "no_direction": True},
         # a hole across the edge of an unweighted upper half would blend it with weighted vertices
         "refuse_blend_with_unweighted": {"model": str(capsule), **CAPSULE, "operation": "drill", "radius": 0.03,
                                          "view": [0, 1, 0], "shift": [0.1, 0, 0],
@@ -108,7 +117,7 @@ def result(runs, name) -> dict:
 
 OPERATED = ["fox_cut", "fox_cut_revert", "fox_tear", "fox_drill", "fox_far_cut", "arm5_cut", "arm5_tear",
             "arm5_drill", "arm5_fbx_cut", "arm5_fbx_drill", "capsule_drill", "capsule_tear_grease_pencil",
-            "capsule_unweighted_drill"]
+            "capsule_unweighted_drill", "fox_cut_cursor", "capsule_blind_open_drill"]
 
 
 @pytest.mark.parametrize("name", OPERATED)
@@ -189,11 +198,24 @@ def test_what_undo_does_headless(runs):
         assert all(out["undone"].values()) and out["undo_removed"]
 
 
-@pytest.mark.parametrize("name", sorted(REFUSALS) + ["blend_with_unweighted"])
+def test_the_cursor_gives_the_plane_and_faces_keep_their_materials(runs):
+    out = result(runs, "fox_cut_cursor")
+    assert len(out["objects"]) == 2
+    for first, second in out["material_faces"]:          # alternate faces: about half and half
+        assert first > 0 and second > 0 and 0.3 < second / (first + second) < 0.7
+
+
+def test_an_open_blind_hole_opens_a_closed_mesh(runs):
+    out = result(runs, "capsule_blind_open_drill")
+    assert out["open_before"] == 0 and out["open_after"][0] > 0
+
+
+@pytest.mark.parametrize("name", sorted(REFUSALS) + ["blend_with_unweighted", "no_blade_direction"])
 def test_what_cgaskin_cannot_reproduce_is_refused_in_one_line(runs, name):
     out = runs[f"refuse_{name}"]
     assert "crash" not in out, out["crash"]
     message = out["refused"].strip()
     assert "\n" not in message and "Traceback" not in message
-    assert (REFUSALS[name][1] if name in REFUSALS else "no bone weighs") in message
+    expected = {"blend_with_unweighted": "no bone weighs", "no_blade_direction": "give the blade a direction"}
+    assert (REFUSALS[name][1] if name in REFUSALS else expected[name]) in message
     assert out["unchanged"]
