@@ -119,9 +119,12 @@ def check_kernels() -> tuple[list, list]:
         stale += [f"{folder.name}: {name}" for name in _stale(manifest, folder, wanted, keys)]
         stale += [f"{folder.name}: {name} (no longer recorded)"
                   for name in sorted(set(manifest["kernels"]) - set(wanted))]
-        differs = [f"{k} {manifest['built_for'][k]} (installed: {here[k]})" for k in ("numba", "llvmlite", "numpy")
-                   if manifest["built_for"][k] != here[k]]
-        if differs:
+    usable = [folder for folder in mine if manifests[folder]["built_for"] == here]
+    if not usable:              # (a layer for another NumPy, Blender's say, beside this setup's is expected)
+        for folder in mine:
+            built_for = manifests[folder]["built_for"]
+            differs = [f"{k} {built_for[k]} (installed: {here[k]})" for k in ("numba", "llvmlite", "numpy")
+                       if built_for[k] != here[k]]
             notes.append(f"{folder.name} is built for {', '.join(differs)}: its kernels compile at their first "
                          "use here")
     return stale, notes
