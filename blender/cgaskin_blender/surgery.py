@@ -94,7 +94,7 @@ def operate(context, obj, run: Callable[[Scene], list]) -> Outcome:
     materials = list(obj.data.materials)
     objects, welds = [], []
     for k, rig in enumerate(results):
-        target = obj if k == 0 else _copy_of(obj, context)
+        target = obj if k == 0 else _copy_of(obj)
         welded = weld(rig)
         mesh = new_mesh(obj.data.name, rig, welded, mesh_in, materials)
         if k == 0:
@@ -133,7 +133,7 @@ def _check_unweighted(results: list, mesh_in: MeshIn) -> None:
                           "ones, which Blender cannot skin as cgaskin does: weight the vertices there")
 
 
-def _copy_of(obj, context):
+def _copy_of(obj):
     copy = obj.copy()           # (parent, modifiers, vertex-group names; its data is replaced)
     copy.name = obj.name + ".cut"
     for collection in obj.users_collection:
