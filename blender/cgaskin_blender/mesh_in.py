@@ -38,6 +38,19 @@ class Weights(NamedTuple):
     weight: np.ndarray      # (k,) float64
 
 
+class ShapeKey(NamedTuple):
+    """A shape key's settings (its offsets travel as a SHAPE attribute)."""
+
+    name: str
+    value: float
+    mute: bool
+    slider_min: float
+    slider_max: float
+    vertex_group: str
+    relative_key: str
+    interpolation: str
+
+
 class MeshIn(NamedTuple):
     """A mesh object as a cgaskin rig and what writing a result back needs."""
 
@@ -46,7 +59,7 @@ class MeshIn(NamedTuple):
     group_names: list       # the object's vertex groups, in order
     other_groups: list      # indices of the groups carried as the GROUPS attribute (not deforming bones)
     uv_names: list
-    shape_names: list       # the shape keys after the basis, carried as SHAPE attributes
+    shape_keys: list        # ShapeKey of each key block, the basis first (the others' offsets: SHAPE k)
     custom_normals: bool
     over_four: int          # vertices that had more than four bone weights (the four largest kept)
 
@@ -206,17 +219,19 @@ def read_mesh(obj, armature, weights: Weights) -> MeshIn:
         pick = column[weights.group] >= 0 if len(weights.group) else np.zeros(0, dtype=bool)
         dense[weights.vertex[pick], column[weights.group[pick]]] = weights.weight[pick]
         attributes[GROUPS] = dense[source]
-    shape_names = []
+    shape_keys = []
     if mesh.shape_keys is not None:
-        for k, block in enumerate(mesh.shape_keys.key_blocks[1:]):
-            co = np.empty(n * 3, dtype=np.float32)
-            block.data.foreach_get("co", co)
-            attributes[SHAPE.format(k)] = (co.reshape(n, 3) - positions)[source]
-            shape_names.append(block.name)
+        for k, block in enumerate(mesh.shape_keys.key_blocks):
+            if k:
+                co = np.empty(n * 3, dtype=np.float32)
+                block.data.foreach_get("co", co)
+                attributes[SHAPE.format(k)] = (co.reshape(n, 3) - positions)[source]
+            shape_keys.append(ShapeKey(block.name, block.value, block.mute, block.slider_min, block.slider_max,
+                                       block.vertex_group, block.relative_key.name, block.interpolation))
     if TEAR in mesh.attributes and mesh.attributes[TEAR].domain == "POINT":
         tear = np.empty(n, dtype=np.float32)
         mesh.attributes[TEAR].data.foreach_get("value", tear)
         attributes[TEAR] = tear[source, None].astype(np.float64)
     rig = cgaskin.Rig(positions[source], faces, joints[source], rows[source], skin.skeleton,
                       attributes=attributes, name=obj.name)
-    return MeshIn(rig, skin, group_names, other, uv_names, shape_names, custom, over_four)
+    return MeshIn(rig, skin, group_names, other, uv_names, shape_keys, custom, over_four)

@@ -78,14 +78,22 @@ def new_mesh(name: str, rig, welded: Welded, source: MeshIn, materials) -> bpy.t
 
 
 def add_shape_keys(obj, rig, welded: Welded, source: MeshIn) -> None:
-    """The shape keys of ``source`` on ``obj`` (whose mesh is new), from their carried offsets."""
-    if not source.shape_names:
+    """The shape keys of ``source`` on ``obj`` (whose mesh is new): positions from their carried
+    offsets, then their settings (value, range, mute, vertex group, the key each is relative to)."""
+    if not source.shape_keys:
         return
     rest = rig.vertices[welded.first]
-    obj.shape_key_add(name="Basis", from_mix=False)
-    for k, name in enumerate(source.shape_names):
-        block = obj.shape_key_add(name=name, from_mix=False)
-        block.data.foreach_set("co", (rest + rig.attributes[SHAPE.format(k)][welded.first]).astype(np.float32).ravel())
+    blocks = []
+    for k, key in enumerate(source.shape_keys):
+        block = obj.shape_key_add(name=key.name, from_mix=False)
+        if k:
+            block.data.foreach_set("co", (rest + rig.attributes[SHAPE.format(k)][welded.first]).astype(np.float32).ravel())
+        blocks.append(block)
+    for block, key in zip(blocks, source.shape_keys):
+        block.slider_min, block.slider_max = key.slider_min, key.slider_max
+        block.value, block.mute = key.value, key.mute
+        block.vertex_group, block.interpolation = key.vertex_group, key.interpolation
+        block.relative_key = obj.data.shape_keys.key_blocks[key.relative_key]
 
 
 def result_weights(rig, welded: Welded, source: MeshIn) -> Weights:

@@ -165,6 +165,23 @@ def boundary_loops(obj) -> int:
     return len({find(a) for a in parent})
 
 
+def shape_offsets(obj) -> list:
+    """Per shape key after the basis: the smallest and largest offset from the basis, per axis."""
+    keys = obj.data.shape_keys
+    if keys is None:
+        return []
+    n = len(obj.data.vertices)
+    basis = np.empty(n * 3, dtype=np.float32)
+    keys.key_blocks[0].data.foreach_get("co", basis)
+    out = []
+    for block in keys.key_blocks[1:]:
+        co = np.empty(n * 3, dtype=np.float32)
+        block.data.foreach_get("co", co)
+        offset = (co - basis).reshape(-1, 3)
+        out.append([offset.min(axis=0).tolist(), offset.max(axis=0).tolist()])
+    return out
+
+
 def group_sums(obj) -> np.ndarray:
     weights = mesh_in.read_weights(obj)
     return np.bincount(weights.vertex, weights=weights.weight, minlength=len(obj.data.vertices))
@@ -262,6 +279,9 @@ def run_job(job: dict) -> dict:
     out["parents"] = [o.parent.name if o.parent else None for o in outcome.objects]
     out["open_after"] = [open_edges(o) for o in outcome.objects]
     out["shape_keys"] = [[b.name for b in o.data.shape_keys.key_blocks] if o.data.shape_keys else [] for o in outcome.objects]
+    out["shape_key_values"] = [[b.value for b in o.data.shape_keys.key_blocks] if o.data.shape_keys else []
+                               for o in outcome.objects]
+    out["shape_offsets"] = [shape_offsets(o) for o in outcome.objects]
     out["custom_normals"] = [o.data.has_custom_normals for o in outcome.objects]
     out["material_faces"] = [np.bincount([p.material_index for p in o.data.polygons], minlength=2).tolist()
                              for o in outcome.objects]

@@ -15,6 +15,7 @@ import subprocess
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import cgaskin
@@ -46,7 +47,9 @@ def jobs(models: Path, capsule: Path, fbx: Path) -> dict:
     return {
         "fox_cut": {"model": fox, **FOX, "operation": "cut", "options": {"cap": True}, "undo": True},
         "fox_cut_revert": {"model": fox, **FOX, "operation": "cut", "revert": True,
-                           "set": {"shape": "obj.shape_key_add(name='Basis'); obj.shape_key_add(name='Idle')"}},
+                           "set": {"shape": "obj.shape_key_add(name='Basis'); k = obj.shape_key_add(name='Idle'); "
+                                            "k.data.foreach_set('co', [c + (5.0 if i % 3 == 2 else 0.0) for i, c in "
+                                            "enumerate(v for d in k.data for v in d.co)]); k.value = 0.0"}},
         "fox_tear": {"model": fox, **FOX, "operation": "tear", "view": [0, 1, 0], "from": -0.04, "to": 0.0,
                      "shift": [0, 0, 0.05], "continue": {"from": 0.0, "to": 0.04}},
         "fox_drill": {"model": fox, **FOX, "operation": "drill", "radius": 0.02, "view": [1, 0, 0]},
@@ -179,6 +182,9 @@ def test_shape_keys_are_carried(runs):
     out = result(runs, "fox_cut_revert")
     assert out["shape_keys_before"] == ["Basis", "Idle"]
     assert out["shape_keys"] == [["Basis", "Idle"], ["Basis", "Idle"]]
+    assert all(values[1] == 0.0 for values in out["shape_key_values"])      # at 0, as it was
+    for (low, high), in out["shape_offsets"]:           # every vertex, new ones too, 5 up in z
+        assert np.allclose(low, [0, 0, 5], atol=1e-4) and np.allclose(high, [0, 0, 5], atol=1e-4)
 
 
 def test_revert_restores_the_mesh_and_removes_the_other_half(runs):
