@@ -61,6 +61,7 @@ class MeshIn(NamedTuple):
     uv_names: list
     shape_keys: list        # ShapeKey of each key block, the basis first (the others' offsets: SHAPE k)
     custom_normals: bool
+    dropped: list           # the mesh's other attributes (colours, edge flags...), not carried
     over_four: int          # vertices that had more than four bone weights (the four largest kept)
 
 
@@ -234,4 +235,6 @@ def read_mesh(obj, armature, weights: Weights) -> MeshIn:
         attributes[TEAR] = tear[source, None].astype(np.float64)
     rig = cgaskin.Rig(positions[source], faces, joints[source], rows[source], skin.skeleton,
                       attributes=attributes, name=obj.name)
-    return MeshIn(rig, skin, group_names, other, uv_names, shape_keys, custom, over_four)
+    carried = {"position", "material_index", "sharp_face", "custom_normal", TEAR, *uv_names}
+    dropped = [a.name for a in mesh.attributes if not a.name.startswith(".") and a.name not in carried]
+    return MeshIn(rig, skin, group_names, other, uv_names, shape_keys, custom, dropped, over_four)

@@ -88,6 +88,8 @@ def operate(context, obj, run: Callable[[Scene], list]) -> Outcome:
     _check_unweighted(results, mesh_in)
     ran = time.perf_counter()
     notes = [str(w.message).splitlines()[0] for w in caught if issubclass(w.category, Warning)]
+    if mesh_in.dropped:
+        notes.append(f"not carried to the result: {', '.join(mesh_in.dropped)}")
     if mesh_in.over_four:
         notes.append(f"{mesh_in.over_four} vertices had more than 4 bone weights: cgaskin kept the 4 largest")
     forget(obj)

@@ -156,8 +156,10 @@ def test_a_cut_makes_two_objects_of_the_same_armature(runs):
     assert out["open_before"] == 0 and out["open_after"] == [0, 0]      # capped
 
 
-def test_the_arm5_glb_has_custom_normals_and_keeps_them(runs):
-    assert result(runs, "arm5_cut")["custom_normals"] == [True, True]
+def test_the_arm5_glb_has_custom_normals_and_keeps_them_and_says_what_it_drops(runs):
+    out = result(runs, "arm5_cut")
+    assert out["custom_normals"] == [True, True]
+    assert "not carried to the result: sharp_edge" in out["notes"]     # (its importer marks sharp edges)
 
 
 def test_a_walled_drill_keeps_a_closed_mesh_closed(runs):
