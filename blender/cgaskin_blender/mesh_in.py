@@ -19,9 +19,10 @@ import cgaskin
 
 from .scene_rig import Skin, armature_skin
 
-#: cgaskin attribute names of what the operators carry (``UV`` and ``SHAPE`` take a number)
+#: cgaskin attribute names of what the operators carry (``UV`` and ``SHAPE`` take a number; custom
+#: normals under glTF's name, which cgaskin renormalises where it blends them and sets on caps and walls)
 VERTEX, MATERIAL, SHARP, NORMAL, GROUPS, WEIGHT_SUM, TEAR = (
-    "_BLENDER_VERTEX", "_MATERIAL", "_SHARP", "_CUSTOM_NORMAL", "_GROUPS", "_WEIGHT_SUM", "_TEAR")
+    "_BLENDER_VERTEX", "_MATERIAL", "_SHARP", "NORMAL", "_GROUPS", "_WEIGHT_SUM", "_TEAR")
 UV, SHAPE = "_UV{}", "_SHAPE{}"
 #: corners of a vertex whose custom normals differ less than this share a copy (Blender decodes a
 #: vertex's custom normal for each of its corners with noise of about 3e-5)
