@@ -78,10 +78,10 @@ def read_weights(obj) -> Weights:
                    np.array(weight, dtype=np.float64))
 
 
-def _corner_arrays(mesh, name: str, width: int, dtype, count: int, collection=None) -> np.ndarray:
-    values = np.empty(count * width, dtype=dtype)
-    (collection if collection is not None else mesh.attributes[name].data).foreach_get(
-        {1: "value"}.get(width, "vector"), values)
+def _vectors(collection, width: int, count: int) -> np.ndarray:
+    """(count, width) float32 of the "vector" property of each item of a collection (per corner)."""
+    values = np.empty(count * width, dtype=np.float32)
+    collection.foreach_get("vector", values)
     return values.reshape(count, width)
 
 
@@ -194,10 +194,10 @@ def read_mesh(obj, armature, weights: Weights) -> MeshIn:
     per_corner = {}                         # attribute name -> (c, w) values of every corner
     uv_names = [layer.name for layer in mesh.uv_layers]
     for k, layer in enumerate(mesh.uv_layers):
-        per_corner[UV.format(k)] = _corner_arrays(mesh, None, 2, np.float32, n_corners, layer.uv)
+        per_corner[UV.format(k)] = _vectors(layer.uv, 2, n_corners)
     custom = bool(mesh.has_custom_normals)
     if custom:
-        per_corner[NORMAL] = _corner_arrays(mesh, None, 3, np.float32, n_corners, mesh.corner_normals)
+        per_corner[NORMAL] = _vectors(mesh.corner_normals, 3, n_corners)
     corner_polygon = np.zeros(n_corners, dtype=np.int64)
     corner_polygon[corners.ravel()] = np.repeat(polygon, 3)
     per_corner[MATERIAL] = _face_attribute(mesh, "material_index", np.int32)[corner_polygon][:, None].astype(np.float32)
